@@ -1,0 +1,111 @@
+//! Content-addressed trial keys: blake3 over a canonical encoding of the fully resolved trial.
+//!
+//! The encoding is the JSON serialisation of the typed [`TrialConfig`]: field order is fixed by the
+//! struct definitions and every float is written in its shortest round-trip form, which is a
+//! bijection with its bits. YAML key order, `1e-3` vs `0.001`, comments and edits to other cells
+//! therefore never change a key, while any change to a value the simulation reads does.
+
+use crate::sim::TrialConfig;
+use std::fmt;
+
+/// Version of the simulation semantics. Bump it whenever a change to the dynamics, the
+/// representations, the learner or the random stream can change any outcome; every key changes
+/// with it, so stale results are never served. Pinned by the semantics fingerprint test.
+pub const ENGINE_VERSION: u32 = 1;
+
+/// A trial's cache key (32 bytes of blake3).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Key(pub [u8; 32]);
+
+impl Key {
+    /// The key of a resolved trial configuration and seed.
+    pub fn of(config: &TrialConfig, seed: u64) -> Self {
+        Self::from_canonical(&canonical_config(config), seed, ENGINE_VERSION)
+    }
+
+    /// The key of an already canonical configuration encoding (used to verify stored rows).
+    pub fn from_canonical(canonical: &str, seed: u64, engine_version: u32) -> Self {
+        let mut h = blake3::Hasher::new();
+        h.update(b"qsweep-trial\0");
+        h.update(&engine_version.to_le_bytes());
+        h.update(&seed.to_le_bytes());
+        h.update(canonical.as_bytes());
+        Self(*h.finalize().as_bytes())
+    }
+
+    /// Lower-case hex, 64 characters.
+    pub fn hex(&self) -> String {
+        self.0.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    /// Parse 64 hex characters.
+    pub fn parse_hex(s: &str) -> Option<Self> {
+        if s.len() != 64 || !s.is_ascii() {
+            return None;
+        }
+        let mut out = [0u8; 32];
+        for (i, byte) in out.iter_mut().enumerate() {
+            *byte = u8::from_str_radix(&s[2 * i..2 * i + 2], 16).ok()?;
+        }
+        Some(Self(out))
+    }
+}
+
+impl fmt::Debug for Key {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Key({})", &self.hex()[..16])
+    }
+}
+
+impl fmt::Display for Key {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.hex())
+    }
+}
+
+/// The canonical encoding of a resolved configuration (also stored in each row as `config_json`).
+pub fn canonical_config(config: &TrialConfig) -> String {
+    serde_json::to_string(config).expect("a TrialConfig always serialises")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::config::TrialConfig;
+    use crate::sim::env::SystemKind;
+    use crate::sim::repr::ReprKind;
+    use crate::sim::Algorithm;
+
+    fn cfg() -> TrialConfig {
+        TrialConfig::paper(SystemKind::CartPole, ReprKind::Crisp, Algorithm::QLambda, vec![2, 2, 2, 2], 2)
+    }
+
+    #[test]
+    fn hex_round_trips() {
+        let k = Key::of(&cfg(), 3);
+        assert_eq!(Key::parse_hex(&k.hex()), Some(k));
+        assert_eq!(Key::parse_hex("zz"), None);
+    }
+
+    #[test]
+    fn every_resolved_field_and_the_seed_change_the_key() {
+        let base = Key::of(&cfg(), 0);
+        assert_ne!(base, Key::of(&cfg(), 1));
+        let mut c = cfg();
+        c.learner.alpha = 0.1000000000000001;
+        assert_ne!(base, Key::of(&c, 0));
+        let mut c = cfg();
+        c.repr.resolution[3] = 3;
+        assert_ne!(base, Key::of(&c, 0));
+        assert_ne!(Key::from_canonical(&canonical_config(&cfg()), 0, ENGINE_VERSION + 1), base);
+    }
+
+    #[test]
+    fn same_value_written_differently_gives_the_same_key() {
+        let mut a = cfg();
+        let mut b = cfg();
+        a.learner.epsilon = "1e-2".parse().unwrap();
+        b.learner.epsilon = "0.010".parse().unwrap();
+        assert_eq!(Key::of(&a, 0), Key::of(&b, 0));
+    }
+}

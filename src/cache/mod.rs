@@ -1,0 +1,7 @@
+//! The content-addressed trial cache: keys, records and the append-only Parquet store.
+
+pub mod key;
+pub mod record;
+
+pub use key::{Key, ENGINE_VERSION};
+pub use record::TrialRecord;

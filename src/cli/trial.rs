@@ -1,0 +1,220 @@
+//! `qsweep trial`: one configuration and one seed, with Table II defaults, printed as text or JSON.
+
+use super::args;
+use super::simulate::env_params;
+use crate::error::user_error;
+use crate::sim::config::{Success, TieBreak, TraceKind, TrialConfig};
+use crate::sim::env::SystemKind;
+use crate::sim::repr::ReprKind;
+use crate::sim::{run_trial, Algorithm};
+use clap::{Args, ValueEnum};
+
+/// Representation names on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ReprArg {
+    /// Uniform bins per variable (tabular Q).
+    Crisp,
+    /// Gaussian fuzzy sets per variable.
+    Fuzzy,
+}
+
+/// Algorithm names on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum AlgorithmArg {
+    /// One-step Q-learning.
+    Q0,
+    /// Q(λ) with eligibility traces.
+    QLambda,
+}
+
+/// Tie-breaking names on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum TieArg {
+    /// Uniformly at random among tied actions.
+    Random,
+    /// The lowest-index tied action.
+    First,
+}
+
+/// Arguments of `qsweep trial`.
+#[derive(Debug, Args)]
+pub struct TrialArgs {
+    /// System: ball-beam, cart-pole or mountain-car.
+    #[arg(long, value_parser = args::system)]
+    pub env: SystemKind,
+    /// State representation.
+    #[arg(long, value_enum)]
+    pub repr: ReprArg,
+    /// Bins or fuzzy sets per state variable, comma-separated in state order (one value = all variables).
+    #[arg(long, value_parser = args::count_list)]
+    pub resolution: args::Counts,
+    /// Number of actions n of A_n (eq. 22) [default: the system's fixed set: 2 cart-pole, 3 otherwise].
+    #[arg(long, value_parser = args::action_count)]
+    pub actions: Option<u32>,
+    /// Learning algorithm.
+    #[arg(long, value_enum)]
+    pub algorithm: AlgorithmArg,
+    /// Seed of the trial's random stream.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Exploration rate ε [default: Table II].
+    #[arg(long, value_parser = args::unit)]
+    pub epsilon: Option<f64>,
+    /// Discount γ [default: Table II].
+    #[arg(long, value_parser = args::unit)]
+    pub gamma: Option<f64>,
+    /// Learning rate α > 0 [default: Table II].
+    #[arg(long, value_parser = args::positive)]
+    pub alpha: Option<f64>,
+    /// Trace decay λ in [0, 1] [default: Table II; ignored by q0].
+    #[arg(long, value_parser = args::unit)]
+    pub lambda: Option<f64>,
+    /// Initial Q value [default: 0].
+    #[arg(long, value_parser = args::finite, allow_hyphen_values = true)]
+    pub q_init: Option<f64>,
+    /// Greedy tie-breaking [default: random].
+    #[arg(long, value_enum)]
+    pub tie_break: Option<TieArg>,
+    /// Use replacing traces instead of accumulating ones.
+    #[arg(long)]
+    pub replacing_traces: bool,
+    /// Watkins's Q(λ): clear traces after an exploratory action.
+    #[arg(long)]
+    pub watkins_cut: bool,
+    /// Fuzzy σ as a multiple of the centre spacing [default: 0.4247, neighbours cross at 0.5].
+    #[arg(long, value_parser = args::positive)]
+    pub width: Option<f64>,
+    /// Fuzzy memberships below this are skipped; 0 is exact [default: 1e-6].
+    #[arg(long, value_parser = args::finite)]
+    pub prune: Option<f64>,
+    /// Episode cap [default: 1000].
+    #[arg(long)]
+    pub max_episodes: Option<u32>,
+    /// Step cap over the whole trial [default: 10,000,000].
+    #[arg(long)]
+    pub max_total_steps: Option<u64>,
+    /// Steps without failure that reach the goal (survival tasks) [default: 100,000].
+    #[arg(long)]
+    pub balance_steps: Option<u64>,
+    /// Override a physical parameter, e.g. --param gravity=9.8 (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = args::param)]
+    pub params: Vec<(String, f64)>,
+    /// Print the outcome (with every episode length) and the resolved configuration as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Resolve the arguments into a validated trial configuration.
+pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
+    let system = a.env;
+    let repr = match a.repr {
+        ReprArg::Crisp => ReprKind::Crisp,
+        ReprArg::Fuzzy => ReprKind::Fuzzy,
+    };
+    let algorithm = match a.algorithm {
+        AlgorithmArg::Q0 => Algorithm::Q0,
+        AlgorithmArg::QLambda => Algorithm::QLambda,
+    };
+    let dim = system.dim();
+    let resolution = match a.resolution.0.as_slice() {
+        [one] => vec![*one; dim],
+        many if many.len() == dim => many.to_vec(),
+        many => {
+            return Err(user_error(format!(
+            "--resolution: {system} has {dim} state variables ({}); give {dim} values or one for all, got {}",
+            system.variables().join(","),
+            many.len()
+        )))
+        }
+    };
+    let actions = a.actions.unwrap_or(system.default_actions());
+    let mut c = TrialConfig::paper(system, repr, algorithm, resolution, actions);
+    c.env = env_params(system, &a.params)?;
+    let l = &mut c.learner;
+    if let Some(v) = a.epsilon {
+        l.epsilon = v;
+    }
+    if let Some(v) = a.gamma {
+        l.gamma = v;
+    }
+    if let Some(v) = a.alpha {
+        l.alpha = v;
+    }
+    if let Some(v) = a.lambda {
+        l.lambda = v;
+    }
+    if let Some(v) = a.q_init {
+        l.q_init = v;
+    }
+    if let Some(t) = a.tie_break {
+        l.tie_break = match t {
+            TieArg::Random => TieBreak::Random,
+            TieArg::First => TieBreak::First,
+        };
+    }
+    if a.replacing_traces {
+        l.traces = TraceKind::Replacing;
+    }
+    l.watkins_cut = a.watkins_cut;
+    if let Some(v) = a.width {
+        c.repr.width = v;
+    }
+    if let Some(v) = a.prune {
+        c.repr.prune = v;
+    }
+    if let Some(v) = a.max_episodes {
+        c.limits.max_episodes = v;
+    }
+    if let Some(v) = a.max_total_steps {
+        c.limits.max_total_steps = v;
+    }
+    if let Some(v) = a.balance_steps {
+        match &mut c.limits.success {
+            Success::Balance { steps } => *steps = v,
+            Success::Reach { .. } => {
+                return Err(user_error(format!(
+                    "--balance-steps: {system} is a goal-reaching task, not a survival task"
+                )))
+            }
+        }
+    }
+    c.normalize();
+    c.validate().map_err(|e| user_error(format!("invalid trial: {e}")))?;
+    Ok(c)
+}
+
+/// Run `qsweep trial`.
+pub fn run(a: TrialArgs) -> anyhow::Result<u8> {
+    let cfg = config(&a)?;
+    let start = std::time::Instant::now();
+    let out = run_trial(&cfg, a.seed);
+    let seconds = start.elapsed().as_secs_f64();
+    if a.json {
+        let v = serde_json::json!({ "config": cfg, "seed": a.seed, "outcome": out, "seconds": seconds });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let label = cfg.learner.algorithm.label(cfg.repr.kind);
+        println!(
+            "{} {} {:?} × {} actions, seed {}",
+            cfg.system().title(),
+            label,
+            cfg.repr.resolution,
+            cfg.actions,
+            a.seed
+        );
+        match out.episodes_to_goal {
+            Some(n) => println!("reached the learning goal in episode {n}"),
+            None => println!(
+                "did not reach the learning goal ({}) after {} episodes",
+                out.stop.name(),
+                out.episodes
+            ),
+        }
+        if let Some(f) = &out.failure {
+            println!("failure: {f}");
+        }
+        let rate = out.total_steps as f64 / seconds.max(1e-9);
+        println!("{} steps in {:.3} s ({:.2} M steps/s)", out.total_steps, seconds, rate / 1e6);
+    }
+    Ok(if out.failure.is_some() { crate::error::exit::FAILURE } else { 0 })
+}

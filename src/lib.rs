@@ -1,0 +1,9 @@
+//! qsweep: declarative, cached, deterministic sweeps of tabular and fuzzy Q-learning, reproducing
+//! "Performance analysis of tabular and Fuzzy Q-learning under varying state and action space
+//! resolution".
+
+pub mod cache;
+pub mod sim;
+
+pub mod cli;
+pub mod error;

@@ -1,0 +1,261 @@
+//! The paper's three control systems (Section III-A) behind one small [`Environment`] trait.
+//!
+//! Each system is a plain struct of named physical parameters (defaults are the paper's values) plus
+//! its current state. States are fixed-size arrays padded to [`MAX_DIM`] so the per-step loop never
+//! allocates; only the first [`Environment::DIM`] entries are meaningful.
+
+mod ball_beam;
+mod cart_pole;
+mod mountain_car;
+
+pub use ball_beam::{BallBeam, BallBeamParams};
+pub use cart_pole::{CartPole, CartPoleParams};
+pub use mountain_car::{MountainCar, MountainCarParams};
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Largest number of state variables of any system (Cart-Pole's four).
+pub const MAX_DIM: usize = 4;
+
+/// A state vector, padded with zeros beyond the system's dimension.
+pub type State = [f64; MAX_DIM];
+
+/// What one step of a system returns besides the new state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transition {
+    /// Reward of eqs. (23)–(25).
+    pub reward: f64,
+    /// True when the step entered a terminal state (failure, or Mountain Car's goal).
+    pub terminal: bool,
+}
+
+/// How a system's episodes count as a success.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TaskKind {
+    /// Avoid failure for a number of steps (Cart-Pole, Ball-Beam); terminal means failure.
+    Survival,
+    /// Reach a goal (Mountain Car); terminal means success.
+    GoalReaching,
+}
+
+/// A discrete-time control system driven by real-valued actions.
+pub trait Environment {
+    /// Number of state variables.
+    const DIM: usize;
+    /// Whether the task is survival or goal reaching.
+    const TASK: TaskKind;
+    /// Return to the configured start state.
+    fn reset(&mut self);
+    /// Overwrite the current state (first `DIM` entries are used).
+    fn set_state(&mut self, state: &[f64]);
+    /// The current state.
+    fn state(&self) -> &State;
+    /// Advance one time step under the action value (force, tilt angle or throttle).
+    fn step(&mut self, action: f64) -> Transition;
+}
+
+/// The systems qsweep knows, by their command-line and YAML names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SystemKind {
+    /// Ball-Beam, eq. (1).
+    BallBeam,
+    /// Cart-Pole, eq. (2).
+    CartPole,
+    /// Mountain Car, eq. (3).
+    MountainCar,
+}
+
+impl SystemKind {
+    /// Every system, in report order (the paper's Figures 5, 6, 7).
+    pub const ALL: [SystemKind; 3] = [Self::BallBeam, Self::CartPole, Self::MountainCar];
+
+    /// Command-line / YAML name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BallBeam => "ball-beam",
+            Self::CartPole => "cart-pole",
+            Self::MountainCar => "mountain-car",
+        }
+    }
+
+    /// Human-readable name as the paper writes it.
+    pub fn title(self) -> &'static str {
+        match self {
+            Self::BallBeam => "Ball-Beam",
+            Self::CartPole => "Cart-Pole",
+            Self::MountainCar => "Mountain Car",
+        }
+    }
+
+    /// Parse a command-line / YAML name.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// State variable names, in state-vector order.
+    pub fn variables(self) -> &'static [&'static str] {
+        match self {
+            Self::BallBeam | Self::MountainCar => &["x", "x_dot"],
+            Self::CartPole => &["x", "x_dot", "theta", "theta_dot"],
+        }
+    }
+
+    /// Number of state variables.
+    pub fn dim(self) -> usize {
+        self.variables().len()
+    }
+
+    /// The paper's fixed action count for the system (Section III-A).
+    pub fn default_actions(self) -> u32 {
+        match self {
+            Self::CartPole => 2,
+            Self::BallBeam | Self::MountainCar => 3,
+        }
+    }
+}
+
+impl fmt::Display for SystemKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Physical parameters of one system, tagged by system.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "system", rename_all = "kebab-case")]
+pub enum EnvParams {
+    /// Ball-Beam parameters.
+    BallBeam(BallBeamParams),
+    /// Cart-Pole parameters.
+    CartPole(CartPoleParams),
+    /// Mountain Car parameters.
+    MountainCar(MountainCarParams),
+}
+
+impl EnvParams {
+    /// The paper's parameters for a system.
+    pub fn default_for(system: SystemKind) -> Self {
+        match system {
+            SystemKind::BallBeam => Self::BallBeam(BallBeamParams::default()),
+            SystemKind::CartPole => Self::CartPole(CartPoleParams::default()),
+            SystemKind::MountainCar => Self::MountainCar(MountainCarParams::default()),
+        }
+    }
+
+    /// Which system these parameters belong to.
+    pub fn system(&self) -> SystemKind {
+        match self {
+            Self::BallBeam(_) => SystemKind::BallBeam,
+            Self::CartPole(_) => SystemKind::CartPole,
+            Self::MountainCar(_) => SystemKind::MountainCar,
+        }
+    }
+
+    /// The symmetric action bounds of eq. (22): A_n spans `[-max, max]`.
+    pub fn action_max(&self) -> f64 {
+        match self {
+            Self::BallBeam(p) => p.angle_max,
+            Self::CartPole(p) => p.force,
+            Self::MountainCar(p) => p.action_max,
+        }
+    }
+
+    /// Names of the scalar parameters `set_param` accepts.
+    pub fn param_names(&self) -> &'static [&'static str] {
+        match self {
+            Self::BallBeam(_) => BallBeamParams::NAMES,
+            Self::CartPole(_) => CartPoleParams::NAMES,
+            Self::MountainCar(_) => MountainCarParams::NAMES,
+        }
+    }
+
+    /// Set one scalar parameter by name; `Err` lists the valid names.
+    pub fn set_param(&mut self, name: &str, value: f64) -> Result<(), String> {
+        let slot = match self {
+            Self::BallBeam(p) => p.slot(name),
+            Self::CartPole(p) => p.slot(name),
+            Self::MountainCar(p) => p.slot(name),
+        };
+        match slot {
+            Some(v) => {
+                *v = value;
+                Ok(())
+            }
+            None => Err(format!(
+                "unknown parameter '{name}' for {}; valid: {}",
+                self.system(),
+                self.param_names().join(", ")
+            )),
+        }
+    }
+
+    /// The start state (first `dim` entries meaningful).
+    pub fn start(&self) -> State {
+        match self {
+            Self::BallBeam(p) => [p.start[0], p.start[1], 0.0, 0.0],
+            Self::CartPole(p) => p.start,
+            Self::MountainCar(p) => [p.start[0], p.start[1], 0.0, 0.0],
+        }
+    }
+
+    /// Check physical sanity; `Err` says which parameter and what is allowed.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive: Vec<(&str, f64)> = match self {
+            Self::BallBeam(p) => vec![("tau", p.tau), ("beam_length", p.beam_length)],
+            Self::CartPole(p) => vec![
+                ("tau", p.tau),
+                ("mass_cart", p.mass_cart),
+                ("mass_pole", p.mass_pole),
+                ("half_length", p.half_length),
+                ("x_limit", p.x_limit),
+                ("theta_limit_deg", p.theta_limit_deg),
+            ],
+            Self::MountainCar(p) => vec![("v_max", p.v_max), ("action_max", p.action_max)],
+        };
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{name} = {v} must be a finite number > 0"));
+            }
+        }
+        let all_finite = match self {
+            Self::BallBeam(p) => {
+                [p.gravity, p.angle_max, p.start[0], p.start[1]].iter().all(|v| v.is_finite())
+            }
+            Self::CartPole(p) => [p.gravity, p.force].iter().chain(p.start.iter()).all(|v| v.is_finite()),
+            Self::MountainCar(p) => [p.force, p.gravity, p.x_min, p.x_max, p.goal]
+                .iter()
+                .chain(p.start.iter())
+                .all(|v| v.is_finite()),
+        };
+        if !all_finite {
+            return Err("every parameter must be a finite number".into());
+        }
+        if let Self::MountainCar(p) = self {
+            if p.x_min >= p.x_max {
+                return Err(format!("x_min = {} must be < x_max = {}", p.x_min, p.x_max));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Generates `NAMES` and `slot(name) -> &mut f64` for a parameter struct's scalar fields.
+macro_rules! scalar_params {
+    ($ty:ty { $($field:ident),* $(,)? }) => {
+        impl $ty {
+            /// Names of the scalar parameters, as accepted by `--param NAME=VALUE`.
+            pub const NAMES: &'static [&'static str] = &[$(stringify!($field)),*];
+
+            /// Mutable access to a scalar parameter by name.
+            pub fn slot(&mut self, name: &str) -> Option<&mut f64> {
+                match name {
+                    $(stringify!($field) => Some(&mut self.$field),)*
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+pub(crate) use scalar_params;

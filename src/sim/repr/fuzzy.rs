@@ -1,0 +1,248 @@
+//! Fuzzy representation: Gaussian membership functions (eq. 9) per variable with centres evenly
+//! spaced over `[lo, hi]` (endpoints included) and spread `σ = width · spacing`; the rule base is the
+//! Cartesian product of the per-variable sets (eq. 8), firing strength the product (eq. 10),
+//! normalised to sum 1 (eq. 11).
+//!
+//! For a grid rule base the normaliser of eq. (11) factorises, `Σ_m Π_j μ_j = Π_j Σ_k μ_jk`, so the
+//! normalised strengths are the outer product of per-variable normalised memberships; that is how
+//! they are computed. Values outside `[lo, hi]` are clamped to the range first (the fuzzy analogue of
+//! the crisp edge bin), and sets whose membership is below `prune` are skipped (`prune = 0` is exact).
+
+use super::{strides, Activations, Representation};
+
+/// Most fuzzy sets a single variable may have.
+pub const MAX_SETS: usize = 64;
+
+/// `width` that makes neighbouring memberships cross at 0.5: `1 / (2·sqrt(2·ln 2))`.
+pub const HALF_CROSSING_WIDTH: f64 = 0.424_660_900_144_009_5;
+
+#[derive(Debug, Clone)]
+struct Variable {
+    lo: f64,
+    hi: f64,
+    n: usize,
+    spacing: f64,
+    inv_two_sigma_sq: f64,
+    /// Half-width of the window of sets that can exceed `prune`, in units of `spacing`.
+    reach: f64,
+}
+
+/// A grid of Gaussian fuzzy sets with normalised product firing strengths.
+#[derive(Debug, Clone)]
+pub struct Fuzzy {
+    vars: Vec<Variable>,
+    strides: Vec<u32>,
+    n_features: usize,
+}
+
+impl Fuzzy {
+    /// `sets[j]` Gaussians over `ranges[j]` with σ = `width` × centre spacing; memberships below
+    /// `prune` are skipped (0 keeps every rule).
+    pub fn new(sets: &[u32], ranges: &[[f64; 2]], width: f64, prune: f64) -> Self {
+        assert_eq!(sets.len(), ranges.len());
+        let vars = sets
+            .iter()
+            .zip(ranges)
+            .map(|(&n, r)| {
+                let n = n as usize;
+                assert!((1..=MAX_SETS).contains(&n));
+                let spacing = if n > 1 { (r[1] - r[0]) / (n - 1) as f64 } else { r[1] - r[0] };
+                let sigma = width * spacing;
+                let reach = if prune > 0.0 {
+                    // exp(−d²/2σ²) ≥ prune  ⇔  d ≤ σ·sqrt(2 ln(1/prune)).
+                    width * (2.0 * (1.0 / prune).ln()).sqrt()
+                } else {
+                    f64::INFINITY
+                };
+                Variable {
+                    lo: r[0],
+                    hi: r[1],
+                    n,
+                    spacing,
+                    inv_two_sigma_sq: 1.0 / (2.0 * sigma * sigma),
+                    reach,
+                }
+            })
+            .collect();
+        let n_features = sets.iter().map(|&s| s as usize).product();
+        Self { vars, strides: strides(sets), n_features }
+    }
+
+    /// Centre of set `k` of variable `j`.
+    pub fn centre(&self, j: usize, k: usize) -> f64 {
+        let v = &self.vars[j];
+        if v.n == 1 {
+            (v.lo + v.hi) / 2.0
+        } else {
+            v.lo + k as f64 * v.spacing
+        }
+    }
+
+    /// Normalised memberships of variable `j` at `value`: writes `(set, μ)` pairs, returns their count.
+    #[inline]
+    fn memberships(
+        &self,
+        j: usize,
+        value: f64,
+        sets: &mut [u32; MAX_SETS],
+        mu: &mut [f64; MAX_SETS],
+    ) -> usize {
+        let v = &self.vars[j];
+        if v.n == 1 {
+            sets[0] = 0;
+            mu[0] = 1.0;
+            return 1;
+        }
+        let x = value.clamp(v.lo, v.hi);
+        let pos = (x - v.lo) / v.spacing;
+        let first = (pos - v.reach).ceil().max(0.0) as usize;
+        let last = ((pos + v.reach).floor() as usize).min(v.n - 1);
+        let (first, last) = if first > last {
+            let nearest = (pos.round() as usize).min(v.n - 1);
+            (nearest, nearest)
+        } else {
+            (first, last)
+        };
+        let mut sum = 0.0;
+        let mut m = 0;
+        for k in first..=last {
+            let d = x - self.centre(j, k);
+            let w = (-(d * d) * v.inv_two_sigma_sq).exp();
+            sets[m] = k as u32;
+            mu[m] = w;
+            sum += w;
+            m += 1;
+        }
+        if sum <= 0.0 || sum.is_nan() {
+            // Every membership underflowed (a very narrow width): the nearest set takes it all.
+            let nearest = (pos.round() as usize).min(v.n - 1);
+            sets[0] = nearest as u32;
+            mu[0] = 1.0;
+            return 1;
+        }
+        let inv = 1.0 / sum;
+        for w in &mut mu[..m] {
+            *w *= inv;
+        }
+        m
+    }
+}
+
+impl Representation for Fuzzy {
+    fn n_features(&self) -> usize {
+        self.n_features
+    }
+
+    fn activate(&self, state: &[f64], out: &mut Activations) {
+        out.clear();
+        out.index.push(0);
+        out.weight.push(1.0);
+        let mut sets = [0u32; MAX_SETS];
+        let mut mu = [0.0f64; MAX_SETS];
+        for (j, &value) in state[..self.vars.len()].iter().enumerate() {
+            let m = self.memberships(j, value, &mut sets, &mut mu);
+            let len = out.len();
+            let stride = self.strides[j];
+            // Blocks 1..m are copies of the current rules extended by set t; block 0 is extended in place.
+            for t in 1..m {
+                for e in 0..len {
+                    out.index.push(out.index[e] + stride * sets[t]);
+                    out.weight.push(out.weight[e] * mu[t]);
+                }
+            }
+            for e in 0..len {
+                out.index[e] += stride * sets[0];
+                out.weight[e] *= mu[0];
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn eq_9_to_11(f: &Fuzzy, sets: &[u32], state: &[f64], width: f64, ranges: &[[f64; 2]]) -> Vec<f64> {
+        // Literal eqs. (9)–(11): every rule's product of Gaussians, divided by the sum over rules.
+        let n: usize = sets.iter().map(|&s| s as usize).product();
+        let mut raw = vec![0.0; n];
+        for (rule, w) in raw.iter_mut().enumerate() {
+            let mut rem = rule;
+            let mut prod = 1.0;
+            for j in (0..sets.len()).rev() {
+                let k = rem % sets[j] as usize;
+                rem /= sets[j] as usize;
+                let spacing = (ranges[j][1] - ranges[j][0]) / (sets[j] - 1) as f64;
+                let sigma = width * spacing;
+                let x = state[j].clamp(ranges[j][0], ranges[j][1]);
+                let c = f.centre(j, k);
+                prod *= (-(x - c).powi(2) / (2.0 * sigma * sigma)).exp();
+            }
+            *w = prod;
+        }
+        let total: f64 = raw.iter().sum();
+        raw.iter().map(|w| w / total).collect()
+    }
+
+    #[test]
+    fn exact_rule_base_matches_equations_9_to_11() {
+        let sets = [3, 2, 4, 5];
+        let ranges = [[-2.4, 2.4], [-2.0, 2.0], [-0.2, 0.2], [-3.0, 3.0]];
+        let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, 0.0);
+        let mut a = Activations::default();
+        for state in [[0.1, -0.3, 0.05, 1.0], [2.0, 5.0, -0.19, -2.9], [-9.0, 0.0, 0.0, 0.0]] {
+            f.activate(&state, &mut a);
+            assert_eq!(a.len(), 3 * 2 * 4 * 5);
+            let reference = eq_9_to_11(&f, &sets, &state, HALF_CROSSING_WIDTH, &ranges);
+            let mut dense = vec![0.0; f.n_features()];
+            for (i, w) in a.index.iter().zip(&a.weight) {
+                dense[*i as usize] += w;
+            }
+            for (ours, theirs) in dense.iter().zip(&reference) {
+                assert!((ours - theirs).abs() < 1e-14, "{ours} vs {theirs}");
+            }
+        }
+    }
+
+    #[test]
+    fn memberships_sum_to_one_and_pruning_keeps_the_big_ones() {
+        let ranges = [[-1.0, 1.0], [-1.0, 1.0]];
+        for n in 1..=10u32 {
+            for prune in [0.0, 1e-6] {
+                let f = Fuzzy::new(&[n, 10], &ranges, HALF_CROSSING_WIDTH, prune);
+                let mut a = Activations::default();
+                for i in 0..50 {
+                    let x = -1.3 + 0.053 * f64::from(i);
+                    f.activate(&[x, -x * 0.7], &mut a);
+                    let s: f64 = a.weight.iter().sum();
+                    assert!((s - 1.0).abs() < 1e-12, "sum {s}");
+                    assert!(a.weight.iter().all(|w| *w > 0.0));
+                    let mut idx = a.index.clone();
+                    idx.sort_unstable();
+                    idx.dedup();
+                    assert_eq!(idx.len(), a.len(), "rules are distinct");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn neighbours_cross_at_one_half_with_the_default_width() {
+        let f = Fuzzy::new(&[2], &[[0.0, 1.0]], HALF_CROSSING_WIDTH, 0.0);
+        let mut a = Activations::default();
+        f.activate(&[0.5], &mut a);
+        assert!((a.weight[0] - 0.5).abs() < 1e-15 && (a.weight[1] - 0.5).abs() < 1e-15);
+        let v = &f.vars[0];
+        let raw = (-(0.5f64 * 0.5) * v.inv_two_sigma_sq).exp();
+        assert!((raw - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tiny_width_never_divides_by_zero() {
+        let f = Fuzzy::new(&[5], &[[0.0, 1.0]], 1e-6, 0.0);
+        let mut a = Activations::default();
+        f.activate(&[0.37], &mut a);
+        assert_eq!(a.index, vec![1]);
+        assert_eq!(a.weight, vec![1.0]);
+    }
+}
