@@ -3,7 +3,9 @@
 //! resolution".
 
 pub mod cache;
+pub mod plan;
 pub mod sim;
+pub mod spec;
 
 pub mod cli;
 pub mod error;

@@ -1,0 +1,107 @@
+//! The resolved plan: a pipeline expanded into experiments → cells (one fully resolved
+//! configuration each) × seeds → trials with their cache keys. Every default is filled in here,
+//! before hashing, so a changed default changes exactly the keys it affects.
+
+mod resolve;
+
+pub use resolve::{plan, DEFAULT_MAX_TRIALS};
+
+use crate::cache::Key;
+use crate::sim::env::SystemKind;
+use crate::sim::repr::ReprKind;
+use crate::sim::{Algorithm, TrialConfig};
+use crate::spec::{Axis, Reference, Target};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// A pipeline, expanded.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Pipeline name (report folder).
+    pub name: String,
+    /// Free text from the pipeline.
+    pub description: Option<String>,
+    /// The pipeline file.
+    pub source: PathBuf,
+    /// Where reference values come from.
+    pub reference_source: Option<String>,
+    /// Seeds of every cell.
+    pub seeds: Vec<u64>,
+    /// Experiments in report order: systems as in the paper's figures, experiments in file order.
+    pub experiments: Vec<Experiment>,
+}
+
+/// One experiment of one system, expanded into cells.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// The system.
+    pub system: SystemKind,
+    /// Identifier (Table I's "Exp." number).
+    pub id: String,
+    /// Optional title.
+    pub title: Option<String>,
+    /// Crisp or fuzzy.
+    pub repr: ReprKind,
+    /// Algorithms (figure columns).
+    pub algorithms: Vec<Algorithm>,
+    /// Varied axes: first = heatmap rows, second = columns.
+    pub axes: Vec<Axis>,
+    /// Constants (including the resolved action count when it is not varied).
+    pub fixed: Vec<(Target, u32)>,
+    /// Published values per algorithm.
+    pub reference: BTreeMap<Algorithm, Reference>,
+    /// Cells: every algorithm × every grid point, algorithm-major, grid in axis order.
+    pub cells: Vec<Cell>,
+}
+
+/// One resolved configuration and its trials.
+#[derive(Debug, Clone)]
+pub struct Cell {
+    /// The algorithm.
+    pub algorithm: Algorithm,
+    /// One value per axis of the experiment.
+    pub coords: Vec<u32>,
+    /// The fully resolved configuration.
+    pub config: TrialConfig,
+    /// One trial per seed.
+    pub trials: Vec<PlannedTrial>,
+}
+
+/// A trial: a seed and its key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlannedTrial {
+    /// The seed.
+    pub seed: u64,
+    /// Cache key of (config, seed).
+    pub key: Key,
+}
+
+impl Plan {
+    /// Every (experiment, cell, trial) of the plan, in plan order.
+    pub fn trials(&self) -> impl Iterator<Item = (&Experiment, &Cell, &PlannedTrial)> {
+        self.experiments
+            .iter()
+            .flat_map(|e| e.cells.iter().flat_map(move |c| c.trials.iter().map(move |t| (e, c, t))))
+    }
+
+    /// Number of trials, counting a trial shared by two cells twice.
+    pub fn trial_count(&self) -> usize {
+        self.experiments.iter().flat_map(|e| &e.cells).map(|c| c.trials.len()).sum()
+    }
+
+    /// Distinct trials by key, first occurrence wins, in plan order.
+    pub fn unique_trials(&self) -> Vec<(&TrialConfig, u64, Key)> {
+        let mut seen = std::collections::HashSet::new();
+        self.trials()
+            .filter(|(_, _, t)| seen.insert(t.key))
+            .map(|(_, c, t)| (&c.config, t.seed, t.key))
+            .collect()
+    }
+}
+
+impl Experiment {
+    /// Label like "Cart-Pole, Exp. 1 (crisp)".
+    pub fn label(&self) -> String {
+        format!("{}, Exp. {} ({})", self.system.title(), self.id, self.repr.name())
+    }
+}

@@ -1,0 +1,314 @@
+//! One experiment of a system (a row of the paper's Table I): representation, algorithms and the
+//! resolution grid in Table I's notation — `vary` holds the varied axes `v(·)`, each a group of
+//! variables sharing one value (`x == theta`), `fixed` the constants `c(·)`.
+
+use super::{variable_index, Settings, SystemMarker, Values};
+use crate::sim::repr::ReprKind;
+use crate::sim::Algorithm;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::marker::PhantomData;
+
+/// What a grid axis or constant sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Target {
+    /// Bins or fuzzy sets of the state variable with this index.
+    Var(usize),
+    /// The number of actions n of A_n.
+    Actions,
+}
+
+/// A varied axis: a group of targets that share each value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// Table I-style label, e.g. `x == theta`.
+    pub label: String,
+    /// The grouped targets.
+    pub targets: Vec<Target>,
+    /// Values, in file order.
+    pub values: Vec<u32>,
+}
+
+/// A published result to compare with (e.g. the paper's Table III row).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Reference {
+    /// Mean episodes to the learning goal.
+    pub mean: f64,
+    /// Standard deviation.
+    pub std: f64,
+    /// Best configuration's bins or sets per variable, in state order.
+    #[serde(default)]
+    pub resolution: Option<Vec<u32>>,
+    /// Best configuration's action count.
+    #[serde(default)]
+    pub actions: Option<u32>,
+}
+
+/// An experiment, validated.
+#[derive(Debug, Clone)]
+pub struct ExperimentSpec<M> {
+    /// Identifier within the system (Table I's "Exp." number).
+    pub id: String,
+    /// Optional title, e.g. "Bins only".
+    pub title: Option<String>,
+    /// Crisp bins or fuzzy sets.
+    pub repr: ReprKind,
+    /// Algorithms to run on every grid point (figure columns).
+    pub algorithms: Vec<Algorithm>,
+    /// Varied axes, in file order (first = heatmap rows, second = columns).
+    pub axes: Vec<Axis>,
+    /// Constants.
+    pub fixed: Vec<(Target, u32)>,
+    /// Settings overriding the system's.
+    pub settings: Settings,
+    /// Published results per algorithm.
+    pub reference: BTreeMap<Algorithm, Reference>,
+    _m: PhantomData<M>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, bound = "")]
+struct RawExperiment<M: SystemMarker> {
+    #[serde(deserialize_with = "id_string")]
+    id: String,
+    #[serde(default)]
+    title: Option<String>,
+    repr: ReprKind,
+    #[serde(default = "both_algorithms")]
+    algorithms: Vec<Algorithm>,
+    vary: AxesRaw<M>,
+    #[serde(default)]
+    fixed: FixedRaw<M>,
+    #[serde(default)]
+    settings: Settings,
+    #[serde(default)]
+    reference: BTreeMap<Algorithm, Reference>,
+}
+
+fn both_algorithms() -> Vec<Algorithm> {
+    vec![Algorithm::Q0, Algorithm::QLambda]
+}
+
+fn id_string<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    struct V;
+    impl Visitor<'_> for V {
+        type Value = String;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("an experiment id (number or short name)")
+        }
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<String, E> {
+            Ok(v.to_string())
+        }
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<String, E> {
+            Ok(v.to_string())
+        }
+        fn visit_str<E: de::Error>(self, v: &str) -> Result<String, E> {
+            if v.is_empty()
+                || v.len() > 40
+                || !v.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+            {
+                return Err(E::custom(format!("id `{v}`: use 1-40 letters, digits, '-', '_' or '.'")));
+            }
+            Ok(v.to_string())
+        }
+    }
+    d.deserialize_any(V)
+}
+
+fn parse_targets(system: crate::sim::env::SystemKind, key: &str) -> Result<Vec<Target>, String> {
+    let mut out = Vec::new();
+    for name in key.split("==").map(str::trim) {
+        let t = if name == "actions" { Target::Actions } else { Target::Var(variable_index(system, name)?) };
+        if out.contains(&t) {
+            return Err(format!("`{key}` names `{name}` twice"));
+        }
+        out.push(t);
+    }
+    if out.contains(&Target::Actions) && out.len() > 1 {
+        return Err(format!("`{key}`: actions cannot share a value with state variables"));
+    }
+    Ok(out)
+}
+
+fn check_value(t: Target, v: u32, what: &str) -> Result<(), String> {
+    match t {
+        Target::Actions if v < 2 => Err(format!("{what}: {v} actions is not allowed; A_n needs n ≥ 2")),
+        Target::Var(_) if v < 1 => {
+            Err(format!("{what}: {v} is not allowed; every variable needs at least 1 bin or fuzzy set"))
+        }
+        Target::Var(_) if v > 1 << 20 => Err(format!("{what}: {v} is too many bins")),
+        _ => Ok(()),
+    }
+}
+
+struct AxesRaw<M>(Vec<Axis>, PhantomData<M>);
+
+impl<'de, M: SystemMarker> Deserialize<'de> for AxesRaw<M> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<M>(PhantomData<M>);
+        impl<'de, M: SystemMarker> Visitor<'de> for V<M> {
+            type Value = AxesRaw<M>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(
+                    f,
+                    "a map from variable groups (e.g. `x == x_dot`, `actions`) to values, for {}",
+                    M::SYSTEM
+                )
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<AxesRaw<M>, A::Error> {
+                let mut axes: Vec<Axis> = Vec::new();
+                while let Some(key) = map.next_key::<String>()? {
+                    let targets = parse_targets(M::SYSTEM, &key).map_err(de::Error::custom)?;
+                    let label = targets_label(M::SYSTEM, &targets);
+                    let values: Values = map.next_value()?;
+                    for &t in &targets {
+                        for &v in &values.0 {
+                            check_value(t, v, &format!("vary.{label}")).map_err(de::Error::custom)?;
+                        }
+                        if let Some(prev) = axes.iter().find(|a| a.targets.contains(&t)) {
+                            return Err(de::Error::custom(format!(
+                                "vary: `{}` appears in `{}` and in `{label}`; each variable belongs to one axis",
+                                target_name(M::SYSTEM, t),
+                                prev.label
+                            )));
+                        }
+                    }
+                    axes.push(Axis { label, targets, values: values.0 });
+                }
+                if axes.is_empty() || axes.len() > 2 {
+                    return Err(de::Error::custom(format!(
+                        "vary: {} axes given; an experiment varies 1 or 2 axes (the heatmap's rows and columns)",
+                        axes.len()
+                    )));
+                }
+                Ok(AxesRaw(axes, PhantomData))
+            }
+        }
+        d.deserialize_map(V(PhantomData))
+    }
+}
+
+struct FixedRaw<M>(Vec<(Target, u32)>, PhantomData<M>);
+
+impl<M> Default for FixedRaw<M> {
+    fn default() -> Self {
+        Self(Vec::new(), PhantomData)
+    }
+}
+
+impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<M>(PhantomData<M>);
+        impl<'de, M: SystemMarker> Visitor<'de> for V<M> {
+            type Value = FixedRaw<M>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(
+                    f,
+                    "a map from variables (or variable groups, or `actions`) to one value, for {}",
+                    M::SYSTEM
+                )
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<FixedRaw<M>, A::Error> {
+                let mut out: Vec<(Target, u32)> = Vec::new();
+                while let Some(key) = map.next_key::<String>()? {
+                    let targets = parse_targets(M::SYSTEM, &key).map_err(de::Error::custom)?;
+                    let v: u32 = map.next_value()?;
+                    for t in targets {
+                        check_value(t, v, &format!("fixed.{key}")).map_err(de::Error::custom)?;
+                        if out.iter().any(|(o, _)| *o == t) {
+                            return Err(de::Error::custom(format!(
+                                "fixed: `{}` is set twice",
+                                target_name(M::SYSTEM, t)
+                            )));
+                        }
+                        out.push((t, v));
+                    }
+                }
+                Ok(FixedRaw(out, PhantomData))
+            }
+        }
+        d.deserialize_map(V(PhantomData))
+    }
+}
+
+/// Name of a target for messages and labels.
+pub fn target_name(system: crate::sim::env::SystemKind, t: Target) -> &'static str {
+    match t {
+        Target::Var(j) => system.variables()[j],
+        Target::Actions => "actions",
+    }
+}
+
+fn targets_label(system: crate::sim::env::SystemKind, targets: &[Target]) -> String {
+    targets.iter().map(|&t| target_name(system, t)).collect::<Vec<_>>().join(" == ")
+}
+
+impl<'de, M: SystemMarker> Deserialize<'de> for ExperimentSpec<M> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let raw = RawExperiment::<M>::deserialize(d)?;
+        let system = M::SYSTEM;
+        let axes = raw.vary.0;
+        let fixed = raw.fixed.0;
+        for (t, _) in &fixed {
+            if let Some(a) = axes.iter().find(|a| a.targets.contains(t)) {
+                return Err(de::Error::custom(format!(
+                    "experiment {}: `{}` is both varied (in `{}`) and fixed; remove one",
+                    raw.id,
+                    target_name(system, *t),
+                    a.label
+                )));
+            }
+        }
+        for j in 0..system.dim() {
+            let t = Target::Var(j);
+            if !axes.iter().any(|a| a.targets.contains(&t)) && !fixed.iter().any(|(f, _)| *f == t) {
+                return Err(de::Error::custom(format!(
+                    "experiment {}: variable `{}` has no resolution; add it to `vary` (e.g. `{} == ...`) or to `fixed`",
+                    raw.id,
+                    system.variables()[j],
+                    system.variables()[j]
+                )));
+            }
+        }
+        let mut algorithms = Vec::new();
+        for a in raw.algorithms {
+            if algorithms.contains(&a) {
+                return Err(de::Error::custom(format!(
+                    "experiment {}: algorithm {} is listed twice",
+                    raw.id,
+                    a.name()
+                )));
+            }
+            algorithms.push(a);
+        }
+        if algorithms.is_empty() {
+            return Err(de::Error::custom(format!(
+                "experiment {}: algorithms is empty; use [q0, q-lambda]",
+                raw.id
+            )));
+        }
+        for a in raw.reference.keys() {
+            if !algorithms.contains(a) {
+                return Err(de::Error::custom(format!(
+                    "experiment {}: reference for {} but the experiment does not run it",
+                    raw.id,
+                    a.name()
+                )));
+            }
+        }
+        Ok(ExperimentSpec {
+            id: raw.id,
+            title: raw.title,
+            repr: raw.repr,
+            algorithms,
+            axes,
+            fixed,
+            settings: raw.settings,
+            reference: raw.reference,
+            _m: PhantomData,
+        })
+    }
+}

@@ -1,0 +1,329 @@
+//! Pipeline files: the raw, typed form of a YAML pipeline (`pipelines/*.yaml`), parsed with
+//! serde_yaml. Unknown keys are rejected, and every value is range-checked while parsing so errors
+//! carry the file, line and column. Nothing here resolves defaults: that is `plan`'s job.
+//!
+//! ```yaml
+//! name: quick                     # report folder name: reports/<name>/
+//! seeds: 2                        # a count (seeds 0..n-1) or a list [0, 7, 9]
+//! defaults: { max_episodes: 500 } # settings for every system (see Settings)
+//! systems:
+//!   cart-pole:
+//!     params: { gravity: 9.81 }   # physical parameters (defaults: the paper's)
+//!     ranges: { x_dot: [-2, 2] }  # bin range / first and last fuzzy centre per variable
+//!     success: { steps: 100000 }  # survival: steps; mountain-car: {within, streak, max_episode_steps}
+//!     crisp: { epsilon: 0.01 }    # settings for crisp experiments of this system (Table II)
+//!     fuzzy: { width: 0.4247 }    # settings for fuzzy experiments of this system
+//!     experiments:
+//!       - id: 1
+//!         repr: crisp
+//!         algorithms: [q0, q-lambda]
+//!         vary: { x == theta: 2..10, x_dot == theta_dot: 2..10 }   # Table I: v(x == θ), v(ẋ == θ̇)
+//!         fixed: { actions: 2 }                                     # Table I: c(Actions)
+//! ```
+
+mod experiment;
+mod load;
+mod overrides;
+mod values;
+
+pub use experiment::{target_name, Axis, ExperimentSpec, Reference, Target};
+pub use load::{load, load_str, LoadedSpec};
+pub use overrides::Override;
+pub use values::{Finite, Positive, Seeds, SubUnit, Unit, Values};
+
+use crate::sim::config::{TieBreak, TraceKind};
+use crate::sim::env::{BallBeamParams, CartPoleParams, MountainCarParams, SystemKind};
+use serde::de::{self, DeserializeOwned, Deserializer, MapAccess, Visitor};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::marker::PhantomData;
+
+/// A whole pipeline file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PipelineSpec {
+    /// Pipeline name; reports go to `reports/<name>/`.
+    #[serde(deserialize_with = "safe_name")]
+    pub name: String,
+    /// Free text shown in reports.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Seeds per cell.
+    pub seeds: Seeds,
+    /// Where the experiments' `reference:` values come from (shown in reports).
+    #[serde(default)]
+    pub reference_source: Option<String>,
+    /// Settings for every system and experiment.
+    #[serde(default)]
+    pub defaults: Settings,
+    /// The systems and their experiments.
+    pub systems: Systems,
+}
+
+/// The systems a pipeline covers; at least one.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Systems {
+    /// Ball-Beam.
+    #[serde(rename = "ball-beam", default)]
+    pub ball_beam: Option<SystemSpec<BallBeamM>>,
+    /// Cart-Pole.
+    #[serde(rename = "cart-pole", default)]
+    pub cart_pole: Option<SystemSpec<CartPoleM>>,
+    /// Mountain Car.
+    #[serde(rename = "mountain-car", default)]
+    pub mountain_car: Option<SystemSpec<MountainCarM>>,
+}
+
+/// Compile-time identity of a system, so its section can check variable names while parsing.
+pub trait SystemMarker: fmt::Debug + Clone + 'static {
+    /// The system.
+    const SYSTEM: SystemKind;
+    /// Its physical parameter struct.
+    type Params: DeserializeOwned + Serialize + Default + Clone + fmt::Debug;
+    /// Its success-criterion section.
+    type Success: DeserializeOwned + Serialize + Clone + fmt::Debug;
+}
+
+/// Marker for Ball-Beam.
+#[derive(Debug, Clone)]
+pub struct BallBeamM;
+/// Marker for Cart-Pole.
+#[derive(Debug, Clone)]
+pub struct CartPoleM;
+/// Marker for Mountain Car.
+#[derive(Debug, Clone)]
+pub struct MountainCarM;
+
+impl SystemMarker for BallBeamM {
+    const SYSTEM: SystemKind = SystemKind::BallBeam;
+    type Params = BallBeamParams;
+    type Success = BalanceSpec;
+}
+impl SystemMarker for CartPoleM {
+    const SYSTEM: SystemKind = SystemKind::CartPole;
+    type Params = CartPoleParams;
+    type Success = BalanceSpec;
+}
+impl SystemMarker for MountainCarM {
+    const SYSTEM: SystemKind = SystemKind::MountainCar;
+    type Params = MountainCarParams;
+    type Success = ReachSpec;
+}
+
+/// One system's section.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, bound = "")]
+pub struct SystemSpec<M: SystemMarker> {
+    /// Physical parameters (unset ones keep the paper's values).
+    #[serde(default)]
+    pub params: M::Params,
+    /// Per-variable `[lo, hi]` ranges (unset ones keep the defaults).
+    #[serde(default)]
+    pub ranges: Ranges<M>,
+    /// Learning-goal criterion (unset: the default for the system).
+    #[serde(default)]
+    pub success: Option<M::Success>,
+    /// Settings for all of this system's experiments.
+    #[serde(default)]
+    pub settings: Settings,
+    /// Settings for this system's crisp experiments (Table II, "Discrete").
+    #[serde(default)]
+    pub crisp: Settings,
+    /// Settings for this system's fuzzy experiments (Table II, "Fuzzy").
+    #[serde(default)]
+    pub fuzzy: Settings,
+    /// Experiments (Table I rows).
+    #[serde(deserialize_with = "non_empty")]
+    pub experiments: Vec<ExperimentSpec<M>>,
+}
+
+/// Survival success criterion.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BalanceSpec {
+    /// Steps without failure that reach the learning goal.
+    #[serde(deserialize_with = "at_least_one_u64")]
+    pub steps: u64,
+}
+
+/// Goal-reaching success criterion; unset fields keep their defaults.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReachSpec {
+    /// An episode reaching the goal within this many steps is a success.
+    #[serde(default, deserialize_with = "opt_at_least_one_u64")]
+    pub within: Option<u64>,
+    /// Consecutive successful episodes needed.
+    #[serde(default, deserialize_with = "opt_at_least_one_u64")]
+    pub streak: Option<u64>,
+    /// Episodes are cut off after this many steps.
+    #[serde(default, deserialize_with = "opt_at_least_one_u64")]
+    pub max_episode_steps: Option<u64>,
+}
+
+/// Learner, representation and cap settings; every field optional so levels can be layered:
+/// built-in defaults < pipeline `defaults` < system `settings` < system `crisp`/`fuzzy` <
+/// experiment `settings`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Settings {
+    /// Exploration rate ε.
+    #[serde(default)]
+    pub epsilon: Option<Unit>,
+    /// Discount γ.
+    #[serde(default)]
+    pub gamma: Option<Unit>,
+    /// Learning rate α.
+    #[serde(default)]
+    pub alpha: Option<Positive>,
+    /// Trace decay λ (Q(λ) only).
+    #[serde(default)]
+    pub lambda: Option<Unit>,
+    /// Initial Q value.
+    #[serde(default)]
+    pub q_init: Option<Finite>,
+    /// Greedy tie-breaking: random or first.
+    #[serde(default)]
+    pub tie_break: Option<TieBreak>,
+    /// Trace rule: accumulating or replacing (Q(λ) only).
+    #[serde(default)]
+    pub traces: Option<TraceKind>,
+    /// Watkins's trace cut after exploratory actions (Q(λ) only).
+    #[serde(default)]
+    pub watkins_cut: Option<bool>,
+    /// Traces below this are dropped (Q(λ) only).
+    #[serde(default)]
+    pub trace_cutoff: Option<SubUnit>,
+    /// Fuzzy σ as a multiple of the centre spacing.
+    #[serde(default)]
+    pub width: Option<Positive>,
+    /// Fuzzy memberships below this are skipped (0 = exact).
+    #[serde(default)]
+    pub prune: Option<SubUnit>,
+    /// Episode cap per trial.
+    #[serde(default, deserialize_with = "opt_at_least_one_u32")]
+    pub max_episodes: Option<u32>,
+    /// Step cap per trial.
+    #[serde(default, deserialize_with = "opt_at_least_one_u64")]
+    pub max_total_steps: Option<u64>,
+}
+
+/// Per-variable ranges of one system, checked against its variable names.
+#[derive(Debug, Clone)]
+pub struct Ranges<M> {
+    /// `(variable index, [lo, hi])`, in file order.
+    pub entries: Vec<(usize, [f64; 2])>,
+    _m: PhantomData<M>,
+}
+
+impl<M> Default for Ranges<M> {
+    fn default() -> Self {
+        Self { entries: Vec::new(), _m: PhantomData }
+    }
+}
+
+impl<'de, M: SystemMarker> Deserialize<'de> for Ranges<M> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<M>(PhantomData<M>);
+        impl<'de, M: SystemMarker> Visitor<'de> for V<M> {
+            type Value = Ranges<M>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "a map from {} variables to [lo, hi]", M::SYSTEM)
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Ranges<M>, A::Error> {
+                let mut out = Ranges::default();
+                while let Some(name) = map.next_key::<String>()? {
+                    let j = variable_index(M::SYSTEM, &name).map_err(de::Error::custom)?;
+                    let [lo, hi]: [f64; 2] = map.next_value()?;
+                    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                        return Err(de::Error::custom(format!(
+                            "ranges.{name}: [{lo}, {hi}] must be two finite numbers with lo < hi"
+                        )));
+                    }
+                    if out.entries.iter().any(|(k, _)| *k == j) {
+                        return Err(de::Error::custom(format!("ranges.{name} is given twice")));
+                    }
+                    out.entries.push((j, [lo, hi]));
+                }
+                Ok(out)
+            }
+        }
+        d.deserialize_map(V(PhantomData))
+    }
+}
+
+/// Index of a state variable by name, or an error listing the valid names.
+pub fn variable_index(system: SystemKind, name: &str) -> Result<usize, String> {
+    let vars = system.variables();
+    vars.iter().position(|v| *v == name).ok_or_else(|| {
+        let hint = suggest(name, vars.iter().copied().chain(["actions"]))
+            .map(|s| format!("; did you mean `{s}`?"))
+            .unwrap_or_default();
+        format!("unknown variable `{name}` for {system}; its variables are {}{hint}", vars.join(", "))
+    })
+}
+
+/// The closest candidate to `word` by edit distance, if reasonably close.
+pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(word, c), c))
+        .filter(|(d, c)| *d <= (c.len().max(word.len()) / 3).max(2))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+fn safe_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    let s = String::deserialize(d)?;
+    let ok = !s.is_empty()
+        && s.len() <= 100
+        && s.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        && !s.starts_with('.');
+    if ok {
+        Ok(s)
+    } else {
+        Err(de::Error::custom(format!(
+            "name `{s}` is not allowed; use 1-100 letters, digits, '-', '_' or '.', not starting with '.' (it names the report folder)"
+        )))
+    }
+}
+
+fn non_empty<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Vec<T>, D::Error> {
+    let v = Vec::<T>::deserialize(d)?;
+    if v.is_empty() {
+        return Err(de::Error::custom("the list is empty; give at least one experiment"));
+    }
+    Ok(v)
+}
+
+fn at_least_one_u64<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+    match u64::deserialize(d)? {
+        0 => Err(de::Error::custom("0 is not allowed; expected an integer ≥ 1")),
+        v => Ok(v),
+    }
+}
+
+fn opt_at_least_one_u64<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    at_least_one_u64(d).map(Some)
+}
+
+fn opt_at_least_one_u32<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    match u32::deserialize(d)? {
+        0 => Err(de::Error::custom("0 is not allowed; expected an integer ≥ 1")),
+        v => Ok(Some(v)),
+    }
+}
