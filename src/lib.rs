@@ -9,3 +9,4 @@ pub mod spec;
 
 pub mod cli;
 pub mod error;
+pub mod exec;

@@ -11,3 +11,6 @@ pub mod trial;
 
 pub use config::{Algorithm, TrialConfig};
 pub use trial::{run_trial, Outcome, StopReason};
+
+#[cfg(test)]
+mod reference_tests;

@@ -107,7 +107,7 @@ fn improve(msg: &str) -> String {
             let rest = &msg[start + kind.len()..];
             let Some(end) = rest.find('`') else { continue };
             let word = &rest[..end];
-            let expected: Vec<&str> = rest[end..].split('`').skip(1).step_by(2).collect();
+            let expected: Vec<&str> = rest[end..].split('`').skip(2).step_by(2).collect();
             if let Some(s) = suggest(word, expected.iter().copied()) {
                 return format!("{msg}; did you mean `{s}`?");
             }

@@ -1,0 +1,104 @@
+//! `qsweep run`: execute the pipeline's missing trials, store them, then write the report.
+
+use super::pipeline_args::PipelineArgs;
+use crate::exec::{execute, ExecOptions, Job, ProgressMode, INTERRUPTED};
+use clap::Args;
+use std::collections::HashSet;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// Arguments of `qsweep run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    #[command(flatten)]
+    pub pipeline: PipelineArgs,
+    /// Worker threads [default: number of CPUs].
+    #[arg(long, short = 'j')]
+    pub jobs: Option<usize>,
+    /// Run every trial again, even those already cached.
+    #[arg(long)]
+    pub force: bool,
+    /// Print nothing but errors.
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Do not write the report afterwards.
+    #[arg(long)]
+    pub no_report: bool,
+    /// Report directory [default: reports/<pipeline name>].
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Flush finished trials to the cache after this many...
+    #[arg(long, default_value_t = 500, value_name = "N")]
+    pub batch_trials: usize,
+    /// ...or after this many seconds, whichever comes first.
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    pub batch_seconds: f64,
+}
+
+/// Run `qsweep run`.
+pub fn run(a: RunArgs) -> anyhow::Result<u8> {
+    let start = Instant::now();
+    let plan = a.pipeline.plan()?;
+    let store = a.pipeline.store()?;
+    install_ctrlc();
+    let unique = plan.unique_trials();
+    let cached: HashSet<_> = if a.force { HashSet::new() } else { store.keys()?.keys };
+    let jobs: Vec<Job> = unique
+        .iter()
+        .filter(|(_, _, key)| !cached.contains(key))
+        .map(|&(config, seed, key)| Job { config, seed, key })
+        .collect();
+    let n_cached = unique.len() - jobs.len();
+    let opts = ExecOptions {
+        jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
+        batch_trials: a.batch_trials.max(1),
+        batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.max(0.0)),
+        progress: if a.quiet || a.json { ProgressMode::Hidden } else { ProgressMode::Auto },
+    };
+    let report = execute(&jobs, &opts, |batch| {
+        store.write_segment(batch)?;
+        Ok(())
+    })?;
+    let seconds = start.elapsed().as_secs_f64();
+    if a.json {
+        let v = serde_json::json!({
+            "pipeline": plan.name,
+            "executed": report.executed,
+            "cached": n_cached,
+            "failed": report.failed,
+            "interrupted": report.interrupted,
+            "seconds": seconds,
+        });
+        println!("{v}");
+    } else if !a.quiet {
+        println!("executed {}, cached {}, failed {} in {:.1} s", report.executed, n_cached, report.failed, seconds);
+    }
+    if report.interrupted {
+        if !a.quiet {
+            eprintln!("interrupted: {} finished trials are stored; run again to continue", report.executed);
+        }
+        return Ok(crate::error::exit::INTERRUPTED);
+    }
+    if !a.no_report {
+        super::report::write(&plan, &store, a.out.as_deref(), a.quiet || a.json)?;
+    }
+    if report.failed > 0 {
+        eprintln!("{} trials failed (diverged); see the `failure` column of trials.parquet", report.failed);
+        return Ok(crate::error::exit::FAILURE);
+    }
+    Ok(0)
+}
+
+fn install_ctrlc() {
+    // A second Ctrl-C exits at once; finished trials are already in renamed segments.
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(i32::from(crate::error::exit::INTERRUPTED));
+        }
+        eprintln!("\ninterrupt: finishing running trials and flushing; press Ctrl-C again to stop now");
+    });
+}

@@ -1,0 +1,171 @@
+//! `qsweep status`: what is cached and what is missing, per system and experiment, without running
+//! anything; `--explain` says why missing cells are missing.
+
+use super::pipeline_args::PipelineArgs;
+use crate::cache::TrialRecord;
+use clap::Args;
+use serde_json::Value;
+use std::collections::{BTreeMap, HashMap, HashSet};
+
+/// Arguments of `qsweep status`.
+#[derive(Debug, Args)]
+pub struct StatusArgs {
+    #[command(flatten)]
+    pub pipeline: PipelineArgs,
+    /// Print the counts as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// For missing cells, show which resolved fields differ from the cached trial at the same grid
+    /// position (same system, representation, algorithm, resolution, actions and seed).
+    #[arg(long)]
+    pub explain: bool,
+}
+
+/// Run `qsweep status`.
+pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
+    let plan = a.pipeline.plan()?;
+    let store = a.pipeline.store()?;
+    let scan = store.keys()?;
+    let cached = &scan.keys;
+    let mut rows = Vec::new();
+    for e in &plan.experiments {
+        let keys: HashSet<_> = e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key)).collect();
+        let hit = keys.iter().filter(|k| cached.contains(k)).count();
+        rows.push((e, keys.len(), hit));
+    }
+    let unique: HashSet<_> = plan.trials().map(|(_, _, t)| t.key).collect();
+    let unique_hit = unique.iter().filter(|k| cached.contains(k)).count();
+    if a.json {
+        let experiments: Vec<Value> = rows
+            .iter()
+            .map(|(e, n, hit)| {
+                serde_json::json!({"system": e.system.name(), "experiment": e.id, "repr": e.repr.name(),
+                    "cells": e.cells.len(), "trials": n, "cached": hit, "missing": n - hit})
+            })
+            .collect();
+        let v = serde_json::json!({"pipeline": plan.name, "trials": unique.len(), "cached": unique_hit,
+            "missing": unique.len() - unique_hit, "experiments": experiments,
+            "damaged_segments": scan.damaged.len()});
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}", "system", "exp", "repr", "cells", "trials", "cached", "missing");
+        for (e, n, hit) in &rows {
+            println!(
+                "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",
+                e.system.name(),
+                e.id,
+                e.repr.name(),
+                e.cells.len(),
+                n,
+                hit,
+                n - hit
+            );
+        }
+        println!(
+            "total: {} trials, {} cached, {} missing (cache: {})",
+            unique.len(),
+            unique_hit,
+            unique.len() - unique_hit,
+            a.pipeline.cache_dir().display()
+        );
+        for d in &scan.damaged {
+            println!("damaged segment: {d}");
+        }
+    }
+    if a.explain && unique_hit < unique.len() {
+        explain(&plan, &store.read_all()?, cached);
+    }
+    Ok(0)
+}
+
+type Position = (String, String, String, Vec<u32>, u32, u64);
+
+fn position(c: &crate::sim::TrialConfig, seed: u64) -> Position {
+    (
+        c.system().name().to_string(),
+        c.repr.kind.name().to_string(),
+        c.learner.algorithm.name().to_string(),
+        c.repr.resolution.clone(),
+        c.actions,
+        seed,
+    )
+}
+
+fn explain(plan: &crate::plan::Plan, records: &[TrialRecord], cached: &HashSet<crate::cache::Key>) {
+    let mut at: HashMap<Position, Vec<&TrialRecord>> = HashMap::new();
+    for r in records {
+        at.entry(position(&r.config, r.seed)).or_default().push(r);
+    }
+    // One line per missing cell: the differences are the same for all its seeds.
+    let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
+    for e in &plan.experiments {
+        for c in &e.cells {
+            let missing: Vec<_> = c.trials.iter().filter(|t| !cached.contains(&t.key)).collect();
+            let Some(t) = missing.first() else { continue };
+            let label = format!(
+                "{} exp {} {} {}",
+                e.system.name(),
+                e.id,
+                c.algorithm.name(),
+                c.coords.iter().map(u32::to_string).collect::<Vec<_>>().join("×")
+            );
+            let why = match at.get(&position(&c.config, t.seed)) {
+                None => "never computed (no cached trial at this grid position and seed)".to_string(),
+                Some(prev) => {
+                    let new = flatten(&serde_json::to_value(&c.config).unwrap_or(Value::Null));
+                    let best = prev
+                        .iter()
+                        .map(|r| {
+                            let old = flatten(&serde_json::to_value(&r.config).unwrap_or(Value::Null));
+                            diff(&old, &new, r.engine_version)
+                        })
+                        .min_by_key(Vec::len)
+                        .unwrap_or_default();
+                    if best.is_empty() {
+                        "cached under another engine version".to_string()
+                    } else {
+                        best.join(", ")
+                    }
+                }
+            };
+            println!("missing {label} ({} of {} seeds): {why}", missing.len(), c.trials.len());
+            *reasons.entry(why).or_default() += 1;
+        }
+    }
+    if reasons.len() > 1 {
+        println!("summary of reasons:");
+        for (why, n) in reasons {
+            println!("  {n} cells: {why}");
+        }
+    }
+}
+
+fn flatten(v: &Value) -> BTreeMap<String, String> {
+    fn go(prefix: &str, v: &Value, out: &mut BTreeMap<String, String>) {
+        match v {
+            Value::Object(m) => {
+                for (k, v) in m {
+                    go(&if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") }, v, out);
+                }
+            }
+            other => {
+                out.insert(prefix.to_string(), other.to_string());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    go("", v, &mut out);
+    out
+}
+
+fn diff(old: &BTreeMap<String, String>, new: &BTreeMap<String, String>, old_version: u32) -> Vec<String> {
+    let mut out: Vec<String> = new
+        .iter()
+        .filter(|(k, v)| old.get(*k) != Some(v))
+        .map(|(k, v)| format!("{k}: {} → {v}", old.get(k).map_or("(unset)", String::as_str)))
+        .collect();
+    if old_version != crate::cache::ENGINE_VERSION {
+        out.push(format!("engine version: {old_version} → {}", crate::cache::ENGINE_VERSION));
+    }
+    out
+}

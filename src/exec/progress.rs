@@ -1,0 +1,81 @@
+//! Progress display: an indicatif bar with rate and ETA on a terminal, plain lines every few
+//! seconds otherwise, nothing when quiet.
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+
+/// How progress is shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProgressMode {
+    /// Nothing (`--quiet`).
+    Hidden,
+    /// A bar on a terminal, plain lines otherwise.
+    Auto,
+}
+
+pub(super) struct Progress {
+    bar: Option<ProgressBar>,
+    plain: bool,
+    total: usize,
+    done: usize,
+    failed: usize,
+    start: Instant,
+    last_line: Instant,
+}
+
+impl Progress {
+    pub(super) fn new(mode: ProgressMode, total: usize) -> Self {
+        let show = mode == ProgressMode::Auto && total > 0;
+        let terminal = std::io::stderr().is_terminal();
+        let bar = (show && terminal).then(|| {
+            let b = ProgressBar::new(total as u64);
+            b.set_style(
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} trials  {per_sec}  ETA {eta}  {msg}",
+                )
+                .expect("valid template"),
+            );
+            b.enable_steady_tick(Duration::from_millis(200));
+            b
+        });
+        let now = Instant::now();
+        Self { bar, plain: show && !terminal, total, done: 0, failed: 0, start: now, last_line: now }
+    }
+
+    pub(super) fn inc(&mut self, failed: bool) {
+        self.done += 1;
+        self.failed += usize::from(failed);
+        if let Some(b) = &self.bar {
+            b.inc(1);
+            if self.failed > 0 {
+                b.set_message(format!("{} failed", self.failed));
+            }
+        }
+        self.tick();
+    }
+
+    pub(super) fn tick(&mut self) {
+        if self.plain && self.last_line.elapsed() >= Duration::from_secs(5) {
+            self.last_line = Instant::now();
+            let secs = self.start.elapsed().as_secs_f64();
+            let rate = self.done as f64 / secs.max(1e-9);
+            let eta = if rate > 0.0 { (self.total - self.done) as f64 / rate } else { f64::NAN };
+            eprintln!(
+                "progress: {}/{} trials ({:.0}%), {:.1} trials/s, ETA {:.0} s{}",
+                self.done,
+                self.total,
+                100.0 * self.done as f64 / self.total as f64,
+                rate,
+                eta,
+                if self.failed > 0 { format!(", {} failed", self.failed) } else { String::new() }
+            );
+        }
+    }
+
+    pub(super) fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
