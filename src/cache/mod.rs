@@ -2,6 +2,8 @@
 
 pub mod key;
 pub mod record;
+pub mod store;
 
 pub use key::{Key, ENGINE_VERSION};
 pub use record::TrialRecord;
+pub use store::Store;

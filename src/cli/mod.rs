@@ -1,7 +1,10 @@
 //! Command-line interface: one file per subcommand, each a thin layer over the library.
 
 mod args;
+mod pipeline_args;
+mod run;
 mod simulate;
+mod status;
 mod trial;
 
 use clap::{Parser, Subcommand};
@@ -22,6 +25,10 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Run one trial (one configuration, one seed) and print its outcome.
     Trial(trial::TrialArgs),
+    /// Run a pipeline's missing trials in parallel, store them in the cache, then write the report.
+    Run(run::RunArgs),
+    /// Show how many of a pipeline's trials are cached and missing, without running anything.
+    Status(status::StatusArgs),
 }
 
 /// Run a parsed command line; returns the process exit code.
@@ -29,5 +36,7 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Simulate(a) => simulate::run(a),
         Command::Trial(a) => trial::run(a),
+        Command::Run(a) => run::run(a),
+        Command::Status(a) => status::run(a),
     }
 }

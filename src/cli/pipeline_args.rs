@@ -28,7 +28,8 @@ pub struct PipelineArgs {
 impl PipelineArgs {
     /// Load, override and expand the pipeline.
     pub fn plan(&self) -> anyhow::Result<Plan> {
-        let overrides = self.set.iter().map(|s| Override::parse(s).map_err(user_error)).collect::<Result<Vec<_>, _>>()?;
+        let overrides =
+            self.set.iter().map(|s| Override::parse(s).map_err(user_error)).collect::<Result<Vec<_>, _>>()?;
         let loaded = load(&self.pipeline, &overrides)?;
         plan(&loaded, (!self.yes).then_some(DEFAULT_MAX_TRIALS))
     }

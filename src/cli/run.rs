@@ -75,16 +75,16 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         });
         println!("{v}");
     } else if !a.quiet {
-        println!("executed {}, cached {}, failed {} in {:.1} s", report.executed, n_cached, report.failed, seconds);
+        println!(
+            "executed {}, cached {}, failed {} in {:.1} s",
+            report.executed, n_cached, report.failed, seconds
+        );
     }
     if report.interrupted {
         if !a.quiet {
             eprintln!("interrupted: {} finished trials are stored; run again to continue", report.executed);
         }
         return Ok(crate::error::exit::INTERRUPTED);
-    }
-    if !a.no_report {
-        super::report::write(&plan, &store, a.out.as_deref(), a.quiet || a.json)?;
     }
     if report.failed > 0 {
         eprintln!("{} trials failed (diverged); see the `failure` column of trials.parquet", report.failed);

@@ -48,7 +48,10 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             "damaged_segments": scan.damaged.len()});
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        println!("{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}", "system", "exp", "repr", "cells", "trials", "cached", "missing");
+        println!(
+            "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",
+            "system", "exp", "repr", "cells", "trials", "cached", "missing"
+        );
         for (e, n, hit) in &rows {
             println!(
                 "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",

@@ -70,7 +70,9 @@ pub fn estimated_cost(c: &TrialConfig) -> f64 {
     let per_step = match c.repr.kind {
         ReprKind::Crisp => 1.0 + 0.05 * f64::from(c.actions),
         // Active rules per step: about min(n, 5) sets per variable survive pruning.
-        ReprKind::Fuzzy => c.repr.resolution.iter().map(|&n| f64::from(n.min(5))).product::<f64>() * f64::from(c.actions),
+        ReprKind::Fuzzy => {
+            c.repr.resolution.iter().map(|&n| f64::from(n.min(5))).product::<f64>() * f64::from(c.actions)
+        }
     };
     per_step * (c.limits.max_total_steps as f64).min(c.limits.episode_cap() as f64 * 10.0)
 }
@@ -109,7 +111,12 @@ pub fn execute(
                         let job = jobs[j];
                         let start = Instant::now();
                         let outcome = run_trial(job.config, job.seed);
-                        let rec = TrialRecord::new(job.config.clone(), job.seed, outcome, start.elapsed().as_secs_f64());
+                        let rec = TrialRecord::new(
+                            job.config.clone(),
+                            job.seed,
+                            outcome,
+                            start.elapsed().as_secs_f64(),
+                        );
                         debug_assert_eq!(rec.key, job.key);
                         if tx.send(rec).is_err() {
                             break;

@@ -11,7 +11,12 @@ use super::run_trial;
 
 /// Episode lengths and whether the goal was reached, by the literal dense algorithm.
 fn dense_reference(cfg: &TrialConfig, seed: u64) -> (Vec<u32>, bool) {
-    fn go<E: Environment>(cfg: &TrialConfig, seed: u64, mut env: E, repr: &dyn Representation) -> (Vec<u32>, bool) {
+    fn go<E: Environment>(
+        cfg: &TrialConfig,
+        seed: u64,
+        mut env: E,
+        repr: &dyn Representation,
+    ) -> (Vec<u32>, bool) {
         let l = &cfg.learner;
         let acts = action_set(cfg.env.action_max(), cfg.actions);
         let na = acts.len();
@@ -123,7 +128,10 @@ fn crisp_learner_matches_the_dense_equations_bit_for_bit() {
                 for seed in 0..3 {
                     let ours = run_trial(&c, seed);
                     let (lengths, converged) = dense_reference(&c, seed);
-                    assert_eq!(ours.episode_lengths, lengths, "{system} {algorithm:?} {res} {actions} seed {seed}");
+                    assert_eq!(
+                        ours.episode_lengths, lengths,
+                        "{system} {algorithm:?} {res} {actions} seed {seed}"
+                    );
                     assert_eq!(ours.converged, converged);
                 }
             }
@@ -168,7 +176,8 @@ fn q0_is_exactly_q_lambda_with_lambda_zero() {
 
 #[test]
 fn trials_are_deterministic_and_seeds_matter() {
-    let c = TrialConfig::paper(SystemKind::CartPole, ReprKind::Fuzzy, Algorithm::QLambda, vec![3, 2, 3, 2], 2);
+    let c =
+        TrialConfig::paper(SystemKind::CartPole, ReprKind::Fuzzy, Algorithm::QLambda, vec![3, 2, 3, 2], 2);
     let mut c = c;
     c.limits.max_episodes = 20;
     let a = run_trial(&c, 5);

@@ -109,7 +109,12 @@ def simulate_args(bin_path: Path, env: str, start: Sequence[float], actions: Seq
     # `--opt=value` so that values beginning with '-' are never taken for flags.
     state = ",".join(repr(float(v)) for v in start)
     acts = ",".join(repr(int(a)) if float(a).is_integer() else repr(float(a)) for a in actions)
-    return [str(bin_path), "simulate", f"--env={env}", f"--state={state}", f"--actions={acts}"]
+    args = [str(bin_path), "simulate", f"--env={env}", f"--state={state}", f"--actions={acts}"]
+    if env == "mountain-car":
+        # MountainCar-v0 clips the position at max_position = 0.6; the paper's range (qsweep's
+        # default) is [-1.2, 0.5]. The two differ only in the reported state of the goal step.
+        args.append("--param=x_max=0.6")
+    return args
 
 
 def run_qsweep(bin_path: Path, env: str, start: Sequence[float], actions: Sequence[float], what: str) -> list[gr.Row]:

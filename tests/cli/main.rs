@@ -1,0 +1,6 @@
+//! End-to-end tests of the `qsweep` binary (one test binary; helpers in `helpers.rs`).
+
+mod helpers;
+mod pipeline;
+mod simulate;
+mod trial;

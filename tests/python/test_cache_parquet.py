@@ -1,0 +1,77 @@
+"""The cache reads back as one table in pandas, polars and DuckDB (the README's promise)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import duckdb
+import pandas as pd
+import polars as pl
+import pytest
+
+from conftest import REPO_ROOT
+
+TINY = REPO_ROOT / "tests" / "fixtures" / "pipelines" / "tiny.yaml"
+N_TRIALS = 56
+
+
+@pytest.fixture(scope="module")
+def cache(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    d = tmp_path_factory.mktemp("cache")
+    out = subprocess.run(
+        [str(qsweep_bin), "run", str(TINY), "--cache", str(d), "--json", "--no-report", "--batch-trials", "10"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    summary = json.loads(out.stdout)
+    assert summary["executed"] == N_TRIALS
+    return d
+
+
+def check(df: pd.DataFrame) -> None:
+    assert len(df) == N_TRIALS
+    assert df["key"].is_unique
+    assert set(df["system"]) == {"ball-beam", "mountain-car"}
+    assert set(df["algorithm"]) == {"q0", "q-lambda"}
+    assert df["episodes"].dtype == "uint32"
+    assert df["total_steps"].dtype == "uint64"
+    assert df["converged"].dtype == bool
+    # The list column holds every episode, and the totals agree with it.
+    for _, row in df.iterrows():
+        lengths = list(row["episode_lengths"])
+        assert len(lengths) == row["episodes"]
+        assert sum(lengths) == row["total_steps"]
+        assert json.loads(row["config_json"])["actions"] == row["actions"]
+        if row["converged"]:
+            assert row["episodes_to_goal"] == row["episodes"]
+        else:
+            assert pd.isna(row["episodes_to_goal"])
+
+
+def test_pandas_reads_the_cache_directory(cache: Path) -> None:
+    check(pd.read_parquet(cache))
+
+
+def test_polars_reads_the_segment_glob(cache: Path) -> None:
+    df = pl.read_parquet(str(cache / "seg-*.parquet"))
+    assert df.schema["resolution"] == pl.List(pl.UInt32)
+    assert df.schema["episodes_to_goal"] == pl.UInt32
+    check(df.to_pandas())
+
+
+def test_duckdb_reads_the_segment_glob(cache: Path) -> None:
+    con = duckdb.connect()
+    glob = str(cache / "seg-*.parquet")
+    n, systems = con.execute(
+        f"select count(*), count(distinct system) from read_parquet('{glob}')"
+    ).fetchone()
+    assert (n, systems) == (N_TRIALS, 2)
+    per_cell = con.execute(
+        f"select system, repr, algorithm, resolution, actions, count(*) as n "
+        f"from read_parquet('{glob}') group by all"
+    ).fetchall()
+    assert len(per_cell) == N_TRIALS // 2
+    assert all(row[-1] == 2 for row in per_cell)
