@@ -13,6 +13,11 @@ use std::fmt;
 /// with it, so stale results are never served. Pinned by the semantics fingerprint test.
 pub const ENGINE_VERSION: u32 = 1;
 
+/// blake3 (first 16 hex chars) of the outcomes of the fixed fingerprint trials under
+/// [`ENGINE_VERSION`]. Changing the simulation changes it, and the fingerprint test then fails until
+/// both are updated together, so stale cached results are never served as current ones.
+pub const SEMANTICS_FINGERPRINT: (u32, &str) = (1, "d48f4770ce5bafb3");
+
 /// A trial's cache key (32 bytes of blake3).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Key(pub [u8; 32]);
@@ -98,6 +103,50 @@ mod tests {
         c.repr.resolution[3] = 3;
         assert_ne!(base, Key::of(&c, 0));
         assert_ne!(Key::from_canonical(&canonical_config(&cfg()), 0, ENGINE_VERSION + 1), base);
+    }
+
+    /// Small trials covering every system × representation × algorithm, tie-breaking rule and
+    /// trace option, hashed by outcome.
+    fn fingerprint() -> String {
+        use crate::sim::config::{TieBreak, TraceKind};
+        use crate::sim::run_trial;
+        let mut h = blake3::Hasher::new();
+        for system in SystemKind::ALL {
+            for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
+                for algorithm in [Algorithm::Q0, Algorithm::QLambda] {
+                    for variant in 0..3 {
+                        let mut c = TrialConfig::paper(system, repr, algorithm, vec![3; system.dim()], 3);
+                        c.limits.max_episodes = 15;
+                        c.limits.max_total_steps = 20_000;
+                        match variant {
+                            1 => c.learner.tie_break = TieBreak::First,
+                            2 => {
+                                c.learner.traces = TraceKind::Replacing;
+                                c.learner.watkins_cut = true;
+                                c.learner.q_init = 0.5;
+                            }
+                            _ => {}
+                        }
+                        c.normalize();
+                        let o = run_trial(&c, 11);
+                        h.update(serde_json::to_string(&o).unwrap().as_bytes());
+                    }
+                }
+            }
+        }
+        h.finalize().to_hex()[..16].to_string()
+    }
+
+    #[test]
+    fn semantics_fingerprint_matches_engine_version() {
+        let got = fingerprint();
+        assert_eq!(
+            (ENGINE_VERSION, got.as_str()),
+            SEMANTICS_FINGERPRINT,
+            "the simulation's outcomes changed: if intended, bump ENGINE_VERSION and set \
+             SEMANTICS_FINGERPRINT to ({}, \"{got}\") in src/cache/key.rs",
+            ENGINE_VERSION + 1
+        );
     }
 
     #[test]
