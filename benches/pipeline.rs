@@ -1,0 +1,86 @@
+//! Pipeline overhead benchmark (`cargo bench --bench pipeline`): planning and key scans on the
+//! paper grid with a warm cache, and the share of a real run spent outside the trials.
+//!
+//! Targets (issue 3): `status` under 1 s and a no-op `run` under 2 s on the full paper grid with a
+//! warm cache; planning + hashing + storing under 1% of trial compute on the quick pipeline.
+
+use qsweep::cache::{Store, TrialRecord};
+use qsweep::sim::{Outcome, StopReason};
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+fn qsweep(args: &[&str], cache: &Path) -> (f64, String) {
+    let start = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+        .args(args)
+        .arg("--cache")
+        .arg(cache)
+        .output()
+        .expect("qsweep runs");
+    let secs = start.elapsed().as_secs_f64();
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    (secs, String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let paper = root.join("pipelines/paper.yaml");
+    let quick = root.join("pipelines/quick.yaml");
+
+    // Plan the paper grid in-process.
+    let start = Instant::now();
+    let loaded = qsweep::spec::load(&paper, &[]).unwrap();
+    let plan = qsweep::plan::plan(&loaded, None).unwrap();
+    let plan_secs = start.elapsed().as_secs_f64();
+    let unique = plan.unique_trials();
+    println!("plan paper.yaml: {} distinct trials in {:.3} s", unique.len(), plan_secs);
+
+    // A warm cache: one synthetic row per trial, in segments of 500 (what --batch-trials writes).
+    let dir = tempfile::tempdir().unwrap();
+    let store = Store::open(dir.path()).unwrap();
+    let records: Vec<TrialRecord> = unique
+        .iter()
+        .map(|&(config, seed, _)| {
+            let outcome = Outcome {
+                converged: true,
+                episodes_to_goal: Some(20),
+                episodes: 20,
+                total_steps: 20 * 500,
+                stop: StopReason::Goal,
+                failure: None,
+                episode_lengths: vec![500; 20],
+            };
+            TrialRecord::new(config.clone(), seed, outcome, 0.1)
+        })
+        .collect();
+    let start = Instant::now();
+    for chunk in records.chunks(500) {
+        store.write_segment(chunk).unwrap();
+    }
+    println!(
+        "store {} rows in {} segments: {:.3} s",
+        records.len(),
+        records.len().div_ceil(500),
+        start.elapsed().as_secs_f64()
+    );
+
+    let p = paper.to_str().unwrap();
+    let (status_secs, _) = qsweep(&["status", p], dir.path());
+    let (noop_secs, out) = qsweep(&["run", p, "--no-report", "--quiet", "--json"], dir.path());
+    assert!(out.contains("\"executed\":0"), "{out}");
+    println!("status paper.yaml, warm cache: {status_secs:.3} s (target < 1 s)");
+    println!("no-op run paper.yaml, warm cache: {noop_secs:.3} s (target < 2 s)");
+
+    // Overhead on the quick pipeline, one thread: wall time minus the trials' own time.
+    let qdir = tempfile::tempdir().unwrap();
+    let (wall, _) =
+        qsweep(&["run", quick.to_str().unwrap(), "--no-report", "--quiet", "--jobs", "1"], qdir.path());
+    let trial_secs: f64 =
+        Store::open(qdir.path()).unwrap().read_all().unwrap().iter().map(|r| r.seconds).sum();
+    let overhead = (wall - trial_secs).max(0.0);
+    println!(
+        "quick.yaml --jobs 1: {wall:.2} s wall, {trial_secs:.2} s in trials, overhead {overhead:.3} s = {:.2}% of trial compute (target < 1%)",
+        100.0 * overhead / trial_secs
+    );
+}
