@@ -1,0 +1,7 @@
+//! The report stage: from a plan and the trial records found for it, write Table III, the data
+//! behind it and the paper's Figures 5–7.
+
+pub mod model;
+pub mod stats;
+
+pub use model::ReportData;
