@@ -2,6 +2,7 @@
 //! behind it and the paper's Figures 5–7.
 
 pub mod model;
+pub mod parquet;
 pub mod stats;
 pub mod table;
 
