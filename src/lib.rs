@@ -4,6 +4,7 @@
 
 pub mod cache;
 pub mod plan;
+pub mod report;
 pub mod sim;
 pub mod spec;
 

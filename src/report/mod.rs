@@ -1,0 +1,109 @@
+//! The report stage: from a plan and the trial records found for it, write
+//!
+//! - `table3.md`, `table3.csv`, `table3.tex`: the paper's Table III (best cell per system,
+//!   experiment and algorithm, with the paper's values when the pipeline gives them);
+//! - `cells.parquet`, `trials.parquet`: the data behind it (schemas in [`parquet`]);
+//! - `figures/<system>.svg` and `.png`: the paper's Figures 5–7 (see [`figures`]);
+//! - `index.html`: one self-contained page with all of the above.
+//!
+//! Trials missing from the records are left out and counted. Every file is written atomically
+//! (a temporary file in the same directory, then a rename), and the output is a pure function of
+//! the inputs: no timestamps, no hash-map order, a seeded bootstrap.
+
+pub mod figures;
+pub mod glyphs;
+pub mod html;
+pub mod model;
+pub mod parquet;
+pub mod stats;
+pub mod table;
+
+use crate::cache::{Key, TrialRecord};
+use crate::plan::Plan;
+use anyhow::Context;
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+pub use model::ReportData;
+
+/// What [`write_report`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReportSummary {
+    /// Experiments in the plan.
+    pub experiments: usize,
+    /// Cells in the plan.
+    pub cells: usize,
+    /// Cells with at least one trial present.
+    pub cells_with_trials: usize,
+    /// Planned (cell, seed) trials; a trial shared by two cells counts twice.
+    pub trials_planned: usize,
+    /// Of those, present in the records.
+    pub trials_present: usize,
+    /// Of those, missing.
+    pub trials_missing: usize,
+    /// Files written, relative to the report directory, in writing order.
+    pub files: Vec<PathBuf>,
+}
+
+/// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it.
+pub fn write_report(
+    plan: &Plan,
+    records: &HashMap<Key, TrialRecord>,
+    dir: &Path,
+) -> anyhow::Result<ReportSummary> {
+    std::fs::create_dir_all(dir.join("figures"))
+        .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
+    let data = ReportData::build(plan, records);
+    let mut files = Vec::new();
+    let mut put = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
+        write_atomic(&dir.join(name), bytes)?;
+        files.push(PathBuf::from(name));
+        Ok(())
+    };
+
+    let t3 = table::table3(&data);
+    put("table3.md", table::render(&t3, &table::Markdown).as_bytes())?;
+    put("table3.csv", table::render(&t3, &table::Csv).as_bytes())?;
+    put("table3.tex", table::render(&t3, &table::Latex).as_bytes())?;
+    put("cells.parquet", &parquet::cells_parquet(&data)?)?;
+    put("trials.parquet", &parquet::trials_parquet(&data)?)?;
+    let mut sizes = Vec::new();
+    for system in data.systems() {
+        let (svg, png) = figures::render(&data, system)?;
+        put(&format!("figures/{}.svg", system.name()), svg.as_bytes())?;
+        put(&format!("figures/{}.png", system.name()), &png)?;
+        let exps: Vec<_> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
+        sizes.push((system.name().to_string(), figures::figure_size(&exps)));
+    }
+    put("index.html", html::page(&data, &sizes).as_bytes())?;
+
+    let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
+    Ok(ReportSummary {
+        experiments: data.experiments.len(),
+        cells: cells.len(),
+        cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
+        trials_planned: data.trials_planned,
+        trials_present: data.trials_present,
+        trials_missing: data.trials_planned - data.trials_present,
+        files,
+    })
+}
+
+/// Write `bytes` to `path` through a temporary file in the same directory and a rename, so a
+/// reader sees the old file or the new one, never a partial one.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}

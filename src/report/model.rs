@@ -1,0 +1,303 @@
+//! The report's view of a plan and its trial records: per experiment, per cell, the trials that
+//! are present, the episode count each contributes, the cell's statistics, and the best cell per
+//! algorithm (the paper's red rectangle and Table III row).
+//!
+//! Episodes counted: a converged trial counts its `episodes_to_goal`; a trial that never reached
+//! the goal is kept and counted at the episode cap `max_episodes` (right-censored), so failures
+//! raise a cell's mean instead of vanishing from it.
+
+use super::stats::Summary;
+use crate::cache::{Key, TrialRecord};
+use crate::plan::{Cell, Experiment, Plan, PlannedTrial};
+use crate::sim::env::SystemKind;
+use crate::sim::Algorithm;
+use std::collections::HashMap;
+
+/// State-variable columns of the report, in Table III order.
+pub const VAR_COLUMNS: [&str; 4] = ["x", "x_dot", "theta", "theta_dot"];
+
+/// The Table III rule, as stated in every caption.
+pub const BEST_RULE: &str = "Best cell: the lowest mean among the cells where every seed reached the \
+learning goal; if no cell qualifies, the cell with the most successes, then the lowest mean (marked †).";
+
+/// How non-converged trials enter the statistics, as stated in every caption.
+pub const CENSORING: &str = "Trials that never reached the goal are not dropped: they count at the \
+episode cap (max_episodes), so those means are lower bounds. std is the sample standard deviation \
+(n − 1).";
+
+/// Episodes a trial contributes to its cell's statistics.
+pub fn episodes_counted(r: &TrialRecord) -> u32 {
+    match (r.outcome.converged, r.outcome.episodes_to_goal) {
+        (true, Some(e)) => e,
+        _ => r.config.limits.max_episodes,
+    }
+}
+
+/// Bins or fuzzy sets per report column ([`VAR_COLUMNS`]); `None` where the system lacks the
+/// variable.
+pub fn resolution_columns(system: SystemKind, resolution: &[u32]) -> [Option<u32>; 4] {
+    let vars = system.variables();
+    VAR_COLUMNS.map(|name| vars.iter().position(|v| *v == name).and_then(|j| resolution.get(j).copied()))
+}
+
+/// A present trial of a cell.
+#[derive(Debug, Clone, Copy)]
+pub struct TrialData<'a> {
+    /// The planned trial (seed, key).
+    pub planned: &'a PlannedTrial,
+    /// Its record.
+    pub record: &'a TrialRecord,
+    /// Episodes it contributes ([`episodes_counted`]).
+    pub counted: u32,
+}
+
+/// A cell with its present trials and statistics.
+#[derive(Debug, Clone)]
+pub struct CellData<'a> {
+    /// The planned cell.
+    pub cell: &'a Cell,
+    /// Present trials, in seed order.
+    pub trials: Vec<TrialData<'a>>,
+    /// Present trials that reached the goal.
+    pub successes: usize,
+    /// Statistics of the counted episodes.
+    pub summary: Summary,
+}
+
+impl CellData<'_> {
+    /// Whether some present trial did not reach the goal.
+    pub fn any_failed(&self) -> bool {
+        self.successes < self.trials.len()
+    }
+
+    /// Planned trials of the cell.
+    pub fn planned(&self) -> usize {
+        self.cell.trials.len()
+    }
+}
+
+/// The chosen best cell of one algorithm in one experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Best {
+    /// Index into the experiment's cells.
+    pub cell: usize,
+    /// Whether every present seed of that cell reached the goal (false: fallback, marked †).
+    pub all_converged: bool,
+}
+
+/// An experiment with its cells and best cells.
+#[derive(Debug, Clone)]
+pub struct ExpData<'a> {
+    /// The planned experiment.
+    pub exp: &'a Experiment,
+    /// Cells in plan order (algorithm-major).
+    pub cells: Vec<CellData<'a>>,
+    /// Per algorithm of the experiment, in its order: the best cell, if any cell has trials.
+    pub best: Vec<(Algorithm, Option<Best>)>,
+}
+
+impl ExpData<'_> {
+    /// The best cell of `algorithm`, if any.
+    pub fn best_of(&self, algorithm: Algorithm) -> Option<Best> {
+        self.best.iter().find(|(a, _)| *a == algorithm).and_then(|(_, b)| *b)
+    }
+
+    /// Whether cell `i` is the best of its algorithm.
+    pub fn is_best(&self, i: usize) -> bool {
+        self.best_of(self.cells[i].cell.algorithm).is_some_and(|b| b.cell == i)
+    }
+
+    /// The index of the cell with this algorithm and coordinates.
+    pub fn find(&self, algorithm: Algorithm, coords: &[u32]) -> Option<usize> {
+        self.cells.iter().position(|c| c.cell.algorithm == algorithm && c.cell.coords == coords)
+    }
+}
+
+/// The whole report's data.
+#[derive(Debug, Clone)]
+pub struct ReportData<'a> {
+    /// The plan.
+    pub plan: &'a Plan,
+    /// Experiments in plan order.
+    pub experiments: Vec<ExpData<'a>>,
+    /// Planned (cell, seed) trials, counting a trial shared by two cells twice.
+    pub trials_planned: usize,
+    /// Of those, present in the records.
+    pub trials_present: usize,
+}
+
+impl<'a> ReportData<'a> {
+    /// Gather the present trials of every cell and compute statistics and best cells.
+    pub fn build(plan: &'a Plan, records: &'a HashMap<Key, TrialRecord>) -> Self {
+        let mut planned = 0;
+        let mut present = 0;
+        let experiments = plan
+            .experiments
+            .iter()
+            .map(|exp| {
+                let cells: Vec<CellData> = exp
+                    .cells
+                    .iter()
+                    .map(|cell| {
+                        let trials: Vec<TrialData> = cell
+                            .trials
+                            .iter()
+                            .filter_map(|t| {
+                                records.get(&t.key).map(|r| TrialData {
+                                    planned: t,
+                                    record: r,
+                                    counted: episodes_counted(r),
+                                })
+                            })
+                            .collect();
+                        planned += cell.trials.len();
+                        present += trials.len();
+                        cell_data(cell, trials)
+                    })
+                    .collect();
+                let best = exp
+                    .algorithms
+                    .iter()
+                    .map(|&a| {
+                        let candidates =
+                            cells.iter().enumerate().filter(|(_, c)| c.cell.algorithm == a).map(|(i, c)| {
+                                Candidate {
+                                    index: i,
+                                    n: c.trials.len(),
+                                    successes: c.successes,
+                                    mean: c.summary.mean,
+                                }
+                            });
+                        (a, best_cell(candidates))
+                    })
+                    .collect();
+                ExpData { exp, cells, best }
+            })
+            .collect();
+        Self { plan, experiments, trials_planned: planned, trials_present: present }
+    }
+
+    /// Systems present in the plan, in report order.
+    pub fn systems(&self) -> Vec<SystemKind> {
+        SystemKind::ALL.into_iter().filter(|s| self.experiments.iter().any(|e| e.exp.system == *s)).collect()
+    }
+
+    /// Whether any experiment carries published reference values.
+    pub fn has_reference(&self) -> bool {
+        self.experiments.iter().any(|e| !e.exp.reference.is_empty())
+    }
+}
+
+fn cell_data<'a>(cell: &'a Cell, trials: Vec<TrialData<'a>>) -> CellData<'a> {
+    let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
+    let successes = trials.iter().filter(|t| t.record.outcome.converged).count();
+    let summary = Summary::of(&values, bootstrap_seed(trials.iter().map(|t| &t.planned.key)));
+    CellData { cell, trials, successes, summary }
+}
+
+/// Bootstrap seed of a cell: derived from the keys of its present trials, so it changes exactly
+/// when the sample does.
+fn bootstrap_seed<'k>(keys: impl Iterator<Item = &'k Key>) -> u64 {
+    let mut h = blake3::Hasher::new();
+    h.update(b"qsweep-bootstrap\0");
+    for k in keys {
+        h.update(&k.0);
+    }
+    let b = h.finalize();
+    u64::from_le_bytes(b.as_bytes()[..8].try_into().expect("8 bytes"))
+}
+
+/// What the best-cell rule looks at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// Cell index.
+    pub index: usize,
+    /// Present trials.
+    pub n: usize,
+    /// Trials that reached the goal.
+    pub successes: usize,
+    /// Mean counted episodes (`None` without trials).
+    pub mean: Option<f64>,
+}
+
+/// The best-cell rule ([`BEST_RULE`]). Cells without trials never win; ties keep the earlier cell.
+pub fn best_cell(candidates: impl IntoIterator<Item = Candidate>) -> Option<Best> {
+    let mut best: Option<(Candidate, bool)> = None;
+    for c in candidates {
+        let Some(mean) = c.mean.filter(|_| c.n > 0) else { continue };
+        let all = c.successes == c.n;
+        let better = match best {
+            None => true,
+            Some((b, b_all)) => {
+                let b_mean = b.mean.expect("kept candidates have a mean");
+                match (all, b_all) {
+                    (true, false) => true,
+                    (false, true) => false,
+                    (true, true) => mean < b_mean,
+                    (false, false) => {
+                        c.successes > b.successes || (c.successes == b.successes && mean < b_mean)
+                    }
+                }
+            }
+        };
+        if better {
+            best = Some((c, all));
+        }
+    }
+    best.map(|(c, all)| Best { cell: c.index, all_converged: all })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c(index: usize, n: usize, successes: usize, mean: Option<f64>) -> Candidate {
+        Candidate { index, n, successes, mean }
+    }
+
+    #[test]
+    fn lowest_mean_among_fully_converged_cells_wins() {
+        let cands = [
+            c(0, 10, 9, Some(1.0)), // lower mean but one seed failed
+            c(1, 10, 10, Some(5.0)),
+            c(2, 10, 10, Some(3.0)),
+            c(3, 10, 10, Some(3.0)), // tie: the earlier cell stays
+            c(4, 0, 0, None),
+        ];
+        assert_eq!(best_cell(cands), Some(Best { cell: 2, all_converged: true }));
+    }
+
+    #[test]
+    fn all_failed_falls_back_to_most_successes_then_lowest_mean() {
+        let cands = [
+            c(0, 10, 3, Some(50.0)),
+            c(1, 10, 7, Some(90.0)),
+            c(2, 10, 7, Some(80.0)),
+            c(3, 10, 0, Some(1.0)),
+        ];
+        assert_eq!(best_cell(cands), Some(Best { cell: 2, all_converged: false }));
+        // No trial converged anywhere: the lowest (censored) mean.
+        let none = [c(0, 4, 0, Some(200.0)), c(1, 4, 0, Some(150.0))];
+        assert_eq!(best_cell(none), Some(Best { cell: 1, all_converged: false }));
+    }
+
+    #[test]
+    fn no_trials_no_best() {
+        assert_eq!(best_cell([c(0, 0, 0, None), c(1, 0, 0, None)]), None);
+        assert_eq!(best_cell([]), None);
+        // A cell whose only present trials all converged qualifies even if others are missing.
+        assert_eq!(
+            best_cell([c(0, 0, 0, None), c(1, 2, 2, Some(4.0))]),
+            Some(Best { cell: 1, all_converged: true })
+        );
+    }
+
+    #[test]
+    fn resolution_columns_follow_variable_names() {
+        assert_eq!(resolution_columns(SystemKind::BallBeam, &[5, 3]), [Some(5), Some(3), None, None]);
+        assert_eq!(
+            resolution_columns(SystemKind::CartPole, &[1, 2, 3, 4]),
+            [Some(1), Some(2), Some(3), Some(4)]
+        );
+    }
+}

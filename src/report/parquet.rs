@@ -1,0 +1,216 @@
+//! The report's data files, Parquet with zstd, in plain types that pandas, polars and DuckDB read
+//! (utf8, uint32, uint64, int64, float64, bool, list<uint32>). Rows are in plan order.
+//!
+//! Columns shared by both files (one cell's identity):
+//!
+//! | column | type | meaning |
+//! | --- | --- | --- |
+//! | `system` | utf8 | `ball-beam`, `cart-pole`, `mountain-car` |
+//! | `system_title` | utf8 | as the paper writes it, e.g. `Ball-Beam` |
+//! | `experiment` | utf8 | experiment id (Table I's "Exp.") |
+//! | `experiment_title` | utf8, null | e.g. `Bins only` |
+//! | `repr` | utf8 | `crisp` or `fuzzy` |
+//! | `algorithm` | utf8 | `q0` or `q-lambda` |
+//! | `label` | utf8 | e.g. `Fuzzy Q(λ)-learning` |
+//! | `axis1_label`, `axis1_value` | utf8, uint32 | first varied axis (heatmap rows), e.g. `x == theta`, 3 |
+//! | `axis2_label`, `axis2_value` | utf8 null, uint32 null | second varied axis (columns); null for 1-axis experiments |
+//! | `x`, `x_dot`, `theta`, `theta_dot` | uint32, null | bins or fuzzy sets per state variable; null where the system has no such variable |
+//! | `actions` | uint32 | number of actions n of A_n |
+//! | `max_episodes` | uint32 | the episode cap, at which non-converged trials are counted |
+//!
+//! `cells.parquet`, one row per cell, then:
+//!
+//! | column | type | meaning |
+//! | --- | --- | --- |
+//! | `planned` | int64 | trials planned (seeds) |
+//! | `n` | int64 | trials present |
+//! | `successes` | int64 | present trials that reached the goal |
+//! | `all_converged` | bool | `n > 0` and every present trial reached the goal |
+//! | `best` | bool | the Table III cell of its experiment and algorithm |
+//! | `mean`, `std` | float64, null | of `episodes_counted`; std is the sample std (ddof = 1), null for n < 2 |
+//! | `min`, `median`, `max` | float64, null | of `episodes_counted` |
+//! | `iqm` | float64, null | interquartile mean: mean after dropping ⌊n/4⌋ values at each end |
+//! | `ci_lo`, `ci_hi` | float64, null | 95% percentile-bootstrap interval of the mean (2000 resamples, seeded by the cell's trial keys) |
+//!
+//! `trials.parquet`, one row per present trial of each cell (a trial shared by two cells, e.g. the
+//! same configuration in two experiments, appears once per cell), then:
+//!
+//! | column | type | meaning |
+//! | --- | --- | --- |
+//! | `seed` | uint64 | the trial's seed |
+//! | `key` | utf8 | cache key, 64 hex characters |
+//! | `converged` | bool | the learning goal was reached |
+//! | `episodes_to_goal` | uint32, null | episodes up to and including the goal; null if never reached |
+//! | `episodes` | uint32 | episodes run |
+//! | `episodes_counted` | uint32 | what enters the cell's statistics: `episodes_to_goal`, or `max_episodes` if the goal was never reached |
+//! | `total_steps` | int64 | steps over all episodes |
+//! | `stop` | utf8 | `goal`, `max-episodes`, `max-total-steps` or `diverged` |
+//! | `failure` | utf8, null | what went wrong, for diverged trials |
+//! | `episode_lengths` | list<uint32> | length of every episode, in order |
+//! | `epsilon`, `gamma`, `alpha`, `lambda` | float64 | hyperparameters (λ = 0 for Q(0)) |
+//! | `seconds` | float64 | wall-clock seconds the trial took when computed (informational) |
+
+use super::model::{resolution_columns, CellData, ExpData, ReportData, TrialData};
+use crate::plan::{Cell, Experiment};
+use crate::sim::config::LearnerConfig;
+use crate::sim::Outcome;
+use arrow::array::{
+    ArrayRef, BooleanArray, Float64Array, Int64Array, ListBuilder, StringArray, UInt32Array, UInt32Builder,
+    UInt64Array,
+};
+use arrow::record_batch::RecordBatch;
+use parquet::arrow::ArrowWriter;
+use parquet::basic::{Compression, ZstdLevel};
+use parquet::file::properties::WriterProperties;
+use std::sync::Arc;
+
+/// A cell's identity: its experiment and itself.
+type Id<'a> = (&'a ExpData<'a>, &'a CellData<'a>);
+
+/// Columns under construction.
+#[derive(Default)]
+struct Cols(Vec<(&'static str, ArrayRef, bool)>);
+
+impl Cols {
+    fn str<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> String) {
+        self.0.push((name, Arc::new(StringArray::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+    }
+    fn str_opt<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> Option<String>) {
+        self.0.push((name, Arc::new(StringArray::from(rows.iter().map(f).collect::<Vec<_>>())), true));
+    }
+    fn u32<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> u32) {
+        self.0.push((name, Arc::new(UInt32Array::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+    }
+    fn u32_opt<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> Option<u32>) {
+        self.0.push((name, Arc::new(UInt32Array::from(rows.iter().map(f).collect::<Vec<_>>())), true));
+    }
+    fn i64<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> i64) {
+        self.0.push((name, Arc::new(Int64Array::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+    }
+    fn f64<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> f64) {
+        self.0.push((name, Arc::new(Float64Array::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+    }
+    fn f64_opt<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> Option<f64>) {
+        self.0.push((name, Arc::new(Float64Array::from(rows.iter().map(f).collect::<Vec<_>>())), true));
+    }
+    fn bool<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> bool) {
+        self.0.push((name, Arc::new(BooleanArray::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+    }
+    fn array(&mut self, name: &'static str, array: ArrayRef, nullable: bool) {
+        self.0.push((name, array, nullable));
+    }
+
+    /// The columns identifying a cell, one row per entry of `ids`.
+    fn cell_identity(&mut self, ids: &[Id]) {
+        fn exp<'a>(r: &Id<'a>) -> &'a Experiment {
+            r.0.exp
+        }
+        fn cell<'a>(r: &Id<'a>) -> &'a Cell {
+            r.1.cell
+        }
+        fn res(r: &Id) -> [Option<u32>; 4] {
+            resolution_columns(exp(r).system, &cell(r).config.repr.resolution)
+        }
+        self.str("system", ids, |r| exp(r).system.name().into());
+        self.str("system_title", ids, |r| exp(r).system.title().into());
+        self.str("experiment", ids, |r| exp(r).id.clone());
+        self.str_opt("experiment_title", ids, |r| exp(r).title.clone());
+        self.str("repr", ids, |r| exp(r).repr.name().into());
+        self.str("algorithm", ids, |r| cell(r).algorithm.name().into());
+        self.str("label", ids, |r| cell(r).algorithm.label(exp(r).repr).into());
+        self.str("axis1_label", ids, |r| exp(r).axes[0].label.clone());
+        self.u32("axis1_value", ids, |r| cell(r).coords[0]);
+        self.str_opt("axis2_label", ids, |r| exp(r).axes.get(1).map(|a| a.label.clone()));
+        self.u32_opt("axis2_value", ids, |r| cell(r).coords.get(1).copied());
+        self.u32_opt("x", ids, |r| res(r)[0]);
+        self.u32_opt("x_dot", ids, |r| res(r)[1]);
+        self.u32_opt("theta", ids, |r| res(r)[2]);
+        self.u32_opt("theta_dot", ids, |r| res(r)[3]);
+        self.u32("actions", ids, |r| cell(r).config.actions);
+        self.u32("max_episodes", ids, |r| cell(r).config.limits.max_episodes);
+    }
+
+    fn into_parquet(self) -> anyhow::Result<Vec<u8>> {
+        let batch = RecordBatch::try_from_iter_with_nullable(self.0)?;
+        let props = WriterProperties::builder()
+            .set_compression(Compression::ZSTD(ZstdLevel::try_new(3)?))
+            .set_created_by(format!("qsweep {}", env!("CARGO_PKG_VERSION")))
+            .build();
+        let mut buf = Vec::new();
+        let mut w = ArrowWriter::try_new(&mut buf, batch.schema(), Some(props))?;
+        w.write(&batch)?;
+        w.close()?;
+        Ok(buf)
+    }
+}
+
+/// `cells.parquet`: one row per cell (schema in the module documentation).
+pub fn cells_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
+    let ids: Vec<Id> = data.experiments.iter().flat_map(|e| e.cells.iter().map(move |c| (e, c))).collect();
+    let best: Vec<bool> =
+        data.experiments.iter().flat_map(|e| (0..e.cells.len()).map(move |i| e.is_best(i))).collect();
+    let mut cols = Cols::default();
+    cols.cell_identity(&ids);
+    cols.i64("planned", &ids, |r| r.1.planned() as i64);
+    cols.i64("n", &ids, |r| r.1.trials.len() as i64);
+    cols.i64("successes", &ids, |r| r.1.successes as i64);
+    cols.bool("all_converged", &ids, |r| !r.1.trials.is_empty() && !r.1.any_failed());
+    cols.bool("best", &best, |b| *b);
+    cols.f64_opt("mean", &ids, |r| r.1.summary.mean);
+    cols.f64_opt("std", &ids, |r| r.1.summary.std);
+    cols.f64_opt("min", &ids, |r| r.1.summary.min);
+    cols.f64_opt("median", &ids, |r| r.1.summary.median);
+    cols.f64_opt("max", &ids, |r| r.1.summary.max);
+    cols.f64_opt("iqm", &ids, |r| r.1.summary.iqm);
+    cols.f64_opt("ci_lo", &ids, |r| r.1.summary.ci_lo);
+    cols.f64_opt("ci_hi", &ids, |r| r.1.summary.ci_hi);
+    cols.into_parquet()
+}
+
+/// `trials.parquet`: one row per present trial of each cell (schema in the module documentation).
+pub fn trials_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
+    let mut ids: Vec<Id> = Vec::new();
+    let mut trials: Vec<&TrialData> = Vec::new();
+    for e in &data.experiments {
+        for c in &e.cells {
+            for t in &c.trials {
+                ids.push((e, c));
+                trials.push(t);
+            }
+        }
+    }
+    fn out<'a>(t: &&'a TrialData) -> &'a Outcome {
+        &t.record.outcome
+    }
+    fn learner<'a>(t: &&'a TrialData) -> &'a LearnerConfig {
+        &t.record.config.learner
+    }
+    let mut cols = Cols::default();
+    cols.cell_identity(&ids);
+    cols.array(
+        "seed",
+        Arc::new(UInt64Array::from(trials.iter().map(|t| t.planned.seed).collect::<Vec<_>>())),
+        false,
+    );
+    cols.str("key", &trials, |t| t.planned.key.hex());
+    cols.bool("converged", &trials, |t| out(t).converged);
+    cols.u32_opt("episodes_to_goal", &trials, |t| out(t).episodes_to_goal);
+    cols.u32("episodes", &trials, |t| out(t).episodes);
+    cols.u32("episodes_counted", &trials, |t| t.counted);
+    cols.i64("total_steps", &trials, |t| i64::try_from(out(t).total_steps).unwrap_or(i64::MAX));
+    cols.str("stop", &trials, |t| out(t).stop.name().into());
+    cols.str_opt("failure", &trials, |t| out(t).failure.clone());
+    let total: usize = trials.iter().map(|t| out(t).episode_lengths.len()).sum();
+    let mut lengths = ListBuilder::new(UInt32Builder::with_capacity(total));
+    for t in &trials {
+        lengths.values().append_slice(&out(t).episode_lengths);
+        lengths.append(true);
+    }
+    cols.array("episode_lengths", Arc::new(lengths.finish()), false);
+    cols.f64("epsilon", &trials, |t| learner(t).epsilon);
+    cols.f64("gamma", &trials, |t| learner(t).gamma);
+    cols.f64("alpha", &trials, |t| learner(t).alpha);
+    cols.f64("lambda", &trials, |t| learner(t).lambda);
+    cols.f64("seconds", &trials, |t| t.record.seconds);
+    cols.into_parquet()
+}

@@ -1,0 +1,153 @@
+//! Descriptive statistics of one cell's episode counts: mean, sample standard deviation
+//! (ddof = 1), min, median, max, interquartile mean and a seeded percentile-bootstrap 95%
+//! confidence interval of the mean. Everything is a pure function of its inputs.
+
+use crate::sim::rng::TrialRng;
+
+/// Bootstrap resamples per cell.
+pub const BOOTSTRAP_RESAMPLES: usize = 2000;
+
+/// Summary of a sample of episode counts. Every statistic is `None` for an empty sample; `std`
+/// is also `None` for a single value (the sample standard deviation needs two).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Summary {
+    /// Sample size.
+    pub n: usize,
+    /// Arithmetic mean.
+    pub mean: Option<f64>,
+    /// Sample standard deviation, √(Σ(xᵢ − x̄)² / (n − 1)).
+    pub std: Option<f64>,
+    /// Smallest value.
+    pub min: Option<f64>,
+    /// Median (mean of the two middle values for even n).
+    pub median: Option<f64>,
+    /// Largest value.
+    pub max: Option<f64>,
+    /// Interquartile mean: the mean of the values left after dropping ⌊n/4⌋ from each end of the
+    /// sorted sample (`scipy.stats.trim_mean(x, 0.25)`).
+    pub iqm: Option<f64>,
+    /// Lower end of the 95% percentile-bootstrap interval of the mean.
+    pub ci_lo: Option<f64>,
+    /// Upper end of the 95% percentile-bootstrap interval of the mean.
+    pub ci_hi: Option<f64>,
+}
+
+impl Summary {
+    /// Summarise `values`; `seed` seeds the bootstrap (same values and seed, same interval).
+    pub fn of(values: &[f64], seed: u64) -> Self {
+        if values.is_empty() {
+            return Self::default();
+        }
+        let mut sorted = values.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let (lo, hi) = bootstrap_ci(values, BOOTSTRAP_RESAMPLES, seed);
+        Self {
+            n: values.len(),
+            mean: Some(mean(values)),
+            std: sample_std(values),
+            min: sorted.first().copied(),
+            median: Some(quantile_sorted(&sorted, 0.5)),
+            max: sorted.last().copied(),
+            iqm: Some(iqm_sorted(&sorted)),
+            ci_lo: Some(lo),
+            ci_hi: Some(hi),
+        }
+    }
+}
+
+/// Arithmetic mean (NaN for an empty slice).
+pub fn mean(values: &[f64]) -> f64 {
+    values.iter().sum::<f64>() / values.len() as f64
+}
+
+/// Sample standard deviation with Bessel's correction (ddof = 1); `None` below two values.
+pub fn sample_std(values: &[f64]) -> Option<f64> {
+    if values.len() < 2 {
+        return None;
+    }
+    let m = mean(values);
+    let ss: f64 = values.iter().map(|v| (v - m) * (v - m)).sum();
+    Some((ss / (values.len() - 1) as f64).sqrt())
+}
+
+/// Quantile `q` ∈ [0, 1] of a sorted, non-empty slice by linear interpolation between order
+/// statistics (type 7, NumPy's default).
+pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
+    let h = (sorted.len() - 1) as f64 * q.clamp(0.0, 1.0);
+    let lo = h.floor() as usize;
+    let hi = h.ceil() as usize;
+    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+}
+
+/// Interquartile mean of a sorted, non-empty slice: drop ⌊n/4⌋ values from each end, average
+/// the rest.
+pub fn iqm_sorted(sorted: &[f64]) -> f64 {
+    let cut = sorted.len() / 4;
+    mean(&sorted[cut..sorted.len() - cut])
+}
+
+/// Percentile-bootstrap 95% interval of the mean: `resamples` resamples with replacement drawn
+/// from a [`TrialRng`] seeded with `seed`, then the 2.5% and 97.5% quantiles of their means.
+pub fn bootstrap_ci(values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
+    let n = values.len();
+    if n == 1 || resamples == 0 {
+        return (values[0], values[0]);
+    }
+    let mut rng = TrialRng::new(seed);
+    let mut means: Vec<f64> =
+        (0..resamples).map(|_| (0..n).map(|_| values[rng.below(n)]).sum::<f64>() / n as f64).collect();
+    means.sort_by(f64::total_cmp);
+    (quantile_sorted(&means, 0.025), quantile_sorted(&means, 0.975))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() < 1e-12
+    }
+
+    #[test]
+    fn mean_std_median_iqm_on_fixed_inputs() {
+        let v = [2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0];
+        assert!(close(mean(&v), 5.0));
+        // Σ(x − 5)² = 32; 32 / 7.
+        assert!(close(sample_std(&v).unwrap(), (32.0f64 / 7.0).sqrt()));
+        let s = Summary::of(&v, 1);
+        assert_eq!(s.n, 8);
+        assert_eq!(s.median, Some(4.5));
+        assert_eq!((s.min, s.max), (Some(2.0), Some(9.0)));
+        // Drop 2 from each end: [4, 4, 5, 5].
+        assert_eq!(s.iqm, Some(4.5));
+        // Odd n: median is the middle value, IQM drops ⌊7/4⌋ = 1 from each end.
+        let odd = [10.0, 1.0, 3.0, 2.0, 100.0, 4.0, 5.0];
+        let s = Summary::of(&odd, 1);
+        assert_eq!(s.median, Some(4.0));
+        assert!(close(s.iqm.unwrap(), (2.0 + 3.0 + 4.0 + 5.0 + 10.0) / 5.0));
+        // Fewer than 4 values: nothing is trimmed.
+        assert!(close(iqm_sorted(&[1.0, 2.0, 6.0]), 3.0));
+        assert!(close(quantile_sorted(&[1.0, 2.0, 3.0, 4.0], 0.25), 1.75));
+    }
+
+    #[test]
+    fn empty_and_single_samples() {
+        assert_eq!(Summary::of(&[], 0), Summary::default());
+        let s = Summary::of(&[7.0], 0);
+        assert_eq!((s.n, s.mean, s.std), (1, Some(7.0), None));
+        assert_eq!((s.ci_lo, s.ci_hi), (Some(7.0), Some(7.0)));
+        assert_eq!(s.iqm, Some(7.0));
+    }
+
+    #[test]
+    fn bootstrap_is_seeded_and_brackets_the_mean() {
+        let v: Vec<f64> = (1..=20).map(|i| f64::from(i * i % 17)).collect();
+        let a = bootstrap_ci(&v, 2000, 42);
+        assert_eq!(a, bootstrap_ci(&v, 2000, 42), "same seed, same interval");
+        assert_ne!(a, bootstrap_ci(&v, 2000, 43), "another seed, another interval");
+        let m = mean(&v);
+        assert!(a.0 < m && m < a.1, "{a:?} should bracket {m}");
+        // A constant sample has a degenerate interval.
+        assert_eq!(bootstrap_ci(&[3.0; 5], 100, 9), (3.0, 3.0));
+    }
+}

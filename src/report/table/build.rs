@@ -1,0 +1,187 @@
+//! The report's tables built from [`ReportData`]: Table III (best cell per system, experiment and
+//! algorithm, with the paper's values when the pipeline has them) and one cell table per
+//! experiment.
+
+use super::{Align, Column, Row, Table, Value};
+use crate::report::model::{resolution_columns, ExpData, ReportData, BEST_RULE, CENSORING};
+
+fn var_columns(prefix: &str) -> Vec<Column> {
+    let vars = [
+        ("x", "$x$", "x"),
+        ("ẋ", "$\\dot{x}$", "x_dot"),
+        ("θ", "$\\theta$", "theta"),
+        ("θ̇", "$\\dot{\\theta}$", "theta_dot"),
+    ];
+    vars.iter().map(|(t, l, c)| Column::new(t, &format!("{prefix}{c}"), Align::Right).latex(l)).collect()
+}
+
+fn opt_int(v: Option<u32>) -> Value {
+    v.map_or(Value::Missing, |v| Value::Int(u64::from(v)))
+}
+
+/// Table III: one row per system, experiment and algorithm.
+pub fn table3(data: &ReportData) -> Table {
+    let reference = data.has_reference();
+    let mut columns = vec![
+        Column::new("System", "system", Align::Left),
+        Column::new("Exp.", "experiment", Align::Left),
+        Column::new("Algorithm", "algorithm", Align::Left),
+        Column::new("Performance", "mean", Align::Right).fields(&["mean", "std"]),
+    ];
+    columns.extend(var_columns(""));
+    columns.push(Column::new("Actions", "actions", Align::Right));
+    columns.push(Column::new("n", "n", Align::Right).latex("$n$"));
+    columns.push(Column::new("Successes", "successes", Align::Right));
+    if reference {
+        columns.push(Column::new("Paper", "paper_mean", Align::Right).fields(&["paper_mean", "paper_std"]));
+        columns.push(
+            Column::new("Paper config (x, ẋ, θ, θ̇, actions)", "paper_x", Align::Left)
+                .latex("Paper config ($x, \\dot{x}, \\theta, \\dot{\\theta}$, actions)")
+                .fields(&["paper_x", "paper_x_dot", "paper_theta", "paper_theta_dot", "paper_actions"]),
+        );
+        columns.push(Column::new("Δ mean", "diff_mean", Align::Right).latex("$\\Delta$ mean"));
+    }
+    let mut rows = Vec::new();
+    for e in &data.experiments {
+        let exp = e.exp;
+        for &alg in &exp.algorithms {
+            let best = e.best_of(alg).map(|b| (b, &e.cells[b.cell]));
+            let mut values = vec![
+                Value::Text(exp.system.title().into()),
+                Value::Text(exp.id.clone()),
+                Value::Text(alg.label(exp.repr).into()),
+            ];
+            let ours = best.and_then(|(_, c)| c.summary.mean);
+            match best {
+                Some((b, c)) => {
+                    let s = &c.summary;
+                    values.push(Value::MeanStd {
+                        mean: s.mean.expect("a best cell has trials"),
+                        std: s.std,
+                        decimals: 2,
+                        marked: !b.all_converged,
+                    });
+                    let cfg = &c.cell.config;
+                    values.extend(resolution_columns(exp.system, &cfg.repr.resolution).map(opt_int));
+                    values.push(Value::Int(u64::from(cfg.actions)));
+                    values.push(Value::Int(c.trials.len() as u64));
+                    values.push(Value::Int(c.successes as u64));
+                }
+                None => {
+                    values.extend(std::iter::repeat_n(Value::Missing, 6));
+                    values.extend([Value::Int(0), Value::Int(0)]);
+                }
+            }
+            if reference {
+                match exp.reference.get(&alg) {
+                    Some(r) => {
+                        values.push(Value::MeanStd {
+                            mean: r.mean,
+                            std: Some(r.std),
+                            decimals: 2,
+                            marked: false,
+                        });
+                        let mut cfg: Vec<Option<u32>> = match &r.resolution {
+                            Some(res) => resolution_columns(exp.system, res).to_vec(),
+                            None => vec![None; 4],
+                        };
+                        cfg.push(r.actions);
+                        values.push(Value::List(cfg));
+                        values.push(ours.map_or(Value::Missing, |m| Value::Num {
+                            value: m - r.mean,
+                            decimals: 2,
+                            signed: true,
+                        }));
+                    }
+                    None => values.extend([Value::Missing, Value::Missing, Value::Missing]),
+                }
+            }
+            rows.push(Row { values, highlight: false });
+        }
+    }
+    let mut caption = String::from(
+        "Best-performing configuration per system, experiment and algorithm (the paper's Table III): \
+         mean ± std of the episodes needed to reach the learning goal over the best cell's trials, and \
+         that cell's bins or fuzzy sets per state variable (— where the system has no such variable) \
+         and number of actions; n = trials present, successes = trials that reached the goal. ",
+    );
+    caption.push_str(BEST_RULE);
+    caption.push(' ');
+    caption.push_str(CENSORING);
+    if reference {
+        caption.push_str(" Paper: the published value and configuration; Δ mean = ours − paper.");
+    }
+    if data.trials_present < data.trials_planned {
+        caption.push_str(&format!(
+            " Only {} of {} planned trials are present.",
+            data.trials_present, data.trials_planned
+        ));
+    }
+    Table { title: "Table III".into(), caption, columns, rows }
+}
+
+/// Every cell of one experiment with its statistics; the best cell of each algorithm highlighted.
+pub fn cell_table(e: &ExpData) -> Table {
+    let exp = e.exp;
+    let mut columns = vec![Column::new("Algorithm", "algorithm", Align::Left)];
+    for a in &exp.axes {
+        columns.push(Column::new(&a.label, &a.label.replace(" == ", "_eq_"), Align::Right));
+    }
+    columns.extend([
+        Column::new("n", "n", Align::Right),
+        Column::new("Successes", "successes", Align::Right),
+        Column::new("Mean ± std", "mean", Align::Right).fields(&["mean", "std"]),
+        Column::new("Median", "median", Align::Right),
+        Column::new("IQM", "iqm", Align::Right),
+        Column::new("95% CI of mean", "ci_lo", Align::Right).fields(&["ci_lo", "ci_hi"]),
+        Column::new("Min", "min", Align::Right),
+        Column::new("Max", "max", Align::Right),
+    ]);
+    let num =
+        |v: Option<f64>| v.map_or(Value::Missing, |value| Value::Num { value, decimals: 2, signed: false });
+    let rows = e
+        .cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let s = &c.summary;
+            let mut values = vec![Value::Text(c.cell.algorithm.label(exp.repr).into())];
+            values.extend(c.cell.coords.iter().map(|&v| Value::Int(u64::from(v))));
+            values.push(Value::Int(c.trials.len() as u64));
+            values.push(Value::Int(c.successes as u64));
+            values.push(s.mean.map_or(Value::Missing, |mean| Value::MeanStd {
+                mean,
+                std: s.std,
+                decimals: 2,
+                marked: false,
+            }));
+            values.push(num(s.median));
+            values.push(num(s.iqm));
+            values.push(match (s.ci_lo, s.ci_hi) {
+                (Some(lo), Some(hi)) => Value::Range { lo, hi, decimals: 2 },
+                _ => Value::Missing,
+            });
+            values.push(num(s.min));
+            values.push(num(s.max));
+            Row { values, highlight: e.is_best(i) }
+        })
+        .collect();
+    let fixed: Vec<String> = exp
+        .fixed
+        .iter()
+        .map(|(t, v)| format!("{} = {v}", crate::spec::target_name(exp.system, *t)))
+        .collect();
+    let mut caption = format!(
+        "{}, Exp. {}{} ({} representation)",
+        exp.system.title(),
+        exp.id,
+        exp.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default(),
+        exp.repr.name()
+    );
+    if !fixed.is_empty() {
+        caption.push_str(&format!("; fixed: {}", fixed.join(", ")));
+    }
+    caption.push_str(". Highlighted: the best cell of each algorithm (Table III). ");
+    caption.push_str(CENSORING);
+    Table { title: format!("{} Exp. {}", exp.system.title(), exp.id), caption, columns, rows }
+}

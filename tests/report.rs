@@ -1,0 +1,243 @@
+//! The report stage end to end: plan `pipelines/quick.yaml`, give every planned trial a record
+//! (a few computed by the real simulation, the rest synthesised with every kind of outcome), write
+//! the report and check its files: all present, PNGs decode at the expected size, SVGs are XML,
+//! `index.html` links only local files, and a second run is byte-identical.
+//!
+//! With `QSWEEP_WRITE_REPORT` set, the full report is also written to `target/test-report-quick/`
+//! for the Python checks (`QSWEEP_REPORT_DIR=target/test-report-quick pytest tests/python/test_report.py`).
+
+use qsweep::cache::{Key, TrialRecord};
+use qsweep::plan::Plan;
+use qsweep::report::{figures, write_report};
+use qsweep::sim::env::SystemKind;
+use qsweep::sim::repr::ReprKind;
+use qsweep::sim::{run_trial, Algorithm, Outcome, StopReason};
+use qsweep::spec::Reference;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+fn quick_plan() -> Plan {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/quick.yaml");
+    let loaded = qsweep::spec::load(&path, &[]).expect("quick.yaml loads");
+    qsweep::plan::plan(&loaded, None).expect("quick.yaml plans")
+}
+
+/// A deterministic outcome for a trial: mostly converged after a key-dependent number of
+/// episodes; some capped, one diverged; every crisp Cart-Pole Q(0) trial fails.
+fn synthetic(cap: u32, key: &Key, all_fail: bool) -> Outcome {
+    let h = u32::from_le_bytes(key.0[..4].try_into().unwrap());
+    let (converged, episodes, stop, failure) = if all_fail || h % 11 == 0 {
+        (false, cap, StopReason::MaxEpisodes, None)
+    } else if h % 97 == 1 {
+        (false, 3, StopReason::Diverged, Some("non-finite TD error at episode 3, step 7".to_string()))
+    } else {
+        (true, 1 + h % 60, StopReason::Goal, None)
+    };
+    let episode_lengths: Vec<u32> = (0..episodes).map(|i| 10 + (h >> 8).wrapping_add(i * 7) % 500).collect();
+    Outcome {
+        converged,
+        episodes_to_goal: converged.then_some(episodes),
+        episodes,
+        total_steps: episode_lengths.iter().map(|&l| u64::from(l)).sum(),
+        stop,
+        failure,
+        episode_lengths,
+    }
+}
+
+/// Records for every planned trial; the two trials of the first Ball-Beam cell are real.
+fn records(plan: &Plan) -> HashMap<Key, TrialRecord> {
+    let mut out = HashMap::new();
+    let first = &plan.experiments[0].cells[0];
+    assert_eq!(plan.experiments[0].system, SystemKind::BallBeam);
+    for t in &first.trials {
+        let mut cfg = first.config.clone();
+        cfg.limits.max_episodes = 5; // keep the real trials short in debug builds
+        let outcome = run_trial(&cfg, t.seed);
+        out.insert(t.key, TrialRecord::new(first.config.clone(), t.seed, outcome, 0.25));
+    }
+    for (e, c, t) in plan.trials() {
+        // Keys are shared between experiments (same configuration), so choose failures by configuration.
+        let all_fail =
+            e.system == SystemKind::CartPole && e.repr == ReprKind::Crisp && c.algorithm == Algorithm::Q0;
+        out.entry(t.key).or_insert_with(|| {
+            let outcome = synthetic(c.config.limits.max_episodes, &t.key, all_fail);
+            TrialRecord::new(c.config.clone(), t.seed, outcome, 0.5)
+        });
+    }
+    out
+}
+
+fn files_under(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.is_dir() {
+            for (k, v) in files_under(&p) {
+                out.insert(PathBuf::from(p.file_name().unwrap()).join(k), v);
+            }
+        } else {
+            out.insert(p.file_name().unwrap().into(), std::fs::read(&p).unwrap());
+        }
+    }
+    out
+}
+
+/// Every `href="…"` and `src="…"` target of a page.
+fn links(html: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for attr in ["href=\"", "src=\""] {
+        let mut rest = html;
+        while let Some(i) = rest.find(attr) {
+            rest = &rest[i + attr.len()..];
+            let end = rest.find('"').unwrap();
+            out.push(rest[..end].to_string());
+            rest = &rest[end..];
+        }
+    }
+    out
+}
+
+#[test]
+fn quick_report_is_complete_valid_and_deterministic() {
+    let plan = quick_plan();
+    let recs = records(&plan);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("quick");
+    let summary = write_report(&plan, &recs, &dir).unwrap();
+    assert_eq!(summary.experiments, 12);
+    assert_eq!(summary.trials_planned, plan.trial_count());
+    assert_eq!(summary.trials_present, plan.trial_count());
+    assert_eq!(summary.trials_missing, 0);
+    assert_eq!(summary.cells_with_trials, summary.cells);
+
+    let files = files_under(&dir);
+    let mut expected: Vec<PathBuf> =
+        ["table3.md", "table3.csv", "table3.tex", "cells.parquet", "trials.parquet", "index.html"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+    for s in SystemKind::ALL {
+        expected.push(Path::new("figures").join(format!("{}.svg", s.name())));
+        expected.push(Path::new("figures").join(format!("{}.png", s.name())));
+    }
+    expected.sort();
+    let mut written = summary.files.clone();
+    written.sort();
+    assert_eq!(written, expected);
+    assert_eq!(files.keys().cloned().collect::<Vec<_>>(), expected, "no temporary files are left behind");
+
+    // PNGs decode at the figure's size; SVGs are XML with the same size.
+    for s in SystemKind::ALL {
+        let exps: Vec<_> = qsweep::report::ReportData::build(&plan, &recs)
+            .experiments
+            .into_iter()
+            .filter(|e| e.exp.system == s)
+            .collect();
+        let (w, h) = figures::figure_size(&exps.iter().collect::<Vec<_>>());
+        assert_eq!(
+            (w, h),
+            (2 * figures::PANEL_W, figures::HEADER_H + 4 * figures::PANEL_H + figures::FOOTER_H)
+        );
+        let png = &files[&Path::new("figures").join(format!("{}.png", s.name()))];
+        let mut reader = png::Decoder::new(std::io::Cursor::new(png.as_slice())).read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height), (w, h), "{s} PNG size");
+        assert!(buf.iter().any(|&b| b < 128), "{s} PNG has dark pixels (text, cells)");
+        let svg = String::from_utf8(files[&Path::new("figures").join(format!("{}.svg", s.name()))].clone())
+            .unwrap();
+        let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{s} SVG: {e}"));
+        assert_eq!(doc.root_element().tag_name().name(), "svg");
+        assert_eq!(doc.root_element().attribute("width"), Some(w.to_string().as_str()));
+        assert!(svg.contains("Q(λ)-learning"), "{s} SVG has the panel titles");
+    }
+
+    // The page links only files of the report (or anchors on itself).
+    let html = String::from_utf8(files[Path::new("index.html")].clone()).unwrap();
+    assert!(!html.contains("http"), "index.html must not reference the network");
+    let targets = links(&html);
+    assert!(targets.iter().any(|t| t == "figures/cart-pole.svg"));
+    for t in targets {
+        if let Some(anchor) = t.strip_prefix('#') {
+            assert!(html.contains(&format!("id=\"{anchor}\"")), "anchor {t}");
+        } else {
+            assert!(files.contains_key(Path::new(&t)), "index.html links {t}, which is not in the report");
+        }
+    }
+
+    // Table III: 3 systems × 4 experiments × 2 algorithms; the all-failed cell uses the fallback.
+    let csv = String::from_utf8(files[Path::new("table3.csv")].clone()).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 1 + 24);
+    assert!(lines[0]
+        .starts_with("system,experiment,algorithm,mean,std,x,x_dot,theta,theta_dot,actions,n,successes"));
+    let md = String::from_utf8(files[Path::new("table3.md")].clone()).unwrap();
+    for exp in ["1", "2"] {
+        let row =
+            md.lines().find(|l| l.starts_with(&format!("| Cart-Pole | {exp} | Q(0)-learning"))).unwrap();
+        assert!(row.contains("200.00 ± 0.00†"), "{row}");
+    }
+    assert!(md.contains("lowest mean among the cells where every seed reached"));
+    assert!(md.contains("count at the episode cap"));
+
+    // A second run, into the same directory and into another, is byte-identical.
+    write_report(&plan, &recs, &dir).unwrap();
+    assert_eq!(files_under(&dir), files);
+    let other = tmp.path().join("again");
+    write_report(&plan, &recs, &other).unwrap();
+    assert_eq!(files_under(&other), files);
+
+    if std::env::var_os("QSWEEP_WRITE_REPORT").is_some() {
+        let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-report-quick");
+        write_report(&plan, &recs, &out).unwrap();
+        eprintln!("report written to {}", out.display());
+    }
+}
+
+#[test]
+fn missing_trials_are_counted_and_reference_values_compared() {
+    let mut plan = quick_plan();
+    plan.experiments[0].reference.insert(
+        Algorithm::Q0,
+        Reference { mean: 90.5, std: 25.8, resolution: Some(vec![5, 3]), actions: Some(3) },
+    );
+    let mut recs = records(&plan);
+    // Drop every trial of the last cell and one trial of the first cell.
+    let last = plan.experiments.last().unwrap().cells.last().unwrap();
+    for t in &last.trials {
+        recs.remove(&t.key);
+    }
+    recs.remove(&plan.experiments[0].cells[0].trials[0].key);
+    let tmp = tempfile::tempdir().unwrap();
+    let summary = write_report(&plan, &recs, tmp.path()).unwrap();
+    // A removed key is missing from every cell that plans it (configurations recur across experiments).
+    let missing = plan.trials().filter(|(_, _, t)| !recs.contains_key(&t.key)).count();
+    assert!(missing > last.trials.len());
+    assert_eq!(summary.trials_missing, missing);
+    let empty = plan
+        .experiments
+        .iter()
+        .flat_map(|e| &e.cells)
+        .filter(|c| c.trials.iter().all(|t| !recs.contains_key(&t.key)))
+        .count();
+    assert!(empty >= 1);
+    assert_eq!(summary.cells_with_trials, summary.cells - empty);
+
+    let csv = std::fs::read_to_string(tmp.path().join("table3.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert!(header.ends_with(
+        "paper_mean,paper_std,paper_x,paper_x_dot,paper_theta,paper_theta_dot,paper_actions,diff_mean"
+    ));
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.starts_with("Ball-Beam,1,Q(0)-learning,"), "{row}");
+    assert!(row.contains(",90.5,25.8,5,3,,,3,"), "{row}");
+    let md = std::fs::read_to_string(tmp.path().join("table3.md")).unwrap();
+    assert!(md.contains(&format!(
+        "Only {} of {} planned trials are present.",
+        summary.trials_present, summary.trials_planned
+    )));
+    assert!(md.contains("| 90.50 ± 25.80 | 5, 3, —, —, 3 |"), "{md}");
+    let html = std::fs::read_to_string(tmp.path().join("index.html")).unwrap();
+    assert!(html.contains(&format!("{} missing", summary.trials_missing)));
+}
