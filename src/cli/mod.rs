@@ -2,6 +2,7 @@
 
 mod args;
 mod pipeline_args;
+mod report;
 mod run;
 mod simulate;
 mod status;
@@ -29,6 +30,8 @@ pub enum Command {
     Run(run::RunArgs),
     /// Show how many of a pipeline's trials are cached and missing, without running anything.
     Status(status::StatusArgs),
+    /// Write a pipeline's report (Table III, Figures 5-7, Parquet data, index.html) from the cache.
+    Report(report::ReportArgs),
 }
 
 /// Run a parsed command line; returns the process exit code.
@@ -38,5 +41,6 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Trial(a) => trial::run(a),
         Command::Run(a) => run::run(a),
         Command::Status(a) => status::run(a),
+        Command::Report(a) => report::run(a),
     }
 }

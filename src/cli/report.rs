@@ -33,10 +33,16 @@ pub fn write(plan: &Plan, store: &Store, out: Option<&Path>, quiet: bool) -> any
     let keys: HashSet<_> = plan.trials().map(|(_, _, t)| t.key).collect();
     let records: HashMap<_, _> = store.read(&keys)?.into_iter().map(|r| (r.key, r)).collect();
     let dir = out.map(Path::to_path_buf).unwrap_or_else(|| Path::new("reports").join(&plan.name));
-    let summary = crate::report::write_report(plan, &records, &dir)?;
+    let s = crate::report::write_report(plan, &records, &dir)?;
     if !quiet {
-        println!("report: {} ({} of {} trials present)", dir.join("index.html").display(), records.len(), keys.len());
+        println!(
+            "report: {} ({} of {} planned trials present, {} of {} cells)",
+            dir.join("index.html").display(),
+            s.trials_present,
+            s.trials_planned,
+            s.cells_with_trials,
+            s.cells
+        );
     }
-    let _ = summary;
     Ok(())
 }

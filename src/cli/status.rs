@@ -122,7 +122,8 @@ fn explain(plan: &crate::plan::Plan, records: &[TrialRecord], cached: &HashSet<c
                             let old = flatten(&serde_json::to_value(&r.config).unwrap_or(Value::Null));
                             diff(&old, &new, r.engine_version)
                         })
-                        .min_by_key(Vec::len)
+                        // Fewest differences; ties by text, so the answer never depends on segment order.
+                        .min_by(|a, b| a.len().cmp(&b.len()).then_with(|| a.cmp(b)))
                         .unwrap_or_default();
                     if best.is_empty() {
                         "cached under another engine version".to_string()

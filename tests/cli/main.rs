@@ -2,5 +2,6 @@
 
 mod helpers;
 mod pipeline;
+mod report_files;
 mod simulate;
 mod trial;

@@ -44,7 +44,9 @@ fn editing_one_systems_alpha_reruns_only_that_system_and_representation() {
         "--set",
         "systems.ball-beam.crisp.alpha=0.3",
     ]));
+    // The nearest cached cells differ only in alpha (0.1 from the file, 0.2 from the first --set).
     assert!(explain.contains("learner.alpha: 0.1 → 0.3"), "{explain}");
+    assert!(!explain.contains("learner.gamma"), "{explain}");
     assert!(explain.contains("total: 56 trials, 40 cached, 16 missing"), "{explain}");
 }
 

@@ -29,7 +29,7 @@ def _candidates() -> list[Path]:
 
 
 def find_qsweep_bin() -> Path:
-    """`$QSWEEP_BIN` if set, else target/release/qsweep, else target/debug/qsweep.
+    """`$QSWEEP_BIN` if set, else the newer of target/release/qsweep and target/debug/qsweep.
 
     Fails the test (never skips) when no binary is found."""
     env = os.environ.get("QSWEEP_BIN")
@@ -46,9 +46,10 @@ def find_qsweep_bin() -> Path:
             pytrace=False,
         )
     tried = _candidates()
-    for c in tried:
-        if c.is_file():
-            return c
+    found = [c for c in tried if c.is_file()]
+    if found:
+        # The most recently built one: `cargo test` refreshes debug, `cargo build --release` release.
+        return max(found, key=lambda c: c.stat().st_mtime)
     pytest.fail(
         "qsweep binary not found (tried: "
         + ", ".join(map(str, tried))

@@ -1,8 +1,8 @@
 """Cross-checks of a qsweep report directory with pandas, polars and DuckDB.
 
-The directory is `$QSWEEP_REPORT_DIR` (default `reports/quick`, relative paths from the repository
-root). `QSWEEP_WRITE_REPORT=1 cargo test --test report` writes one to `target/test-report-quick`;
-`qsweep report pipelines/quick.yaml` writes `reports/quick`.
+The report is the one `qsweep run pipelines/quick.yaml` writes, made here with the binary into a
+temporary cache and report folder; set `$QSWEEP_REPORT_DIR` to check an existing report instead
+(e.g. `reports/paper`, relative paths from the repository root).
 
 Checks: both Parquet files load in all three libraries with the documented types and the same
 row counts; every cell's n, successes, mean and std (ddof = 1) recomputed from trials.parquet match
@@ -11,8 +11,10 @@ cells.parquet; `episodes_counted` follows the censoring rule; table3.csv rows ar
 
 from __future__ import annotations
 
+import json
 import math
 import os
+import subprocess
 from pathlib import Path
 
 import duckdb
@@ -23,14 +25,28 @@ import pyarrow.parquet as pq
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-_dir = Path(os.environ.get("QSWEEP_REPORT_DIR", "reports/quick"))
-REPORT_DIR = _dir if _dir.is_absolute() else REPO_ROOT / _dir
+REPORT_DIR = Path()  # set by the `report_dir` fixture before any test runs
 
-pytestmark = pytest.mark.skipif(
-    not (REPORT_DIR / "cells.parquet").is_file(),
-    reason=f"no report at {REPORT_DIR}; set QSWEEP_REPORT_DIR (e.g. QSWEEP_WRITE_REPORT=1 cargo test --test report, "
-    "then QSWEEP_REPORT_DIR=target/test-report-quick)",
-)
+
+@pytest.fixture(scope="module", autouse=True)
+def report_dir(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    global REPORT_DIR
+    given = os.environ.get("QSWEEP_REPORT_DIR")
+    if given:
+        d = Path(given)
+        REPORT_DIR = d if d.is_absolute() else REPO_ROOT / d
+        assert (REPORT_DIR / "cells.parquet").is_file(), f"no report at {REPORT_DIR}"
+        return REPORT_DIR
+    tmp = tmp_path_factory.mktemp("quick")
+    out = subprocess.run(
+        [str(qsweep_bin), "run", str(REPO_ROOT / "pipelines" / "quick.yaml"), "--json",
+         "--cache", str(tmp / "cache"), "--out", str(tmp / "report")],
+        capture_output=True, text=True, timeout=1200,
+    )
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["failed"] == 0
+    REPORT_DIR = tmp / "report"
+    return REPORT_DIR
 
 CELL_KEY = ["system", "experiment", "algorithm", "axis1_value", "axis2_value"]
 
@@ -77,12 +93,12 @@ TRIALS = IDENTITY | {
 
 
 @pytest.fixture(scope="module")
-def cells() -> pd.DataFrame:
+def cells(report_dir: Path) -> pd.DataFrame:
     return pd.read_parquet(REPORT_DIR / "cells.parquet")
 
 
 @pytest.fixture(scope="module")
-def trials() -> pd.DataFrame:
+def trials(report_dir: Path) -> pd.DataFrame:
     return pd.read_parquet(REPORT_DIR / "trials.parquet")
 
 

@@ -2,9 +2,6 @@
 //! (a few computed by the real simulation, the rest synthesised with every kind of outcome), write
 //! the report and check its files: all present, PNGs decode at the expected size, SVGs are XML,
 //! `index.html` links only local files, and a second run is byte-identical.
-//!
-//! With `QSWEEP_WRITE_REPORT` set, the full report is also written to `target/test-report-quick/`
-//! for the Python checks (`QSWEEP_REPORT_DIR=target/test-report-quick pytest tests/python/test_report.py`).
 
 use qsweep::cache::{Key, TrialRecord};
 use qsweep::plan::Plan;
@@ -187,12 +184,6 @@ fn quick_report_is_complete_valid_and_deterministic() {
     let other = tmp.path().join("again");
     write_report(&plan, &recs, &other).unwrap();
     assert_eq!(files_under(&other), files);
-
-    if std::env::var_os("QSWEEP_WRITE_REPORT").is_some() {
-        let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-report-quick");
-        write_report(&plan, &recs, &out).unwrap();
-        eprintln!("report written to {}", out.display());
-    }
 }
 
 #[test]
