@@ -118,6 +118,12 @@ mod tests {
                         let mut c = TrialConfig::paper(system, repr, algorithm, vec![3; system.dim()], 3);
                         c.limits.max_episodes = 15;
                         c.limits.max_total_steps = 20_000;
+                        // Pinned explicitly: a changed default changes keys, not semantics.
+                        if let crate::sim::config::Success::Reach { max_episode_steps, .. } =
+                            &mut c.limits.success
+                        {
+                            *max_episode_steps = 100_000;
+                        }
                         match variant {
                             1 => c.learner.tie_break = TieBreak::First,
                             2 => {

@@ -158,8 +158,12 @@ fn expand<M: Resolve>(
     }
     let env = M::env(&sys.params);
     env.validate().map_err(|e| user_error(format!("{origin}: systems.{system}.params: {e}")))?;
-    let success = M::success(sys.success.as_ref());
     for (idx, e) in sys.experiments.iter().enumerate() {
+        let mut ranges = ranges.clone();
+        for (j, r) in &e.ranges.entries {
+            ranges[*j] = *r;
+        }
+        let success = M::success(e.success.as_ref().or(sys.success.as_ref()));
         if out.iter().any(|o: &Experiment| o.system == system && o.id == e.id) {
             return Err(user_error(format!(
                 "{origin}: systems.{system}.experiments[{idx}]: id {} is used twice; ids must be unique per system",
@@ -250,4 +254,40 @@ fn grid_points(lens: &[usize]) -> Vec<Vec<usize>> {
         out = out.into_iter().flat_map(|p| (0..n).map(move |i| [p.clone(), vec![i]].concat())).collect();
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::load_str;
+
+    fn plan_of(text: &str) -> Plan {
+        let spec = load_str(text, "test.yaml", &[]).unwrap();
+        plan(&LoadedSpec { spec, path: "test.yaml".into() }, None).unwrap()
+    }
+
+    #[test]
+    fn settings_ranges_and_success_layer_from_system_to_experiment() {
+        let p = plan_of(
+            "name: t\nseeds: [3, 9]\ndefaults: { alpha: 0.2, max_episodes: 7 }\nsystems:\n  cart-pole:\n    ranges: { x_dot: [-1, 1] }\n    success: { steps: 500 }\n    crisp: { alpha: 0.3 }\n    experiments:\n      - { id: a, repr: crisp, vary: { x == theta: [2, 3], x_dot == theta_dot: 4 } }\n      - { id: b, repr: crisp, algorithms: [q0], vary: { x == x_dot == theta == theta_dot: 2, actions: 2..4 }, ranges: { theta_dot: [-5, 5] }, success: { steps: 9 }, settings: { alpha: 0.4 } }\n",
+        );
+        let (a, b) = (&p.experiments[0], &p.experiments[1]);
+        assert_eq!(a.cells.len(), 2 * 2);
+        assert_eq!(b.cells.len(), 3);
+        let ca = &a.cells[1].config;
+        assert_eq!(ca.repr.resolution, vec![3, 4, 3, 4]);
+        assert_eq!(ca.actions, 2, "the paper's fixed Cart-Pole set");
+        assert_eq!(ca.learner.alpha, 0.3);
+        assert_eq!(ca.limits.max_episodes, 7);
+        assert_eq!(ca.repr.ranges[1], [-1.0, 1.0]);
+        assert_eq!(ca.limits.success, Success::Balance { steps: 500 });
+        let cb = &b.cells[2].config;
+        assert_eq!((cb.repr.resolution.clone(), cb.actions), (vec![2; 4], 4));
+        assert_eq!(cb.learner.alpha, 0.4);
+        assert_eq!(cb.learner.lambda, 0.0, "Q(0) normalises lambda away");
+        assert_eq!((cb.repr.ranges[1], cb.repr.ranges[3]), ([-1.0, 1.0], [-5.0, 5.0]));
+        assert_eq!(cb.limits.success, Success::Balance { steps: 9 });
+        assert_eq!(a.cells[0].trials.iter().map(|t| t.seed).collect::<Vec<_>>(), vec![3, 9]);
+        assert_eq!(p.unique_trials().len(), p.trial_count());
+    }
 }

@@ -192,7 +192,7 @@ pub fn default_ranges(system: SystemKind) -> Vec<[f64; 2]> {
 pub fn default_success(system: SystemKind) -> Success {
     match TaskKind::of(system) {
         TaskKind::Survival => Success::Balance { steps: 100_000 },
-        TaskKind::GoalReaching => Success::Reach { within: 200, streak: 1, max_episode_steps: 100_000 },
+        TaskKind::GoalReaching => Success::Reach { within: 200, streak: 1, max_episode_steps: 10_000 },
     }
 }
 

@@ -2,7 +2,7 @@
 //! resolution grid in Table I's notation — `vary` holds the varied axes `v(·)`, each a group of
 //! variables sharing one value (`x == theta`), `fixed` the constants `c(·)`.
 
-use super::{variable_index, Settings, SystemMarker, Values};
+use super::{variable_index, Ranges, Settings, SystemMarker, Values};
 use crate::sim::repr::ReprKind;
 use crate::sim::Algorithm;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
@@ -49,7 +49,7 @@ pub struct Reference {
 
 /// An experiment, validated.
 #[derive(Debug, Clone)]
-pub struct ExperimentSpec<M> {
+pub struct ExperimentSpec<M: SystemMarker> {
     /// Identifier within the system (Table I's "Exp." number).
     pub id: String,
     /// Optional title, e.g. "Bins only".
@@ -64,6 +64,10 @@ pub struct ExperimentSpec<M> {
     pub fixed: Vec<(Target, u32)>,
     /// Settings overriding the system's.
     pub settings: Settings,
+    /// Per-variable ranges overriding the system's.
+    pub ranges: Ranges<M>,
+    /// Learning-goal criterion replacing the system's.
+    pub success: Option<M::Success>,
     /// Published results per algorithm.
     pub reference: BTreeMap<Algorithm, Reference>,
     _m: PhantomData<M>,
@@ -84,6 +88,10 @@ struct RawExperiment<M: SystemMarker> {
     fixed: FixedRaw<M>,
     #[serde(default)]
     settings: Settings,
+    #[serde(default)]
+    ranges: Ranges<M>,
+    #[serde(default)]
+    success: Option<M::Success>,
     #[serde(default)]
     reference: BTreeMap<Algorithm, Reference>,
 }
@@ -307,6 +315,8 @@ impl<'de, M: SystemMarker> Deserialize<'de> for ExperimentSpec<M> {
             axes,
             fixed,
             settings: raw.settings,
+            ranges: raw.ranges,
+            success: raw.success,
             reference: raw.reference,
             _m: PhantomData,
         })
