@@ -95,8 +95,9 @@ impl Fuzzy {
         }
         let x = value.clamp(v.lo, v.hi);
         let pos = (x - v.lo) / v.spacing;
-        let first = (pos - v.reach).ceil().max(0.0) as usize;
-        let last = ((pos + v.reach).floor() as usize).min(v.n - 1);
+        let first = ceil_to_index(pos - v.reach);
+        // A saturating cast is floor for every input here (negatives and NaN give 0 either way).
+        let last = ((pos + v.reach) as usize).min(v.n - 1);
         let (first, last) = if first > last {
             let nearest = (pos.round() as usize).min(v.n - 1);
             (nearest, nearest)
@@ -106,7 +107,7 @@ impl Fuzzy {
         let mut sum = 0.0;
         let mut m = 0;
         for k in first..=last {
-            let d = x - self.centre(j, k);
+            let d = x - (v.lo + k as f64 * v.spacing); // `centre(j, k)`, inlined
             let w = (-(d * d) * v.inv_two_sigma_sq).exp();
             sets[m] = k as u32;
             mu[m] = w;
@@ -133,6 +134,17 @@ impl Representation for Fuzzy {
         self.n_features
     }
 
+    fn max_active(&self) -> usize {
+        self.vars
+            .iter()
+            .map(|v| {
+                // At most ⌊2·reach⌋ + 1 set centres lie within ±reach spacings of any point.
+                let window = if v.reach.is_finite() { (2.0 * v.reach) as usize + 1 } else { v.n };
+                window.min(v.n)
+            })
+            .product()
+    }
+
     fn activate(&self, state: &[f64], out: &mut Activations) {
         out.clear();
         out.index.push(0);
@@ -143,18 +155,37 @@ impl Representation for Fuzzy {
             let m = self.memberships(j, value, &mut sets, &mut mu);
             let len = out.len();
             let stride = self.strides[j];
-            // Blocks 1..m are copies of the current rules extended by set t; block 0 is extended in place.
-            for t in 1..m {
-                for e in 0..len {
-                    out.index.push(out.index[e] + stride * sets[t]);
-                    out.weight.push(out.weight[e] * mu[t]);
+            // Rule order and every product are as in eq. (10) evaluated variable by variable: block t
+            // (rules extended by set t) is a copy of the current rules, each weight times μ_t. The
+            // copies come first so every block reads the unextended rules; no per-rule push.
+            for _ in 1..m {
+                out.index.extend_from_within(..len);
+                out.weight.extend_from_within(..len);
+            }
+            let blocks = out.index.chunks_exact_mut(len).zip(out.weight.chunks_exact_mut(len));
+            for ((index, weight), (&set, &mu)) in blocks.zip(sets[..m].iter().zip(&mu[..m])) {
+                for (i, w) in index.iter_mut().zip(weight) {
+                    *i += stride * set;
+                    *w *= mu;
                 }
             }
-            for e in 0..len {
-                out.index[e] += stride * sets[0];
-                out.weight[e] *= mu[0];
-            }
         }
+    }
+}
+
+/// `y.ceil().max(0.0) as usize` without the `ceil` library call: 0 for y ≤ 0 and NaN, else the
+/// smallest integer ≥ y (exact for the small y of a window edge, which is below `MAX_SETS`).
+#[inline]
+fn ceil_to_index(y: f64) -> usize {
+    if y > 0.0 {
+        let t = y as usize;
+        if (t as f64) < y {
+            t + 1
+        } else {
+            t
+        }
+    } else {
+        0
     }
 }
 
@@ -235,6 +266,32 @@ mod tests {
         let v = &f.vars[0];
         let raw = (-(0.5f64 * 0.5) * v.inv_two_sigma_sq).exp();
         assert!((raw - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn window_edges_match_ceil_and_floor() {
+        for y in [-3.0, -0.5, -0.0, 0.0, 1e-300, 0.3, 1.0, 1.0 + f64::EPSILON, 2.5, 62.999, 63.0, f64::NAN] {
+            assert_eq!(ceil_to_index(y), y.ceil().max(0.0) as usize, "{y}");
+            assert_eq!(y as usize, y.floor() as usize, "{y}");
+        }
+        assert_eq!(f64::INFINITY as usize, f64::INFINITY.floor() as usize);
+        assert_eq!(ceil_to_index(f64::NEG_INFINITY), 0);
+    }
+
+    #[test]
+    fn max_active_bounds_every_activation() {
+        let ranges = [[-1.0, 1.0], [-2.0, 2.0]];
+        for (sets, prune) in [([10, 4], 1e-6), ([7, 64], 1e-3), ([5, 3], 0.0)] {
+            let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, prune);
+            let mut a = Activations::default();
+            let mut most = 0;
+            for i in 0..400 {
+                let x = -1.2 + 0.006 * f64::from(i);
+                f.activate(&[x, 1.7 * x], &mut a);
+                most = most.max(a.len());
+            }
+            assert!(most <= f.max_active(), "{sets:?}: {most} > {}", f.max_active());
+        }
     }
 
     #[test]
