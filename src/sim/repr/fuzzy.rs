@@ -13,6 +13,13 @@ use super::{strides, Activations, Representation};
 /// Most fuzzy sets a single variable may have.
 pub const MAX_SETS: usize = 64;
 
+/// Most state variables a rule base may have (Cart-Pole's four).
+const MAX_VARS: usize = 4;
+
+/// Windows up to this many sets (every variable, as with the default prune) take the activation
+/// path with small scratch arrays.
+const SMALL_WINDOW: usize = 8;
+
 /// `width` that makes neighbouring memberships cross at 0.5: `1 / (2·sqrt(2·ln 2))`.
 pub const HALF_CROSSING_WIDTH: f64 = 0.424_660_900_144_009_5;
 
@@ -27,12 +34,26 @@ struct Variable {
     reach: f64,
 }
 
+impl Variable {
+    /// Most sets a window can hold: ⌊2·reach⌋ + 1 centres lie within ±reach spacings of a point,
+    /// plus one for rounding in the window edges.
+    fn max_window(&self) -> usize {
+        if self.reach.is_finite() {
+            ((2.0 * self.reach) as usize + 2).min(self.n)
+        } else {
+            self.n
+        }
+    }
+}
+
 /// A grid of Gaussian fuzzy sets with normalised product firing strengths.
 #[derive(Debug, Clone)]
 pub struct Fuzzy {
     vars: Vec<Variable>,
     strides: Vec<u32>,
     n_features: usize,
+    /// Largest window of any variable.
+    max_window: usize,
 }
 
 impl Fuzzy {
@@ -40,7 +61,8 @@ impl Fuzzy {
     /// `prune` are skipped (0 keeps every rule).
     pub fn new(sets: &[u32], ranges: &[[f64; 2]], width: f64, prune: f64) -> Self {
         assert_eq!(sets.len(), ranges.len());
-        let vars = sets
+        assert!(sets.len() <= MAX_VARS, "at most {MAX_VARS} state variables");
+        let vars: Vec<Variable> = sets
             .iter()
             .zip(ranges)
             .map(|(&n, r)| {
@@ -65,7 +87,8 @@ impl Fuzzy {
             })
             .collect();
         let n_features = sets.iter().map(|&s| s as usize).product();
-        Self { vars, strides: strides(sets), n_features }
+        let max_window = vars.iter().map(Variable::max_window).max().unwrap_or(1);
+        Self { vars, strides: strides(sets), n_features, max_window }
     }
 
     /// Centre of set `k` of variable `j`.
@@ -78,15 +101,10 @@ impl Fuzzy {
         }
     }
 
-    /// Normalised memberships of variable `j` at `value`: writes `(set, μ)` pairs, returns their count.
-    #[inline]
-    fn memberships(
-        &self,
-        j: usize,
-        value: f64,
-        sets: &mut [u32; MAX_SETS],
-        mu: &mut [f64; MAX_SETS],
-    ) -> usize {
+    /// Normalised memberships of variable `j` at `value`: writes `(set, μ)` pairs, returns their
+    /// count (at most the variable's `max_window`, which `sets` and `mu` must hold).
+    #[inline(always)]
+    fn memberships(&self, j: usize, value: f64, sets: &mut [u32], mu: &mut [f64]) -> usize {
         let v = &self.vars[j];
         if v.n == 1 {
             sets[0] = 0;
@@ -135,38 +153,54 @@ impl Representation for Fuzzy {
     }
 
     fn max_active(&self) -> usize {
-        self.vars
-            .iter()
-            .map(|v| {
-                // At most ⌊2·reach⌋ + 1 set centres lie within ±reach spacings of any point.
-                let window = if v.reach.is_finite() { (2.0 * v.reach) as usize + 1 } else { v.n };
-                window.min(v.n)
-            })
-            .product()
+        self.vars.iter().map(Variable::max_window).product()
     }
 
     fn activate(&self, state: &[f64], out: &mut Activations) {
-        out.clear();
-        out.index.push(0);
-        out.weight.push(1.0);
-        let mut sets = [0u32; MAX_SETS];
-        let mut mu = [0.0f64; MAX_SETS];
+        if self.max_window <= SMALL_WINDOW {
+            self.activate_with::<SMALL_WINDOW>(state, out);
+        } else {
+            self.activate_with::<MAX_SETS>(state, out);
+        }
+    }
+}
+
+impl Fuzzy {
+    /// [`activate`](Representation::activate) with scratch room for `W` sets per variable. Every
+    /// variable's memberships are computed first: they are independent, so their latency chains
+    /// (a division, the exponentials, the normalising division) overlap.
+    #[inline(always)]
+    fn activate_with<const W: usize>(&self, state: &[f64], out: &mut Activations) {
+        // Missing variables (two-variable systems) are padded with one set of membership 1 at
+        // offset 0, which leaves every index and product unchanged (x · 1 = x exactly).
+        let mut offset = [[0u32; W]; MAX_VARS];
+        let mut mu = [[1.0f64; W]; MAX_VARS];
+        let mut count = [1usize; MAX_VARS];
         for (j, &value) in state[..self.vars.len()].iter().enumerate() {
-            let m = self.memberships(j, value, &mut sets, &mut mu);
-            let len = out.len();
-            let stride = self.strides[j];
-            // Rule order and every product are as in eq. (10) evaluated variable by variable: block t
-            // (rules extended by set t) is a copy of the current rules, each weight times μ_t. The
-            // copies come first so every block reads the unextended rules; no per-rule push.
-            for _ in 1..m {
-                out.index.extend_from_within(..len);
-                out.weight.extend_from_within(..len);
+            count[j] = self.memberships(j, value, &mut offset[j], &mut mu[j]);
+            for o in &mut offset[j][..count[j]] {
+                *o *= self.strides[j];
             }
-            let blocks = out.index.chunks_exact_mut(len).zip(out.weight.chunks_exact_mut(len));
-            for ((index, weight), (&set, &mu)) in blocks.zip(sets[..m].iter().zip(&mu[..m])) {
-                for (i, w) in index.iter_mut().zip(weight) {
-                    *i += stride * set;
-                    *w *= mu;
+        }
+        let total = count.iter().product();
+        out.index.resize(total, 0);
+        out.weight.resize(total, 0.0);
+        // Rule order and every product exactly as eq. (10) evaluated variable by variable (what an
+        // outer product built one variable at a time gives): variable 0 varies fastest, and a
+        // weight is ((1·μ₀)·μ₁)·μ₂)·μ₃, where 1·μ₀ = μ₀.
+        let [m0, m1, m2, m3] = count;
+        let (mu0, o0) = (&mu[0][..m0], &offset[0][..m0]);
+        let mut p = 0;
+        for (&mu3, &o3) in mu[3][..m3].iter().zip(&offset[3][..m3]) {
+            for (&mu2, &o2) in mu[2][..m2].iter().zip(&offset[2][..m2]) {
+                for (&mu1, &o1) in mu[1][..m1].iter().zip(&offset[1][..m1]) {
+                    let o123 = o1 + o2 + o3;
+                    let row = out.index[p..p + m0].iter_mut().zip(&mut out.weight[p..p + m0]);
+                    for ((i, w), (&m, &o)) in row.zip(mu0.iter().zip(o0)) {
+                        *i = o + o123;
+                        *w = ((m * mu1) * mu2) * mu3;
+                    }
+                    p += m0;
                 }
             }
         }
