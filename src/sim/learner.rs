@@ -4,7 +4,9 @@
 //! is exactly λ = 0: the traces then hold only the current activation, so the update is eq. (5)/(19).
 //!
 //! Parameters are laid out rule-major (`q[feature · n_actions + action]`) so all actions of a rule
-//! are contiguous. Traces that decay below `trace_cutoff` are dropped (set to exactly 0).
+//! are contiguous. Traces that decay below `trace_cutoff` are dropped (set to exactly 0). The
+//! traces are stored already decayed for the next step: the decay e ← γλe of step t+1 depends on
+//! nothing learned at step t+1, so it is done in the same pass that applies step t's update.
 //!
 //! # Exactness
 //! Every result is bit-for-bit that of the literal algorithm (the tests in `reference_tests.rs` and
@@ -15,7 +17,8 @@
 //! reassociated). What changes is bookkeeping:
 //! - Q(s, ·) keeps all actions' running sums in registers ([`q_values`](Learner::q_values));
 //! - Q(0) touches only the current activation's parameters, with no trace bookkeeping;
-//! - a single active feature (every crisp step) decays, extends and applies the traces in one pass;
+//! - applying the update and decaying the traces for the next step is one pass, not two;
+//! - a single active feature (every crisp step) extends, applies and decays in that same pass;
 //! - small tables where most traces are live anyway sweep the dense trace array (vectorisable)
 //!   instead of an active list; large ones keep the active list, so a step costs O(active traces).
 
@@ -48,11 +51,12 @@ struct TraceRule {
 }
 
 impl TraceRule {
-    /// `e · γλ`, dropped to exactly 0 below the cutoff.
+    /// `e · γλ`, dropped to exactly 0 below the cutoff. (The original test `e < cutoff || e == 0`
+    /// is the same for traces, which are never negative or NaN: with cutoff 0, a zero stays 0.)
     #[inline(always)]
     fn decayed(self, e: f64) -> f64 {
         let e = e * self.decay;
-        if e < self.cutoff || e == 0.0 {
+        if e < self.cutoff {
             0.0
         } else {
             e
@@ -189,7 +193,8 @@ impl Learner {
     }
 
     /// One learning step for the pair (s_t, a_t) with TD error δ_t: decay every trace by γλ, add the
-    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21).
+    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21). (The decay was
+    /// done at the end of the previous step; this step's traces are decayed for the next.)
     #[inline(always)]
     pub fn update(&mut self, phi: &Activations, action: usize, delta: f64) {
         let step = self.alpha * delta;
@@ -218,7 +223,7 @@ impl Learner {
         }
     }
 
-    /// Every trace, one per parameter (for tests).
+    /// Every stored trace, one per parameter, as decayed for the next step (for tests).
     #[cfg(test)]
     fn dense_traces(&self) -> Vec<f64> {
         match &self.traces {
@@ -244,7 +249,7 @@ fn update_q0(q: &mut [f64], na: usize, rule: TraceRule, phi: &Activations, actio
     }
 }
 
-/// One active feature (crisp tables), sparse traces: decay, extend and apply in a single pass over
+/// One active feature (crisp tables), sparse traces: extend, apply and decay in a single pass over
 /// the live traces.
 #[inline(always)]
 fn update_single(q: &mut [f64], t: &mut SparseTraces, rule: TraceRule, target: usize, w: f64, step: f64) {
@@ -252,23 +257,27 @@ fn update_single(q: &mut [f64], t: &mut SparseTraces, rule: TraceRule, target: u
     let mut r = 0;
     while r < t.keys.len() {
         let k = t.keys[r] as usize;
-        let mut e = rule.decayed(t.values[r]);
+        let mut e = t.values[r];
         if k == target {
-            // Dropped or not, the target is extended and stays live (as a re-push would).
             e = rule.extend(e, w);
             found = true;
-        } else if e == 0.0 {
-            t.remove(r);
-            continue;
         }
-        t.values[r] = e;
         q[k] += step * e;
-        r += 1;
+        let next = rule.decayed(e);
+        if next == 0.0 {
+            t.remove(r);
+        } else {
+            t.values[r] = next;
+            r += 1;
+        }
     }
     if !found {
         let e = rule.extend(0.0, w);
-        t.push(target, e);
         q[target] += step * e;
+        let next = rule.decayed(e);
+        if next != 0.0 {
+            t.push(target, next);
+        }
     }
 }
 
@@ -285,35 +294,38 @@ fn update_dense(
     action: usize,
     step: f64,
 ) {
-    let (decay, cutoff) = (rule.decay, rule.cutoff);
-    for e in trace.iter_mut() {
-        let d = *e * decay;
-        *e = if d < cutoff || d == 0.0 { 0.0 } else { d };
-    }
     for (&i, &w) in phi.index.iter().zip(&phi.weight) {
         let k = i as usize * na + action;
         trace[k] = rule.extend(trace[k], w);
     }
     // The list-based update adds step·e to every non-zero trace and to the current activation's
-    // entries; skipping zero traces elsewhere is exact (q + step·0 = q, up to the sign of a zero q,
-    // which no sum can see: sums start from +0). Only a non-finite step (an overflowing α·δ) makes
-    // step·0 a NaN that the list-based update writes into the activation's zero entries.
-    for (q, &e) in q.iter_mut().zip(trace.iter()) {
-        *q = if e != 0.0 { *q + step * e } else { *q };
-    }
-    if !step.is_finite() {
+    // entries. Adding step·0 = ±0 everywhere else is exact too, up to the sign of a zero q, which no
+    // sum can see (sums start from +0, and ±0 terms never change a running sum). Only a non-finite
+    // step (an overflowing α·δ) makes step·0 a NaN: then exactly the list-based entries move.
+    if step.is_finite() {
+        for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+            *q += step * *e;
+            *e = rule.decayed(*e);
+        }
+    } else {
         for &i in &phi.index {
             let k = i as usize * na + action;
             if trace[k] == 0.0 {
                 q[k] += step * trace[k];
             }
         }
+        for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+            if *e != 0.0 {
+                *q += step * *e;
+            }
+            *e = rule.decayed(*e);
+        }
     }
 }
 
-/// Several active features, large table: decay the live traces (dropping those that vanish),
-/// extend the current activation's, then apply. Both list passes are branch-free: which traces die
-/// and which activations are new is data-dependent and would mispredict often.
+/// Several active features, large table: extend the current activation's traces, then apply and
+/// decay every live trace in one pass, dropping those that vanish. Both passes are branch-free:
+/// which activations are new and which traces die is data-dependent and would mispredict often.
 #[inline(never)]
 fn update_sparse(
     q: &mut [f64],
@@ -325,24 +337,12 @@ fn update_sparse(
     step: f64,
 ) {
     let SparseTraces { keys, values, slot } = t;
-    // Decay, compacting in place; every kept trace's slot is rewritten (it may have moved).
-    let mut kept = 0;
-    for r in 0..keys.len() {
-        let k = keys[r];
-        let e = rule.decayed(values[r]);
-        keys[kept] = k;
-        values[kept] = e;
-        let live = e != 0.0;
-        slot[k as usize] = if live { kept as u32 + 1 } else { 0 };
-        kept += usize::from(live);
-    }
     // Extend: a parameter without a live trace gets the next free position, whose value the
     // resize set to 0, so extending it gives extend(0, w) exactly as for a new trace.
-    keys.truncate(kept);
-    values.truncate(kept);
-    keys.resize(kept + phi.len(), 0);
-    values.resize(kept + phi.len(), 0.0);
-    let mut len = kept;
+    let live = keys.len();
+    keys.resize(live + phi.len(), 0);
+    values.resize(live + phi.len(), 0.0);
+    let mut len = live;
     for (&i, &w) in phi.index.iter().zip(&phi.weight) {
         let k = i as usize * na + action;
         let p = slot[k] as usize;
@@ -352,11 +352,20 @@ fn update_sparse(
         slot[k] = dest as u32 + 1;
         len += usize::from(p == 0);
     }
-    keys.truncate(len);
-    values.truncate(len);
-    for (&k, &e) in keys.iter().zip(values.iter()) {
+    // Apply, decay and compact in place; every kept trace's slot is rewritten (it may have moved).
+    let mut kept = 0;
+    for r in 0..len {
+        let (k, e) = (keys[r], values[r]);
         q[k as usize] += step * e;
+        let next = rule.decayed(e);
+        keys[kept] = k;
+        values[kept] = next;
+        let stays = next != 0.0;
+        slot[k as usize] = if stays { kept as u32 + 1 } else { 0 };
+        kept += usize::from(stays);
     }
+    keys.truncate(kept);
+    values.truncate(kept);
 }
 
 /// Q(s, ·) with `N` actions: all `N` running sums stay in registers across the activation.
@@ -514,8 +523,10 @@ mod tests {
                 oracle.update(&phi, step % na, delta);
                 let what = format!("λ {lambda} replacing {replacing} α {alpha} step {step}");
                 if lambda > 0.0 {
-                    assert_eq!(dense.dense_traces(), oracle.trace, "{what}");
-                    assert_eq!(sparse.dense_traces(), oracle.trace, "{what}");
+                    // Ours are stored decayed for the next step; the oracle decays at its start.
+                    let next: Vec<f64> = oracle.trace.iter().map(|&e| dense.rule.decayed(e)).collect();
+                    assert_eq!(dense.dense_traces(), next, "{what}");
+                    assert_eq!(sparse.dense_traces(), next, "{what}");
                 }
                 // Signs of zero may differ where q stays 0 (no sum can tell); nothing else may.
                 let zero_sign =
