@@ -2,6 +2,7 @@
 //! "Performance analysis of tabular and Fuzzy Q-learning under varying state and action space
 //! resolution".
 
+pub mod bench;
 pub mod cache;
 pub mod plan;
 pub mod report;

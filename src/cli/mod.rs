@@ -1,6 +1,7 @@
 //! Command-line interface: one file per subcommand, each a thin layer over the library.
 
 mod args;
+mod bench;
 mod pipeline_args;
 mod report;
 mod run;
@@ -22,6 +23,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Measure the engine's steps per second on the standard configurations.
+    Bench(bench::BenchArgs),
     /// Roll a system forward under given action values and print the trajectory as CSV.
     Simulate(simulate::SimulateArgs),
     /// Run one trial (one configuration, one seed) and print its outcome.
@@ -37,6 +40,7 @@ pub enum Command {
 /// Run a parsed command line; returns the process exit code.
 pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
+        Command::Bench(a) => bench::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Trial(a) => trial::run(a),
         Command::Run(a) => run::run(a),

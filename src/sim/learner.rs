@@ -4,94 +4,208 @@
 //! is exactly λ = 0: the traces then hold only the current activation, so the update is eq. (5)/(19).
 //!
 //! Parameters are laid out rule-major (`q[feature · n_actions + action]`) so all actions of a rule
-//! are contiguous. Traces are a dense array plus a list of the non-zero entries, so a step costs
-//! O(active traces), not O(table); traces that decay below `trace_cutoff` are dropped.
+//! are contiguous. Traces that decay below `trace_cutoff` are dropped (set to exactly 0). The
+//! traces are stored already decayed for the next step: the decay e ← γλe of step t+1 depends on
+//! nothing learned at step t+1, so it is done in the same pass that applies step t's update.
+//!
+//! # Exactness
+//! Every result is bit-for-bit that of the literal algorithm (the tests in `reference_tests.rs` and
+//! `pinned_tests.rs` hold it to that), so the fast paths below only ever reorder work that is
+//! independent per parameter: each trace and each q is updated by the same floating-point operations
+//! as before, and Q(s, ·) is still summed over the active features in activation order, starting
+//! from 0 (a different summation order would change results, so the sums are never split or
+//! reassociated). What changes is bookkeeping:
+//! - Q(s, ·) keeps all actions' running sums in registers ([`q_values`](Learner::q_values));
+//! - Q(0) touches only the current activation's parameters, with no trace bookkeeping;
+//! - applying the update and decaying the traces for the next step is one pass, not two;
+//! - a single active feature (every crisp step) extends, applies and decays in that same pass;
+//! - small tables where most traces are live anyway sweep the dense trace array (vectorisable)
+//!   instead of an active list; large ones keep the active list, so a step costs O(active traces).
 
 use super::config::{LearnerConfig, TraceKind};
 use super::repr::Activations;
+
+/// Dense traces when the table has at most this many features per feature a single state can
+/// activate: then most traces are live in practice and a linear sweep beats list bookkeeping.
+pub const DENSE_TRACE_RATIO: usize = 4;
+
+/// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
+const MAX_UNROLLED_ACTIONS: usize = 16;
 
 /// Q parameters and eligibility traces of one trial.
 #[derive(Debug, Clone)]
 pub struct Learner {
     n_actions: usize,
     q: Vec<f64>,
-    trace: Vec<f64>,
-    active: Vec<u32>,
+    traces: Traces,
+    rule: TraceRule,
     alpha: f64,
+}
+
+/// How traces decay and grow (eqs. 7 and 20 with the cutoff), shared by every layout.
+#[derive(Debug, Clone, Copy)]
+struct TraceRule {
     decay: f64,
     cutoff: f64,
     replacing: bool,
 }
 
-impl Learner {
-    /// A learner over `n_features × n_actions` parameters, all set to `cfg.q_init`.
-    pub fn new(n_features: usize, n_actions: usize, cfg: &LearnerConfig) -> Self {
-        let n = n_features * n_actions;
-        Self {
-            n_actions,
-            q: vec![cfg.q_init; n],
-            trace: vec![0.0; n],
-            active: Vec::new(),
-            alpha: cfg.alpha,
-            decay: cfg.gamma * cfg.lambda,
-            cutoff: cfg.trace_cutoff,
-            replacing: cfg.traces == TraceKind::Replacing,
+impl TraceRule {
+    /// `e · γλ`, dropped to exactly 0 below the cutoff. (The original test `e < cutoff || e == 0`
+    /// is the same for traces, which are never negative or NaN: with cutoff 0, a zero stays 0.)
+    #[inline(always)]
+    fn decayed(self, e: f64) -> f64 {
+        let e = e * self.decay;
+        if e < self.cutoff {
+            0.0
+        } else {
+            e
         }
     }
 
-    /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action).
-    #[inline]
-    pub fn q_values(&self, phi: &Activations, out: &mut [f64]) {
-        let na = self.n_actions;
-        out.fill(0.0);
-        for (&i, &w) in phi.index.iter().zip(&phi.weight) {
-            let row = &self.q[i as usize * na..(i as usize + 1) * na];
-            for (o, q) in out.iter_mut().zip(row) {
-                *o += w * q;
-            }
+    /// The trace after adding activation `w` to a (decayed) trace `e`: eq. (20), or replacing.
+    #[inline(always)]
+    fn extend(self, e: f64, w: f64) -> f64 {
+        if self.replacing {
+            e.max(w)
+        } else {
+            e + w
         }
+    }
+}
+
+/// Where the eligibility traces live.
+#[derive(Debug, Clone)]
+enum Traces {
+    /// γλ = 0 (Q(0)): a trace never outlives its step, so none is stored.
+    None,
+    /// One trace per parameter, swept in full every step.
+    Dense(Vec<f64>),
+    /// Only the live traces, packed.
+    Sparse(SparseTraces),
+}
+
+/// The live traces as a packed list, plus a map from parameter to list position. Traces are summed
+/// and decayed in list order, which never matters: every trace and parameter update is per entry.
+#[derive(Debug, Clone)]
+struct SparseTraces {
+    /// Parameter index of each live trace (every non-zero trace, plus any entry extended by a zero
+    /// weight this step, exactly the entries a list-based update touches).
+    keys: Vec<u32>,
+    /// The trace of `keys[r]`.
+    values: Vec<f64>,
+    /// Per parameter: 1 + its position in `keys`, or 0 when it has no live trace.
+    slot: Vec<u32>,
+}
+
+impl SparseTraces {
+    fn new(n: usize) -> Self {
+        Self { keys: Vec::new(), values: Vec::new(), slot: vec![0; n] }
+    }
+
+    #[inline]
+    fn clear(&mut self) {
+        for &k in &self.keys {
+            self.slot[k as usize] = 0;
+        }
+        self.keys.clear();
+        self.values.clear();
+    }
+
+    /// Drop the trace at list position `r`; the last one moves into its place.
+    #[inline]
+    fn remove(&mut self, r: usize) {
+        self.slot[self.keys[r] as usize] = 0;
+        self.keys.swap_remove(r);
+        self.values.swap_remove(r);
+        if let Some(&moved) = self.keys.get(r) {
+            self.slot[moved as usize] = r as u32 + 1;
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, k: usize, e: f64) {
+        self.keys.push(k as u32);
+        self.values.push(e);
+        self.slot[k] = self.keys.len() as u32;
+    }
+}
+
+impl Learner {
+    /// A learner over `n_features × n_actions` parameters, all set to `cfg.q_init`, for a
+    /// representation that activates at most `max_active` features per state (chooses the trace
+    /// layout; results do not depend on it).
+    pub fn new(n_features: usize, n_actions: usize, max_active: usize, cfg: &LearnerConfig) -> Self {
+        let n = n_features * n_actions;
+        let rule = TraceRule {
+            decay: cfg.gamma * cfg.lambda,
+            cutoff: cfg.trace_cutoff,
+            replacing: cfg.traces == TraceKind::Replacing,
+        };
+        let traces = if rule.decay == 0.0 {
+            Traces::None
+        } else if max_active > 1 && n_features <= DENSE_TRACE_RATIO * max_active {
+            Traces::Dense(vec![0.0; n])
+        } else {
+            Traces::Sparse(SparseTraces::new(n))
+        };
+        Self { n_actions, q: vec![cfg.q_init; n], traces, rule, alpha: cfg.alpha }
+    }
+
+    /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action): for
+    /// each action, `0 + w₀q₀ + w₁q₁ + …` in activation order.
+    #[inline(always)]
+    pub fn q_values(&self, phi: &Activations, out: &mut [f64]) {
+        if let ([i], [w]) = (&phi.index[..], &phi.weight[..]) {
+            // One feature (every crisp state): small enough to inline into the trial loop.
+            let na = self.n_actions;
+            for (o, &v) in out.iter_mut().zip(&self.q[*i as usize * na..][..na]) {
+                *o = 0.0 + w * v;
+            }
+        } else {
+            self.q_values_many(phi, out);
+        }
+    }
+
+    /// [`q_values`](Self::q_values) for several active features.
+    #[inline(never)]
+    fn q_values_many(&self, phi: &Activations, out: &mut [f64]) {
+        macro_rules! unrolled {
+            ($($n:literal)*) => {
+                match self.n_actions {
+                    $($n => q_values_fixed::<$n>(&self.q, phi, out),)*
+                    _ => q_values_any(&self.q, self.n_actions, phi, out),
+                }
+            };
+        }
+        const _: () = assert!(MAX_UNROLLED_ACTIONS == 16);
+        unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
     }
 
     /// Clear every trace (episode start; Watkins's cut).
     #[inline]
     pub fn clear_traces(&mut self) {
-        for &k in &self.active {
-            self.trace[k as usize] = 0.0;
+        match &mut self.traces {
+            Traces::None => {}
+            Traces::Dense(e) => e.fill(0.0),
+            Traces::Sparse(t) => t.clear(),
         }
-        self.active.clear();
     }
 
     /// One learning step for the pair (s_t, a_t) with TD error δ_t: decay every trace by γλ, add the
-    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21).
-    #[inline]
+    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21). (The decay was
+    /// done at the end of the previous step; this step's traces are decayed for the next.)
+    #[inline(always)]
     pub fn update(&mut self, phi: &Activations, action: usize, delta: f64) {
-        if self.decay == 0.0 {
-            self.clear_traces();
-        } else {
-            let (decay, cutoff, trace) = (self.decay, self.cutoff, &mut self.trace);
-            self.active.retain(|&k| {
-                let e = &mut trace[k as usize];
-                *e *= decay;
-                if *e < cutoff || *e == 0.0 {
-                    *e = 0.0;
-                    false
-                } else {
-                    true
-                }
-            });
-        }
-        let na = self.n_actions;
-        for (&i, &w) in phi.index.iter().zip(&phi.weight) {
-            let k = i as usize * na + action;
-            let e = &mut self.trace[k];
-            if *e == 0.0 {
-                self.active.push(k as u32);
-            }
-            *e = if self.replacing { e.max(w) } else { *e + w };
-        }
         let step = self.alpha * delta;
-        for &k in &self.active {
-            self.q[k as usize] += step * self.trace[k as usize];
+        let (q, na, rule) = (&mut self.q[..], self.n_actions, self.rule);
+        match &mut self.traces {
+            Traces::None => update_q0(q, na, rule, phi, action, step),
+            Traces::Dense(e) => update_dense(q, e, na, rule, phi, action, step),
+            Traces::Sparse(t) => match (&phi.index[..], &phi.weight[..]) {
+                ([i], [w]) => update_single(q, t, rule, *i as usize * na + action, *w, step),
+                _ => update_sparse(q, t, na, rule, phi, action, step),
+            },
         }
     }
 
@@ -102,6 +216,348 @@ impl Learner {
 
     /// Number of traces currently non-zero.
     pub fn active_traces(&self) -> usize {
-        self.active.len()
+        match &self.traces {
+            Traces::None => 0,
+            Traces::Dense(e) => e.iter().filter(|&&e| e != 0.0).count(),
+            Traces::Sparse(t) => t.values.iter().filter(|&&e| e != 0.0).count(),
+        }
+    }
+
+    /// Every stored trace, one per parameter, as decayed for the next step (for tests).
+    #[cfg(test)]
+    fn dense_traces(&self) -> Vec<f64> {
+        match &self.traces {
+            Traces::None => vec![0.0; self.q.len()],
+            Traces::Dense(e) => e.clone(),
+            Traces::Sparse(t) => {
+                let mut e = vec![0.0; self.q.len()];
+                for (&k, &v) in t.keys.iter().zip(&t.values) {
+                    e[k as usize] = v;
+                }
+                e
+            }
+        }
+    }
+}
+
+/// γλ = 0: every trace from the previous step is gone, so the traces are exactly the current
+/// activation (0 extended by w) and only those parameters move.
+#[inline(always)]
+fn update_q0(q: &mut [f64], na: usize, rule: TraceRule, phi: &Activations, action: usize, step: f64) {
+    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+        q[i as usize * na + action] += step * rule.extend(0.0, w);
+    }
+}
+
+/// One active feature (crisp tables), sparse traces: extend, apply and decay in a single pass over
+/// the live traces.
+#[inline(always)]
+fn update_single(q: &mut [f64], t: &mut SparseTraces, rule: TraceRule, target: usize, w: f64, step: f64) {
+    let mut found = false;
+    let mut r = 0;
+    while r < t.keys.len() {
+        let k = t.keys[r] as usize;
+        let mut e = t.values[r];
+        if k == target {
+            e = rule.extend(e, w);
+            found = true;
+        }
+        q[k] += step * e;
+        let next = rule.decayed(e);
+        if next == 0.0 {
+            t.remove(r);
+        } else {
+            t.values[r] = next;
+            r += 1;
+        }
+    }
+    if !found {
+        let e = rule.extend(0.0, w);
+        q[target] += step * e;
+        let next = rule.decayed(e);
+        if next != 0.0 {
+            t.push(target, next);
+        }
+    }
+}
+
+/// Several active features, small table: sweep every trace. Parameters without a live trace have
+/// trace exactly 0, so decaying them is a no-op, and q moves exactly where the list-based update
+/// moves it (see the comment on the parameter pass).
+#[inline(never)]
+fn update_dense(
+    q: &mut [f64],
+    trace: &mut [f64],
+    na: usize,
+    rule: TraceRule,
+    phi: &Activations,
+    action: usize,
+    step: f64,
+) {
+    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+        let k = i as usize * na + action;
+        trace[k] = rule.extend(trace[k], w);
+    }
+    // The list-based update adds step·e to every non-zero trace and to the current activation's
+    // entries. Adding step·0 = ±0 everywhere else is exact too, up to the sign of a zero q, which no
+    // sum can see (sums start from +0, and ±0 terms never change a running sum). Only a non-finite
+    // step (an overflowing α·δ) makes step·0 a NaN: then exactly the list-based entries move.
+    if step.is_finite() {
+        for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+            *q += step * *e;
+            *e = rule.decayed(*e);
+        }
+    } else {
+        for &i in &phi.index {
+            let k = i as usize * na + action;
+            if trace[k] == 0.0 {
+                q[k] += step * trace[k];
+            }
+        }
+        for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+            if *e != 0.0 {
+                *q += step * *e;
+            }
+            *e = rule.decayed(*e);
+        }
+    }
+}
+
+/// Several active features, large table: extend the current activation's traces, then apply and
+/// decay every live trace in one pass, dropping those that vanish. Both passes are branch-free:
+/// which activations are new and which traces die is data-dependent and would mispredict often.
+#[inline(never)]
+fn update_sparse(
+    q: &mut [f64],
+    t: &mut SparseTraces,
+    na: usize,
+    rule: TraceRule,
+    phi: &Activations,
+    action: usize,
+    step: f64,
+) {
+    let SparseTraces { keys, values, slot } = t;
+    // Extend: a parameter without a live trace gets the next free position, whose value the
+    // resize set to 0, so extending it gives extend(0, w) exactly as for a new trace.
+    let live = keys.len();
+    keys.resize(live + phi.len(), 0);
+    values.resize(live + phi.len(), 0.0);
+    let mut len = live;
+    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+        let k = i as usize * na + action;
+        let p = slot[k] as usize;
+        let dest = if p == 0 { len } else { p - 1 };
+        keys[dest] = k as u32;
+        values[dest] = rule.extend(values[dest], w);
+        slot[k] = dest as u32 + 1;
+        len += usize::from(p == 0);
+    }
+    // Apply, decay and compact in place; every kept trace's slot is rewritten (it may have moved).
+    let mut kept = 0;
+    for r in 0..len {
+        let (k, e) = (keys[r], values[r]);
+        q[k as usize] += step * e;
+        let next = rule.decayed(e);
+        keys[kept] = k;
+        values[kept] = next;
+        let stays = next != 0.0;
+        slot[k as usize] = if stays { kept as u32 + 1 } else { 0 };
+        kept += usize::from(stays);
+    }
+    keys.truncate(kept);
+    values.truncate(kept);
+}
+
+/// Q(s, ·) with `N` actions: all `N` running sums stay in registers across the activation.
+#[inline(always)]
+fn q_values_fixed<const N: usize>(q: &[f64], phi: &Activations, out: &mut [f64]) {
+    let mut acc = [0.0f64; N];
+    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+        let row: &[f64; N] = q[i as usize * N..][..N].try_into().expect("row of N actions");
+        for (s, &v) in acc.iter_mut().zip(row) {
+            *s += w * v;
+        }
+    }
+    out[..N].copy_from_slice(&acc);
+}
+
+/// Q(s, ·) for any action count, summing in `out` directly.
+fn q_values_any(q: &[f64], na: usize, phi: &Activations, out: &mut [f64]) {
+    out.fill(0.0);
+    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+        let row = &q[i as usize * na..(i as usize + 1) * na];
+        for (o, v) in out.iter_mut().zip(row) {
+            *o += w * v;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::config::{Algorithm, TrialConfig};
+    use crate::sim::env::SystemKind;
+    use crate::sim::repr::ReprKind;
+
+    fn config(lambda: f64, replacing: bool, cutoff: f64) -> LearnerConfig {
+        let mut c =
+            TrialConfig::paper(SystemKind::CartPole, ReprKind::Fuzzy, Algorithm::QLambda, vec![2; 4], 3)
+                .learner;
+        c.lambda = lambda;
+        c.trace_cutoff = cutoff;
+        if replacing {
+            c.traces = TraceKind::Replacing;
+        }
+        c
+    }
+
+    /// Deterministic pseudo-random activations over `nf` features (distinct indices).
+    fn activations(step: usize, nf: usize, len: usize) -> Activations {
+        let mut a = Activations::default();
+        let start = (step * 7919) % nf;
+        for j in 0..len {
+            a.index.push(((start + j * 3) % nf) as u32);
+            a.weight.push(if j % 5 == 4 { 0.0 } else { 1.0 / (1.0 + (step + j) as f64 % 7.0) });
+        }
+        a
+    }
+
+    /// The list-based learner qsweep shipped before the fast paths, verbatim: the oracle.
+    struct ListLearner {
+        na: usize,
+        q: Vec<f64>,
+        trace: Vec<f64>,
+        active: Vec<u32>,
+        alpha: f64,
+        decay: f64,
+        cutoff: f64,
+        replacing: bool,
+    }
+
+    impl ListLearner {
+        fn new(nf: usize, na: usize, cfg: &LearnerConfig) -> Self {
+            Self {
+                na,
+                q: vec![cfg.q_init; nf * na],
+                trace: vec![0.0; nf * na],
+                active: Vec::new(),
+                alpha: cfg.alpha,
+                decay: cfg.gamma * cfg.lambda,
+                cutoff: cfg.trace_cutoff,
+                replacing: cfg.traces == TraceKind::Replacing,
+            }
+        }
+
+        fn clear_traces(&mut self) {
+            for &k in &self.active {
+                self.trace[k as usize] = 0.0;
+            }
+            self.active.clear();
+        }
+
+        fn update(&mut self, phi: &Activations, action: usize, delta: f64) {
+            if self.decay == 0.0 {
+                self.clear_traces();
+            } else {
+                let (decay, cutoff, trace) = (self.decay, self.cutoff, &mut self.trace);
+                self.active.retain(|&k| {
+                    let e = &mut trace[k as usize];
+                    *e *= decay;
+                    if *e < cutoff || *e == 0.0 {
+                        *e = 0.0;
+                        false
+                    } else {
+                        true
+                    }
+                });
+            }
+            for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+                let k = i as usize * self.na + action;
+                let e = &mut self.trace[k];
+                if *e == 0.0 {
+                    self.active.push(k as u32);
+                }
+                *e = if self.replacing { e.max(w) } else { *e + w };
+            }
+            let step = self.alpha * delta;
+            for &k in &self.active {
+                self.q[k as usize] += step * self.trace[k as usize];
+            }
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    #[test]
+    fn every_trace_layout_matches_the_list_based_learner_bit_for_bit() {
+        let settings = [
+            (0.9, false, 1e-10, 0.1),
+            (0.5, true, 1e-3, 0.1),
+            (0.7, false, 0.0, 0.1),
+            (0.0, false, 0.0, 0.1),
+            (0.0, true, 0.0, 0.1),
+            // α·δ overflows: step·0 is NaN wherever the list-based update touches a zero trace.
+            (0.6, false, 1e-10, 1e308),
+        ];
+        for (lambda, replacing, cutoff, alpha) in settings {
+            let mut cfg = config(lambda, replacing, cutoff);
+            cfg.alpha = alpha;
+            let (nf, na) = (24, 3);
+            let mut oracle = ListLearner::new(nf, na, &cfg);
+            let mut dense = Learner::new(nf, na, nf, &cfg);
+            let mut sparse = Learner::new(nf, na, 1, &cfg);
+            if lambda > 0.0 {
+                assert!(matches!(dense.traces, Traces::Dense(_)));
+                assert!(matches!(sparse.traces, Traces::Sparse(_)));
+            }
+            let (mut qd, mut qs) = (vec![0.0; na], vec![0.0; na]);
+            for step in 0..400 {
+                // Single-feature steps (the crisp path) mixed with several-feature ones.
+                let phi = activations(step, nf, if step % 3 == 0 { 1 } else { 1 + step % 6 });
+                let delta = ((step as f64) * 0.37).sin() * if alpha > 1.0 { 10.0 } else { 1.0 };
+                for l in [&mut dense, &mut sparse] {
+                    l.update(&phi, step % na, delta);
+                }
+                oracle.update(&phi, step % na, delta);
+                let what = format!("λ {lambda} replacing {replacing} α {alpha} step {step}");
+                if lambda > 0.0 {
+                    // Ours are stored decayed for the next step; the oracle decays at its start.
+                    let next: Vec<f64> = oracle.trace.iter().map(|&e| dense.rule.decayed(e)).collect();
+                    assert_eq!(dense.dense_traces(), next, "{what}");
+                    assert_eq!(sparse.dense_traces(), next, "{what}");
+                }
+                // Signs of zero may differ where q stays 0 (no sum can tell); nothing else may.
+                let zero_sign =
+                    |v: &[f64]| bits(&v.iter().map(|x| if *x == 0.0 { 0.0 } else { *x }).collect::<Vec<_>>());
+                assert_eq!(zero_sign(&dense.q), zero_sign(&oracle.q), "{what}");
+                assert_eq!(zero_sign(&sparse.q), zero_sign(&oracle.q), "{what}");
+                dense.q_values(&phi, &mut qd);
+                sparse.q_values(&phi, &mut qs);
+                assert_eq!(bits(&qd), bits(&qs), "{what}");
+                if step % 97 == 0 {
+                    dense.clear_traces();
+                    sparse.clear_traces();
+                    oracle.clear_traces();
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn unrolled_q_values_match_the_generic_sum() {
+        for na in 1..=20 {
+            let cfg = config(0.0, false, 0.0);
+            let mut l = Learner::new(10, na, 4, &cfg);
+            for (k, q) in l.q.iter_mut().enumerate() {
+                *q = (k as f64 * 0.731).sin() * 1e3;
+            }
+            let phi = activations(3, 10, 7);
+            let (mut fast, mut slow) = (vec![0.0; na], vec![0.0; na]);
+            l.q_values(&phi, &mut fast);
+            q_values_any(&l.q, na, &phi, &mut slow);
+            assert_eq!(fast, slow, "{na} actions");
+        }
     }
 }

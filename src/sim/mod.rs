@@ -13,4 +13,6 @@ pub use config::{Algorithm, TrialConfig};
 pub use trial::{run_trial, Outcome, StopReason};
 
 #[cfg(test)]
+mod pinned_tests;
+#[cfg(test)]
 mod reference_tests;

@@ -73,7 +73,7 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E) -> Outcome {
 }
 
 /// ε-greedy action choice; returns the action and whether it is greedy.
-#[inline]
+#[inline(always)]
 fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize, bool) {
     let mut best = f64::NEG_INFINITY;
     let mut n_best = 0usize;
@@ -103,7 +103,7 @@ fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, mut env:
     let l = &cfg.learner;
     let actions = action_set(cfg.env.action_max(), cfg.actions);
     let na = actions.len();
-    let mut learner = Learner::new(repr.n_features(), na, l);
+    let mut learner = Learner::new(repr.n_features(), na, repr.max_active(), l);
     let mut rng = TrialRng::new(seed);
     let (mut phi, mut phi_next) = (Activations::default(), Activations::default());
     let (mut qs, mut qs_next) = (vec![0.0; na], vec![0.0; na]);

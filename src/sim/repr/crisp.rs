@@ -24,15 +24,27 @@ impl Crisp {
     }
 
     /// Bin of one variable's value.
-    #[inline]
+    #[inline(always)]
     pub fn bin(&self, var: usize, value: f64) -> u32 {
-        let b = ((value - self.lo[var]) * self.scale[var]).floor();
-        // Negative, NaN and too-large values land in the edge bins.
-        if b >= 0.0 {
-            (b as u32).min(self.bins[var] - 1)
+        let t = (value - self.lo[var]) * self.scale[var];
+        // Negative, NaN and too-large values land in the edge bins. For t ≥ 0 the saturating cast
+        // truncates, which is floor; and floor(t) ≥ 0 exactly when t ≥ 0. So this is bin =
+        // floor(t) without a call to `floor` (a library call on baseline x86-64, which lacks SSE4.1).
+        if t >= 0.0 {
+            (t as u32).min(self.bins[var] - 1)
         } else {
             0
         }
+    }
+
+    /// The one feature (table row) `state` activates.
+    #[inline(always)]
+    pub fn feature(&self, state: &[f64]) -> u32 {
+        let mut index = 0;
+        for (j, &v) in state[..self.bins.len()].iter().enumerate() {
+            index += self.strides[j] * self.bin(j, v);
+        }
+        index
     }
 }
 
@@ -41,14 +53,14 @@ impl Representation for Crisp {
         self.n_features
     }
 
-    #[inline]
+    fn max_active(&self) -> usize {
+        1
+    }
+
+    #[inline(always)]
     fn activate(&self, state: &[f64], out: &mut Activations) {
         out.clear();
-        let mut index = 0;
-        for (j, &v) in state[..self.bins.len()].iter().enumerate() {
-            index += self.strides[j] * self.bin(j, v);
-        }
-        out.index.push(index);
+        out.index.push(self.feature(state));
         out.weight.push(1.0);
     }
 }

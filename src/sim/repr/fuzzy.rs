@@ -13,6 +13,13 @@ use super::{strides, Activations, Representation};
 /// Most fuzzy sets a single variable may have.
 pub const MAX_SETS: usize = 64;
 
+/// Most state variables a rule base may have (Cart-Pole's four).
+const MAX_VARS: usize = 4;
+
+/// Windows up to this many sets (every variable, as with the default prune) take the activation
+/// path with small scratch arrays.
+const SMALL_WINDOW: usize = 8;
+
 /// `width` that makes neighbouring memberships cross at 0.5: `1 / (2·sqrt(2·ln 2))`.
 pub const HALF_CROSSING_WIDTH: f64 = 0.424_660_900_144_009_5;
 
@@ -27,12 +34,26 @@ struct Variable {
     reach: f64,
 }
 
+impl Variable {
+    /// Most sets a window can hold: ⌊2·reach⌋ + 1 centres lie within ±reach spacings of a point,
+    /// plus one for rounding in the window edges.
+    fn max_window(&self) -> usize {
+        if self.reach.is_finite() {
+            ((2.0 * self.reach) as usize + 2).min(self.n)
+        } else {
+            self.n
+        }
+    }
+}
+
 /// A grid of Gaussian fuzzy sets with normalised product firing strengths.
 #[derive(Debug, Clone)]
 pub struct Fuzzy {
     vars: Vec<Variable>,
     strides: Vec<u32>,
     n_features: usize,
+    /// Largest window of any variable.
+    max_window: usize,
 }
 
 impl Fuzzy {
@@ -40,7 +61,8 @@ impl Fuzzy {
     /// `prune` are skipped (0 keeps every rule).
     pub fn new(sets: &[u32], ranges: &[[f64; 2]], width: f64, prune: f64) -> Self {
         assert_eq!(sets.len(), ranges.len());
-        let vars = sets
+        assert!(sets.len() <= MAX_VARS, "at most {MAX_VARS} state variables");
+        let vars: Vec<Variable> = sets
             .iter()
             .zip(ranges)
             .map(|(&n, r)| {
@@ -65,7 +87,8 @@ impl Fuzzy {
             })
             .collect();
         let n_features = sets.iter().map(|&s| s as usize).product();
-        Self { vars, strides: strides(sets), n_features }
+        let max_window = vars.iter().map(Variable::max_window).max().unwrap_or(1);
+        Self { vars, strides: strides(sets), n_features, max_window }
     }
 
     /// Centre of set `k` of variable `j`.
@@ -78,15 +101,10 @@ impl Fuzzy {
         }
     }
 
-    /// Normalised memberships of variable `j` at `value`: writes `(set, μ)` pairs, returns their count.
-    #[inline]
-    fn memberships(
-        &self,
-        j: usize,
-        value: f64,
-        sets: &mut [u32; MAX_SETS],
-        mu: &mut [f64; MAX_SETS],
-    ) -> usize {
+    /// Normalised memberships of variable `j` at `value`: writes `(set, μ)` pairs, returns their
+    /// count (at most the variable's `max_window`, which `sets` and `mu` must hold).
+    #[inline(always)]
+    fn memberships(&self, j: usize, value: f64, sets: &mut [u32], mu: &mut [f64]) -> usize {
         let v = &self.vars[j];
         if v.n == 1 {
             sets[0] = 0;
@@ -95,8 +113,9 @@ impl Fuzzy {
         }
         let x = value.clamp(v.lo, v.hi);
         let pos = (x - v.lo) / v.spacing;
-        let first = (pos - v.reach).ceil().max(0.0) as usize;
-        let last = ((pos + v.reach).floor() as usize).min(v.n - 1);
+        let first = ceil_to_index(pos - v.reach);
+        // A saturating cast is floor for every input here (negatives and NaN give 0 either way).
+        let last = ((pos + v.reach) as usize).min(v.n - 1);
         let (first, last) = if first > last {
             let nearest = (pos.round() as usize).min(v.n - 1);
             (nearest, nearest)
@@ -106,7 +125,7 @@ impl Fuzzy {
         let mut sum = 0.0;
         let mut m = 0;
         for k in first..=last {
-            let d = x - self.centre(j, k);
+            let d = x - (v.lo + k as f64 * v.spacing); // `centre(j, k)`, inlined
             let w = (-(d * d) * v.inv_two_sigma_sq).exp();
             sets[m] = k as u32;
             mu[m] = w;
@@ -133,28 +152,74 @@ impl Representation for Fuzzy {
         self.n_features
     }
 
+    fn max_active(&self) -> usize {
+        self.vars.iter().map(Variable::max_window).product()
+    }
+
     fn activate(&self, state: &[f64], out: &mut Activations) {
-        out.clear();
-        out.index.push(0);
-        out.weight.push(1.0);
-        let mut sets = [0u32; MAX_SETS];
-        let mut mu = [0.0f64; MAX_SETS];
+        if self.max_window <= SMALL_WINDOW {
+            self.activate_with::<SMALL_WINDOW>(state, out);
+        } else {
+            self.activate_with::<MAX_SETS>(state, out);
+        }
+    }
+}
+
+impl Fuzzy {
+    /// [`activate`](Representation::activate) with scratch room for `W` sets per variable. Every
+    /// variable's memberships are computed first: they are independent, so their latency chains
+    /// (a division, the exponentials, the normalising division) overlap.
+    #[inline(always)]
+    fn activate_with<const W: usize>(&self, state: &[f64], out: &mut Activations) {
+        // Missing variables (two-variable systems) are padded with one set of membership 1 at
+        // offset 0, which leaves every index and product unchanged (x · 1 = x exactly).
+        let mut offset = [[0u32; W]; MAX_VARS];
+        let mut mu = [[1.0f64; W]; MAX_VARS];
+        let mut count = [1usize; MAX_VARS];
         for (j, &value) in state[..self.vars.len()].iter().enumerate() {
-            let m = self.memberships(j, value, &mut sets, &mut mu);
-            let len = out.len();
-            let stride = self.strides[j];
-            // Blocks 1..m are copies of the current rules extended by set t; block 0 is extended in place.
-            for t in 1..m {
-                for e in 0..len {
-                    out.index.push(out.index[e] + stride * sets[t]);
-                    out.weight.push(out.weight[e] * mu[t]);
-                }
-            }
-            for e in 0..len {
-                out.index[e] += stride * sets[0];
-                out.weight[e] *= mu[0];
+            count[j] = self.memberships(j, value, &mut offset[j], &mut mu[j]);
+            for o in &mut offset[j][..count[j]] {
+                *o *= self.strides[j];
             }
         }
+        let total = count.iter().product();
+        out.index.resize(total, 0);
+        out.weight.resize(total, 0.0);
+        // Rule order and every product exactly as eq. (10) evaluated variable by variable (what an
+        // outer product built one variable at a time gives): variable 0 varies fastest, and a
+        // weight is ((1·μ₀)·μ₁)·μ₂)·μ₃, where 1·μ₀ = μ₀.
+        let [m0, m1, m2, m3] = count;
+        let (mu0, o0) = (&mu[0][..m0], &offset[0][..m0]);
+        let mut p = 0;
+        for (&mu3, &o3) in mu[3][..m3].iter().zip(&offset[3][..m3]) {
+            for (&mu2, &o2) in mu[2][..m2].iter().zip(&offset[2][..m2]) {
+                for (&mu1, &o1) in mu[1][..m1].iter().zip(&offset[1][..m1]) {
+                    let o123 = o1 + o2 + o3;
+                    let row = out.index[p..p + m0].iter_mut().zip(&mut out.weight[p..p + m0]);
+                    for ((i, w), (&m, &o)) in row.zip(mu0.iter().zip(o0)) {
+                        *i = o + o123;
+                        *w = ((m * mu1) * mu2) * mu3;
+                    }
+                    p += m0;
+                }
+            }
+        }
+    }
+}
+
+/// `y.ceil().max(0.0) as usize` without the `ceil` library call: 0 for y ≤ 0 and NaN, else the
+/// smallest integer ≥ y (exact for the small y of a window edge, which is below `MAX_SETS`).
+#[inline]
+fn ceil_to_index(y: f64) -> usize {
+    if y > 0.0 {
+        let t = y as usize;
+        if (t as f64) < y {
+            t + 1
+        } else {
+            t
+        }
+    } else {
+        0
     }
 }
 
@@ -235,6 +300,32 @@ mod tests {
         let v = &f.vars[0];
         let raw = (-(0.5f64 * 0.5) * v.inv_two_sigma_sq).exp();
         assert!((raw - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn window_edges_match_ceil_and_floor() {
+        for y in [-3.0, -0.5, -0.0, 0.0, 1e-300, 0.3, 1.0, 1.0 + f64::EPSILON, 2.5, 62.999, 63.0, f64::NAN] {
+            assert_eq!(ceil_to_index(y), y.ceil().max(0.0) as usize, "{y}");
+            assert_eq!(y as usize, y.floor() as usize, "{y}");
+        }
+        assert_eq!(f64::INFINITY as usize, f64::INFINITY.floor() as usize);
+        assert_eq!(ceil_to_index(f64::NEG_INFINITY), 0);
+    }
+
+    #[test]
+    fn max_active_bounds_every_activation() {
+        let ranges = [[-1.0, 1.0], [-2.0, 2.0]];
+        for (sets, prune) in [([10, 4], 1e-6), ([7, 64], 1e-3), ([5, 3], 0.0)] {
+            let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, prune);
+            let mut a = Activations::default();
+            let mut most = 0;
+            for i in 0..400 {
+                let x = -1.2 + 0.006 * f64::from(i);
+                f.activate(&[x, 1.7 * x], &mut a);
+                most = most.max(a.len());
+            }
+            assert!(most <= f.max_active(), "{sets:?}: {most} > {}", f.max_active());
+        }
     }
 
     #[test]

@@ -62,6 +62,8 @@ impl Activations {
 pub trait Representation {
     /// Total number of features (bins or rules).
     fn n_features(&self) -> usize;
+    /// Most features a single state can activate (the learner sizes its trace strategy by it).
+    fn max_active(&self) -> usize;
     /// Write the activations of `state` (its first `dim` entries) into `out`.
     fn activate(&self, state: &[f64], out: &mut Activations);
 }
