@@ -87,6 +87,9 @@ pub struct TrialArgs {
     /// Fuzzy memberships below this are skipped; 0 is exact [default: 1e-6].
     #[arg(long, value_parser = args::finite)]
     pub prune: Option<f64>,
+    /// Q(λ) traces below this are dropped; 0 keeps every trace [default: 1e-10].
+    #[arg(long, value_parser = args::finite)]
+    pub trace_cutoff: Option<f64>,
     /// Episode cap [default: 1000].
     #[arg(long)]
     pub max_episodes: Option<u32>,
@@ -161,6 +164,9 @@ pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
     }
     if let Some(v) = a.prune {
         c.repr.prune = v;
+    }
+    if let Some(v) = a.trace_cutoff {
+        c.learner.trace_cutoff = v;
     }
     if let Some(v) = a.max_episodes {
         c.limits.max_episodes = v;

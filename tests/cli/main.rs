@@ -1,5 +1,6 @@
 //! End-to-end tests of the `qsweep` binary (one test binary; helpers in `helpers.rs`).
 
+mod bench;
 mod helpers;
 mod pipeline;
 mod report_files;

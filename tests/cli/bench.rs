@@ -1,10 +1,6 @@
 //! `qsweep bench` from the command line: JSON shape, filtering and argument errors.
 
-use assert_cmd::Command;
-
-fn qsweep() -> Command {
-    Command::cargo_bin("qsweep").expect("binary builds")
-}
+use crate::helpers::qsweep;
 
 #[test]
 fn json_lists_config_steps_seconds_and_rate() {
