@@ -119,6 +119,9 @@ mod tests {
                         c.limits.max_episodes = 15;
                         c.limits.max_total_steps = 20_000;
                         // Pinned explicitly: a changed default changes keys, not semantics.
+                        if repr == ReprKind::Fuzzy {
+                            c.repr.prune = 1e-6;
+                        }
                         if let crate::sim::config::Success::Reach { max_episode_steps, .. } =
                             &mut c.limits.success
                         {

@@ -84,7 +84,7 @@ pub struct TrialArgs {
     /// Fuzzy σ as a multiple of the centre spacing [default: 0.4247, neighbours cross at 0.5].
     #[arg(long, value_parser = args::positive)]
     pub width: Option<f64>,
-    /// Fuzzy memberships below this are skipped; 0 is exact [default: 1e-6].
+    /// Fuzzy memberships below this are skipped; 0 is exact [default: 1e-3].
     #[arg(long, value_parser = args::finite)]
     pub prune: Option<f64>,
     /// Q(λ) traces below this are dropped; 0 keeps every trace [default: 1e-10].

@@ -199,7 +199,7 @@ pub fn default_success(system: SystemKind) -> Success {
 /// Default fuzzy membership width (neighbouring sets cross at 0.5).
 pub const DEFAULT_WIDTH: f64 = super::repr::HALF_CROSSING_WIDTH;
 /// Default fuzzy pruning threshold.
-pub const DEFAULT_PRUNE: f64 = 1e-6;
+pub const DEFAULT_PRUNE: f64 = 1e-3;
 /// Default trace cutoff.
 pub const DEFAULT_TRACE_CUTOFF: f64 = 1e-10;
 /// Default episode cap per trial.

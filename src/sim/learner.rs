@@ -26,8 +26,9 @@ use super::config::{LearnerConfig, TraceKind};
 use super::repr::Activations;
 
 /// Dense traces when the table has at most this many features per feature a single state can
-/// activate: then most traces are live in practice and a linear sweep beats list bookkeeping.
-pub const DENSE_TRACE_RATIO: usize = 4;
+/// activate: then most traces are live in practice and a linear sweep beats list bookkeeping
+/// (measured on Cart-Pole fuzzy Q(λ), 625 rules active at most: 6⁴ rules faster dense, 7⁴ sparse).
+pub const DENSE_TRACE_RATIO: usize = 3;
 
 /// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
 const MAX_UNROLLED_ACTIONS: usize = 16;

@@ -35,6 +35,10 @@ fn cases() -> Vec<(String, TrialConfig)> {
                 };
                 let base = |res: u32, actions: u32| {
                     let mut c = TrialConfig::paper(system, repr, algorithm, vec![res; dim], actions);
+                    // Pinned explicitly, independent of the default (a default changes keys, not semantics).
+                    if repr == ReprKind::Fuzzy {
+                        c.repr.prune = 1e-6;
+                    }
                     // Mountain Car's early episodes are long: fewer of them, with room to vary.
                     (c.limits.max_episodes, c.limits.success) = match c.limits.success {
                         Success::Balance { .. } => (60, Success::Balance { steps: 4_000 }),
@@ -77,6 +81,7 @@ fn cases() -> Vec<(String, TrialConfig)> {
             let dim = system.dim();
             let base = |res: u32, actions: u32| {
                 let mut c = TrialConfig::paper(system, ReprKind::Fuzzy, algorithm, vec![res; dim], actions);
+                c.repr.prune = 1e-6;
                 (c.limits.max_episodes, c.limits.success) = match c.limits.success {
                     Success::Balance { .. } => (40, Success::Balance { steps: 3_000 }),
                     Success::Reach { .. } => {
