@@ -9,6 +9,7 @@ qsweep itself is Rust. Every figure here can be recomputed from cells.parquet wi
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -30,6 +31,35 @@ def main() -> None:
         cells=("n", "size"), full=("all_converged", "sum"), trials=("n", "sum"), ok=("successes", "sum")
     )
 
+    print("### Table III side by side\n")
+    print("Verdict: *replicates* when the difference of the means is within two standard errors")
+    print("(√(s₁²/n₁ + s₂²/n₂), both n = 10: an approximate two-sample test at the 5% level);")
+    print("*within 2×* when it is not, but our mean is between half and twice the paper's;")
+    print("*does not replicate* otherwise. *Order* says whether Q(0) and Q(λ) of the same experiment")
+    print("rank as in the paper. Configurations are compared separately.\n")
+    t3 = pd.read_csv(d / "table3.csv", dtype={"experiment": str})
+    print("| system | exp. | algorithm | paper | paper config | qsweep | qsweep config | successes | verdict | order | config |")
+    print("|---|---|---|---:|---|---:|---|---:|---|---|---|")
+    res_cols = ["x", "x_dot", "theta", "theta_dot"]
+    for _, r in t3.iterrows():
+        ours = [int(r[c]) for c in res_cols if pd.notna(r[c])] + [int(r["actions"])]
+        paper_cfg = [int(r[f"paper_{c}"]) for c in res_cols + ["actions"] if pd.notna(r[f"paper_{c}"])]
+        se = math.sqrt(r["paper_std"] ** 2 / 10 + r["std"] ** 2 / r["n"])
+        diff = abs(r["mean"] - r["paper_mean"])
+        if diff <= 2 * se:
+            verdict = "replicates"
+        elif 0.5 <= r["mean"] / r["paper_mean"] <= 2:
+            verdict = "within 2×"
+        else:
+            verdict = "does not replicate"
+        same = t3[(t3.system == r.system) & (t3.experiment == r.experiment)]
+        order = same.sort_values("mean")["algorithm"].tolist() == same.sort_values("paper_mean")["algorithm"].tolist()
+        print(
+            f"| {r.system} | {r.experiment} | {r.algorithm} | {r.paper_mean:g} ± {r.paper_std:g} | {paper_cfg} "
+            f"| {r['mean']:.1f} ± {r['std']:.1f} | {ours} | {int(r.successes)}/{int(r.n)} | {verdict} "
+            f"| {'same' if order else 'reversed'} | {'same' if ours == paper_cfg else 'differs'} |"
+        )
+    print()
     print("### Convergence overall (cells where every seed reached the goal / trials that did)\n")
     print("| system | exp. | algorithm | cells fully converged | trials converged |")
     print("|---|---|---|---:|---:|")
@@ -65,7 +95,6 @@ def main() -> None:
     print("Best-cell means: " + ", ".join(f"Exp. {e} {a}: {r['mean']:.1f}" for (e, a), r in mc.iterrows()))
 
     print("\n### 4. Compact representations (2-4 bins or sets, 2-4 actions) are preferred\n")
-    res_cols = ["x", "x_dot", "theta", "theta_dot"]
     n_compact = 0
     rows = []
     for (s, e, a), r in b.iterrows():
