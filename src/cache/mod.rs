@@ -3,6 +3,7 @@
 pub mod key;
 pub mod record;
 pub mod store;
+pub mod verify;
 
 pub use key::{Key, ENGINE_VERSION};
 pub use record::TrialRecord;

@@ -8,6 +8,7 @@ mod run;
 mod simulate;
 mod status;
 mod trial;
+mod verify;
 
 use clap::{Parser, Subcommand};
 
@@ -35,6 +36,8 @@ pub enum Command {
     Status(status::StatusArgs),
     /// Write a pipeline's report (Table III, Figures 5-7, Parquet data, index.html) from the cache.
     Report(report::ReportArgs),
+    /// Check every cache segment (readable, schema, keys match configurations); quarantine damage.
+    Verify(verify::VerifyArgs),
 }
 
 /// Run a parsed command line; returns the process exit code.
@@ -46,5 +49,6 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Run(a) => run::run(a),
         Command::Status(a) => status::run(a),
         Command::Report(a) => report::run(a),
+        Command::Verify(a) => verify::run(a),
     }
 }

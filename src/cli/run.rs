@@ -46,7 +46,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let store = a.pipeline.store()?;
     install_ctrlc();
     let unique = plan.unique_trials();
-    let cached: HashSet<_> = if a.force { HashSet::new() } else { store.keys()?.keys };
+    let scan = store.keys()?;
+    for d in &scan.damaged {
+        // Never serve or keep reading a segment we cannot read: move it aside, rerun its trials.
+        let to = store.quarantine(&d.path)?;
+        eprintln!("warning: damaged cache segment {d}; moved to {}", to.display());
+    }
+    let cached: HashSet<_> = if a.force { HashSet::new() } else { scan.keys };
     let jobs: Vec<Job> = unique
         .iter()
         .filter(|(_, _, key)| !cached.contains(key))
