@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod gc;
 mod pipeline_args;
 mod report;
 mod run;
@@ -38,6 +39,8 @@ pub enum Command {
     Report(report::ReportArgs),
     /// Check every cache segment (readable, schema, keys match configurations); quarantine damage.
     Verify(verify::VerifyArgs),
+    /// Compact the cache; with pipelines given, drop rows none of them references.
+    Gc(gc::GcArgs),
 }
 
 /// Run a parsed command line; returns the process exit code.
@@ -50,5 +53,6 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Status(a) => status::run(a),
         Command::Report(a) => report::run(a),
         Command::Verify(a) => verify::run(a),
+        Command::Gc(a) => gc::run(a),
     }
 }

@@ -1,7 +1,7 @@
 //! End-to-end tests of the `qsweep` binary (one test binary; helpers in `helpers.rs`).
 
 mod bench;
-mod damage;
+mod cache;
 mod helpers;
 mod pipeline;
 mod report_files;

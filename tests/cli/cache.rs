@@ -1,5 +1,5 @@
-//! A damaged cache and diverging trials: detected, reported with paths, moved aside, recomputed;
-//! never served and never a panic.
+//! Cache robustness: damaged segments and diverging trials are detected, reported with paths,
+//! moved aside and recomputed, never served; concurrent writers; `gc` keeps what pipelines use.
 
 use crate::helpers::{stdout, Sandbox};
 use serde_json::Value;
@@ -70,4 +70,52 @@ fn diverging_trials_are_stored_as_failed_and_the_run_exits_1() {
     // Failed trials are results too: a rerun serves them from the cache.
     let v = sb.run_json(&p, &[]);
     assert_eq!(v["cached"].as_u64(), Some(4));
+}
+
+#[test]
+fn two_concurrent_runs_on_one_cache_both_finish_and_store_every_trial() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let bin = assert_cmd::cargo::cargo_bin("qsweep");
+    let spawn = || {
+        std::process::Command::new(&bin)
+            .current_dir(sb.dir.path())
+            .args(["run", p.to_str().unwrap(), "--json", "--no-report", "--jobs", "1", "--batch-trials", "3"])
+            .args(["--set", "seeds=4"])
+            .arg("--cache")
+            .arg(sb.cache())
+            .output()
+    };
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(spawn);
+        let b = s.spawn(spawn);
+        (a.join().unwrap().unwrap(), b.join().unwrap().unwrap())
+    });
+    for o in [&a, &b] {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let recs = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
+    assert_eq!(recs.len(), 112, "every trial exactly once after dropping identical duplicates");
+    let v = sb.run_json(&p, &["--set", "seeds=4"]);
+    assert_eq!((v["executed"].as_u64(), v["cached"].as_u64()), (Some(0), Some(112)));
+    assert!(stdout(&mut sb.qsweep(&["verify"])).contains("0 damaged"));
+}
+
+#[test]
+fn gc_drops_only_rows_no_given_pipeline_references_and_compacts() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    sb.run_json(&p, &["--set", "seeds=3", "--batch-trials", "5"]);
+    let before = segments(&sb).len();
+    let dry = stdout(&mut sb.qsweep(&["gc", p.to_str().unwrap(), "--dry-run"]));
+    assert!(dry.starts_with("dry run: ") && dry.contains("56 rows kept, 28 removed"), "{dry}");
+    assert_eq!(segments(&sb).len(), before);
+    let out = stdout(&mut sb.qsweep(&["gc", p.to_str().unwrap()]));
+    assert!(out.contains(&format!("{before} segments → 1, 56 rows kept, 28 removed")), "{out}");
+    assert!(out.contains("MiB freed"), "{out}");
+    let v = sb.run_json(&p, &[]);
+    assert_eq!((v["executed"].as_u64(), v["cached"].as_u64()), (Some(0), Some(56)));
+    // With no pipeline it only compacts.
+    let out = stdout(&mut sb.qsweep(&["gc"]));
+    assert!(out.contains("56 rows kept, 0 removed"), "{out}");
 }

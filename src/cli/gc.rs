@@ -1,0 +1,62 @@
+//! `qsweep gc`: compact the cache and drop rows no given pipeline references.
+
+use super::pipeline_args::cache_dir;
+use crate::cache::Store;
+use crate::error::user_error;
+use crate::plan::plan;
+use crate::spec::load;
+use clap::Args;
+use std::collections::HashSet;
+use std::path::PathBuf;
+
+/// Arguments of `qsweep gc`.
+#[derive(Debug, Args)]
+pub struct GcArgs {
+    /// Keep only the trials of these pipelines (none: keep every row, just compact).
+    pub pipelines: Vec<PathBuf>,
+    /// Cache directory [env: QSWEEP_CACHE; default: cache].
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Say what would be removed and compacted; change nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+}
+
+/// Run `qsweep gc`.
+pub fn run(a: GcArgs) -> anyhow::Result<u8> {
+    let dir = cache_dir(a.cache.as_ref());
+    if !dir.is_dir() {
+        return Err(user_error(format!("cache {} does not exist", dir.display())));
+    }
+    let mut keep: Option<HashSet<_>> = None;
+    for p in &a.pipelines {
+        let planned = plan(&load(p, &[])?, None)?;
+        keep.get_or_insert_with(HashSet::new).extend(planned.trials().map(|(_, _, t)| t.key));
+    }
+    let store = Store::open(&dir)?;
+    let r = store.gc(keep.as_ref(), a.dry_run)?;
+    for s in &r.skipped {
+        eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");
+    }
+    let mib = |b: u64| b as f64 / (1 << 20) as f64;
+    let sizes = if a.dry_run {
+        format!("{:.2} MiB now", mib(r.bytes_before))
+    } else {
+        format!(
+            "{:.2} MiB → {:.2} MiB ({:.2} MiB freed)",
+            mib(r.bytes_before),
+            mib(r.bytes_after),
+            mib(r.bytes_before.saturating_sub(r.bytes_after))
+        )
+    };
+    println!(
+        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped; {sizes}",
+        if a.dry_run { "dry run: " } else { "" },
+        r.segments_before,
+        r.segments_after,
+        r.rows_kept,
+        r.rows_removed,
+        r.duplicates,
+    );
+    Ok(0)
+}
