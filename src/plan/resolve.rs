@@ -17,32 +17,22 @@ pub const DEFAULT_MAX_TRIALS: usize = 200_000;
 
 /// How a system's typed sections become resolved values.
 trait Resolve: SystemMarker {
-    fn env(p: &Self::Params) -> EnvParams;
     fn success(s: Option<&Self::Success>) -> Success;
 }
 
 impl Resolve for BallBeamM {
-    fn env(p: &Self::Params) -> EnvParams {
-        EnvParams::BallBeam(p.clone())
-    }
     fn success(s: Option<&BalanceSpec>) -> Success {
         balance(Self::SYSTEM, s)
     }
 }
 
 impl Resolve for CartPoleM {
-    fn env(p: &Self::Params) -> EnvParams {
-        EnvParams::CartPole(p.clone())
-    }
     fn success(s: Option<&BalanceSpec>) -> Success {
         balance(Self::SYSTEM, s)
     }
 }
 
 impl Resolve for MountainCarM {
-    fn env(p: &Self::Params) -> EnvParams {
-        EnvParams::MountainCar(p.clone())
-    }
     fn success(s: Option<&ReachSpec>) -> Success {
         let Success::Reach { within, streak, max_episode_steps } = default_success(Self::SYSTEM) else {
             unreachable!("mountain car is goal-reaching")
@@ -114,6 +104,14 @@ impl Settings {
 pub fn plan(loaded: &LoadedSpec, max_trials: Option<usize>) -> anyhow::Result<Plan> {
     let spec = &loaded.spec;
     let origin = loaded.path.display().to_string();
+    if let Some(limit) = max_trials {
+        // Counted from the spec, before any configuration is built or hashed, so an accidental
+        // huge grid is refused at once.
+        let n = planned_trials(spec);
+        if n > limit as u128 {
+            return Err(too_many(&origin, n, limit));
+        }
+    }
     let mut experiments = Vec::new();
     let s = &spec.systems;
     if let Some(sys) = &s.ball_beam {
@@ -133,16 +131,30 @@ pub fn plan(loaded: &LoadedSpec, max_trials: Option<usize>) -> anyhow::Result<Pl
         seeds: spec.seeds.0.clone(),
         experiments,
     };
-    if let Some(limit) = max_trials {
-        let n = plan.trial_count();
-        if n > limit {
-            return Err(user_error(format!(
-                "{origin}: the plan has {n} trials, more than the confirmation limit of {limit}; \
-                 rerun with --yes if this is intended, or shrink the grid or the seeds"
-            )));
-        }
-    }
     Ok(plan)
+}
+
+fn too_many(origin: &str, n: u128, limit: usize) -> anyhow::Error {
+    user_error(format!(
+        "{origin}: the plan has {n} trials, more than the confirmation limit of {limit}; \
+         rerun with --yes if this is intended, or shrink the grid or the seeds"
+    ))
+}
+
+/// Trials the spec expands to (cells × seeds), without building anything.
+fn planned_trials(spec: &PipelineSpec) -> u128 {
+    fn system<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> u128 {
+        s.iter()
+            .flat_map(|s| &s.experiments)
+            .map(|e| {
+                e.axes.iter().map(|a| a.values.len() as u128).product::<u128>() * e.algorithms.len() as u128
+            })
+            .sum()
+    }
+    let cells = system(&spec.systems.ball_beam)
+        + system(&spec.systems.cart_pole)
+        + system(&spec.systems.mountain_car);
+    cells * spec.seeds.0.len() as u128
 }
 
 fn expand<M: Resolve>(
@@ -164,12 +176,6 @@ fn expand<M: Resolve>(
             ranges[*j] = *r;
         }
         let success = M::success(e.success.as_ref().or(sys.success.as_ref()));
-        if out.iter().any(|o: &Experiment| o.system == system && o.id == e.id) {
-            return Err(user_error(format!(
-                "{origin}: systems.{system}.experiments[{idx}]: id {} is used twice; ids must be unique per system",
-                e.id
-            )));
-        }
         out.push(expand_experiment(spec, sys, e, &env, &ranges, &success, origin, idx)?);
     }
     Ok(())

@@ -46,7 +46,7 @@ pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
 
 /// Parse pipeline text; `origin` names it in messages.
 pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Result<PipelineSpec> {
-    if text.trim().is_empty() {
+    if text.lines().all(|l| l.trim().is_empty() || l.trim_start().starts_with('#')) {
         return Err(user_error(format!(
             "{origin}: the file is empty; a pipeline needs at least name, seeds and systems"
         )));

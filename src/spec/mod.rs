@@ -32,7 +32,7 @@ pub use overrides::Override;
 pub use values::{Finite, Positive, Seeds, SubUnit, Unit, Values};
 
 use crate::sim::config::{TieBreak, TraceKind};
-use crate::sim::env::{BallBeamParams, CartPoleParams, MountainCarParams, SystemKind};
+use crate::sim::env::{BallBeamParams, CartPoleParams, EnvParams, MountainCarParams, SystemKind};
 use serde::de::{self, DeserializeOwned, Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -83,6 +83,15 @@ pub trait SystemMarker: fmt::Debug + Clone + 'static {
     type Params: DeserializeOwned + Serialize + Default + Clone + fmt::Debug;
     /// Its success-criterion section.
     type Success: DeserializeOwned + Serialize + Clone + fmt::Debug;
+    /// The parameters as the simulation's tagged form.
+    fn env(p: &Self::Params) -> EnvParams;
+}
+
+/// Physical parameters, validated inside deserialisation so errors carry the file position.
+fn valid_params<'de, M: SystemMarker, D: Deserializer<'de>>(d: D) -> Result<M::Params, D::Error> {
+    let p = M::Params::deserialize(d)?;
+    M::env(&p).validate().map_err(|e| de::Error::custom(format!("params: {e}")))?;
+    Ok(p)
 }
 
 /// Marker for Ball-Beam.
@@ -99,24 +108,33 @@ impl SystemMarker for BallBeamM {
     const SYSTEM: SystemKind = SystemKind::BallBeam;
     type Params = BallBeamParams;
     type Success = BalanceSpec;
+    fn env(p: &BallBeamParams) -> EnvParams {
+        EnvParams::BallBeam(p.clone())
+    }
 }
 impl SystemMarker for CartPoleM {
     const SYSTEM: SystemKind = SystemKind::CartPole;
     type Params = CartPoleParams;
     type Success = BalanceSpec;
+    fn env(p: &CartPoleParams) -> EnvParams {
+        EnvParams::CartPole(p.clone())
+    }
 }
 impl SystemMarker for MountainCarM {
     const SYSTEM: SystemKind = SystemKind::MountainCar;
     type Params = MountainCarParams;
     type Success = ReachSpec;
+    fn env(p: &MountainCarParams) -> EnvParams {
+        EnvParams::MountainCar(p.clone())
+    }
 }
 
 /// One system's section.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, bound = "")]
 pub struct SystemSpec<M: SystemMarker> {
-    /// Physical parameters (unset ones keep the paper's values).
-    #[serde(default)]
+    /// Physical parameters (unset ones keep the paper's values), checked while parsing.
+    #[serde(default, deserialize_with = "valid_params::<M, _>")]
     pub params: M::Params,
     /// Per-variable `[lo, hi]` ranges (unset ones keep the defaults).
     #[serde(default)]
@@ -133,8 +151,8 @@ pub struct SystemSpec<M: SystemMarker> {
     /// Settings for this system's fuzzy experiments (Table II, "Fuzzy").
     #[serde(default)]
     pub fuzzy: Settings,
-    /// Experiments (Table I rows).
-    #[serde(deserialize_with = "non_empty")]
+    /// Experiments (Table I rows), at least one, ids unique.
+    #[serde(deserialize_with = "experiments::<M, _>")]
     pub experiments: Vec<ExperimentSpec<M>>,
 }
 
@@ -302,10 +320,18 @@ fn safe_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
     }
 }
 
-fn non_empty<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Vec<T>, D::Error> {
-    let v = Vec::<T>::deserialize(d)?;
+fn experiments<'de, M: SystemMarker, D: Deserializer<'de>>(d: D) -> Result<Vec<ExperimentSpec<M>>, D::Error> {
+    let v = Vec::<ExperimentSpec<M>>::deserialize(d)?;
     if v.is_empty() {
-        return Err(de::Error::custom("the list is empty; give at least one experiment"));
+        return Err(de::Error::custom("experiments: the list is empty; give at least one experiment"));
+    }
+    for (i, e) in v.iter().enumerate() {
+        if v[..i].iter().any(|o| o.id == e.id) {
+            return Err(de::Error::custom(format!(
+                "experiments[{i}]: id {} is used twice; ids must be unique per system",
+                e.id
+            )));
+        }
     }
     Ok(v)
 }

@@ -1,5 +1,6 @@
 //! End-to-end tests of the `qsweep` binary (one test binary; helpers in `helpers.rs`).
 
+mod bad_pipelines;
 mod bench;
 mod cache;
 mod helpers;
