@@ -31,7 +31,12 @@ pub struct GcReport {
     pub bytes_after: u64,
     /// Unreadable segments left in place (see `qsweep verify`).
     pub skipped: Vec<String>,
+    /// Temp files left by killed writers (older than [`STALE_TEMP`]), removed.
+    pub stale_temps: usize,
 }
+
+/// A temp file this old cannot belong to a live writer (writing a segment takes milliseconds).
+pub const STALE_TEMP: std::time::Duration = std::time::Duration::from_secs(600);
 
 impl Store {
     /// Compact the cache; keep only keys in `keep` when given. With `dry_run`, change nothing.
@@ -57,6 +62,16 @@ impl Store {
                     read.push(path);
                 }
                 Err(e) => report.skipped.push(format!("{}: {e:#}", path.display())),
+            }
+        }
+        for entry in std::fs::read_dir(self.dir())? {
+            let entry = entry?;
+            let stale = entry.metadata()?.modified()?.elapsed().is_ok_and(|age| age > STALE_TEMP);
+            if entry.file_name().to_string_lossy().starts_with(".tmp-") && stale {
+                report.stale_temps += 1;
+                if !dry_run {
+                    std::fs::remove_file(entry.path())?;
+                }
             }
         }
         report.rows_kept = kept.len();

@@ -50,13 +50,14 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         )
     };
     println!(
-        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped; {sizes}",
+        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files; {sizes}",
         if a.dry_run { "dry run: " } else { "" },
         r.segments_before,
         r.segments_after,
         r.rows_kept,
         r.rows_removed,
         r.duplicates,
+        r.stale_temps,
     );
     Ok(0)
 }

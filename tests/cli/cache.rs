@@ -119,3 +119,66 @@ fn gc_drops_only_rows_no_given_pipeline_references_and_compacts() {
     let out = stdout(&mut sb.qsweep(&["gc"]));
     assert!(out.contains("56 rows kept, 0 removed"), "{out}");
 }
+
+#[test]
+fn sigkill_at_several_points_loses_only_unflushed_trials() {
+    let sb = Sandbox::new();
+    let p = sb.write(
+        "slow.yaml",
+        "name: slow\nseeds: 300\nsystems:\n  mountain-car:\n    success: { within: 1, streak: 1, max_episode_steps: 100000 }\n    settings: { max_episodes: 2 }\n    experiments:\n      - { id: 1, repr: crisp, algorithms: [q0], vary: { x == x_dot: [2] } }\n",
+    );
+    let bin = assert_cmd::cargo::cargo_bin("qsweep");
+    for kill_after in [1, 3] {
+        let mut child = std::process::Command::new(&bin)
+            .current_dir(sb.dir.path())
+            .args([
+                "run",
+                p.to_str().unwrap(),
+                "--quiet",
+                "--no-report",
+                "--jobs",
+                "2",
+                "--batch-trials",
+                "4",
+            ])
+            .arg("--cache")
+            .arg(sb.cache())
+            .spawn()
+            .unwrap();
+        let start = std::time::Instant::now();
+        let before = sb.segments();
+        while sb.segments() < before + kill_after {
+            assert!(start.elapsed().as_secs() < 120, "no progress");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap();
+        // Whatever is in renamed segments is intact and is served, never recomputed.
+        let stored = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap().len() as u64;
+        assert!(stdout(&mut sb.qsweep(&["verify", "--no-quarantine"])).contains(" 0 damaged"));
+        let status: Value =
+            serde_json::from_str(&stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"])))
+                .unwrap();
+        assert_eq!(status["cached"].as_u64(), Some(stored));
+    }
+    let v = sb.run_json(&p, &[]);
+    let cached = v["cached"].as_u64().unwrap();
+    assert!(cached >= 8, "{v}");
+    assert_eq!(cached + v["executed"].as_u64().unwrap(), 300);
+}
+
+#[test]
+fn a_cache_path_that_is_not_a_directory_is_a_clear_error() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let file = sb.write("not-a-dir", "x");
+    let out = crate::helpers::qsweep()
+        .current_dir(sb.dir.path())
+        .args(["run", p.to_str().unwrap(), "--cache", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("not-a-dir"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}

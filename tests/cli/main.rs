@@ -4,6 +4,7 @@ mod bad_pipelines;
 mod bench;
 mod cache;
 mod helpers;
+mod mutations;
 mod pipeline;
 mod report_files;
 mod simulate;
