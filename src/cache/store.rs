@@ -484,6 +484,23 @@ mod tests {
     }
 
     #[test]
+    fn a_segment_with_the_wrong_schema_is_damaged() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let schema = Arc::new(Schema::new(vec![Field::new("key", DataType::UInt64, false)]));
+        let batch =
+            RecordBatch::try_new(schema.clone(), vec![Arc::new(UInt64Array::from(vec![1u64, 2]))]).unwrap();
+        let file = File::create(dir.path().join("seg-other.parquet")).unwrap();
+        let mut w = ArrowWriter::try_new(file, schema, None).unwrap();
+        w.write(&batch).unwrap();
+        w.close().unwrap();
+        let scan = store.keys().unwrap();
+        assert!(scan.keys.is_empty());
+        assert_eq!(scan.damaged.len(), 1);
+        assert!(scan.damaged[0].error.contains("column `key` has type UInt64"), "{}", scan.damaged[0].error);
+    }
+
+    #[test]
     fn a_garbage_segment_is_reported_and_its_rows_count_as_missing() {
         let dir = tempfile::tempdir().unwrap();
         let store = Store::open(dir.path()).unwrap();

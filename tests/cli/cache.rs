@@ -99,6 +99,23 @@ fn two_concurrent_runs_on_one_cache_both_finish_and_store_every_trial() {
     let v = sb.run_json(&p, &["--set", "seeds=4"]);
     assert_eq!((v["executed"].as_u64(), v["cached"].as_u64()), (Some(0), Some(112)));
     assert!(stdout(&mut sb.qsweep(&["verify"])).contains("0 damaged"));
+    // The report equals a single run's.
+    let single = Sandbox::new();
+    let q = single.fixture("tiny.yaml");
+    single.run_json(&q, &["--set", "seeds=4"]);
+    for s in [&sb, &single] {
+        let pipeline = s.path("tiny.yaml");
+        s.qsweep(&["report", pipeline.to_str().unwrap(), "--set", "seeds=4", "--out", "rep", "--quiet"])
+            .assert()
+            .success();
+    }
+    for f in ["table3.md", "table3.csv", "cells.parquet", "figures/ball-beam.svg"] {
+        assert!(
+            std::fs::read(sb.path("rep").join(f)).unwrap()
+                == std::fs::read(single.path("rep").join(f)).unwrap(),
+            "{f}"
+        );
+    }
 }
 
 #[test]
@@ -181,4 +198,58 @@ fn a_cache_path_that_is_not_a_directory_is_a_clear_error() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("not-a-dir"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
+}
+
+/// Unmounts the test's tmpfs even when an assertion fails.
+struct Mount(std::path::PathBuf);
+
+impl Drop for Mount {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("umount").arg(&self.0).status();
+    }
+}
+
+#[test]
+fn a_full_disk_is_a_clear_error_and_keeps_what_was_stored() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    std::fs::create_dir_all(sb.cache()).unwrap();
+    // A 96 KiB filesystem for the cache. Needs root (CI and the dev machines run as root); where
+    // mounting is not allowed the test says so and checks nothing.
+    let mounted = std::process::Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=96k", "tmpfs"])
+        .arg(sb.cache())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        eprintln!("note: cannot mount a tmpfs here; the full-disk test checked nothing");
+        return;
+    }
+    let _guard = Mount(sb.cache());
+    let out = sb
+        .qsweep(&[
+            "run",
+            p.to_str().unwrap(),
+            "--json",
+            "--no-report",
+            "--set",
+            "seeds=60",
+            "--batch-trials",
+            "40",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write cache segment") && err.contains("No space left"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let names: Vec<String> = std::fs::read_dir(sb.cache())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| n.starts_with("seg-")), "no temp debris: {names:?}");
+    assert!(!names.is_empty(), "batches before the disk filled are kept");
+    let verify = stdout(&mut sb.qsweep(&["verify", "--no-quarantine"]));
+    assert!(verify.contains(" 0 damaged"), "{verify}");
 }
