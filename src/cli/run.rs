@@ -35,7 +35,7 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 500, value_name = "N")]
     pub batch_trials: usize,
     /// ...or after this many seconds, whichever comes first.
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS", value_parser = super::args::finite)]
     pub batch_seconds: f64,
 }
 
@@ -62,7 +62,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let opts = ExecOptions {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
         batch_trials: a.batch_trials.max(1),
-        batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.max(0.0)),
+        batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
         progress: if a.quiet || a.json { ProgressMode::Hidden } else { ProgressMode::Auto },
     };
     let report = execute(&jobs, &opts, |batch| {

@@ -184,3 +184,11 @@ fn ctrl_c_flushes_finished_trials_exits_130_and_a_rerun_finishes_the_rest() {
     assert_eq!(count(&rest, "cached"), done, "everything flushed before the interrupt is kept");
     assert_eq!(count(&rest, "executed"), 400 - done);
 }
+
+#[test]
+fn infinite_batch_seconds_is_a_usage_error_not_a_panic() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let err = fails_with(&mut sb.qsweep(&["run", p.to_str().unwrap(), "--batch-seconds", "inf"]), 2);
+    assert!(err.contains("not a finite number") && !err.contains("panicked"), "{err}");
+}
