@@ -19,6 +19,11 @@ pub struct RunArgs {
     /// Run every trial again, even those already cached.
     #[arg(long)]
     pub force: bool,
+    /// Run only shard I of N (1 ≤ I ≤ N, as `sbatch --array=1-N` numbers tasks): a deterministic,
+    /// cost-balanced split of the plan's trials, so shards on several machines sharing one cache
+    /// run every trial exactly once. Cached trials are skipped as usual.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::exec::shard::Shard>,
     /// Print nothing but errors.
     #[arg(long, short = 'q')]
     pub quiet: bool,
@@ -53,6 +58,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         eprintln!("warning: damaged cache segment {d}; moved to {}", to.display());
     }
     let cached: HashSet<_> = if a.force { HashSet::new() } else { scan.keys };
+    let unique = match a.shard {
+        Some(shard) => {
+            let mine = crate::exec::shard::shard_keys(&unique, shard);
+            unique.into_iter().filter(|t| mine.contains(&t.2)).collect()
+        }
+        None => unique,
+    };
     let jobs: Vec<Job> = unique
         .iter()
         .filter(|(_, _, key)| !cached.contains(key))

@@ -6,6 +6,7 @@
 //! seed, and batches are written in completion order, which only affects segment layout.
 
 mod progress;
+pub mod shard;
 
 pub use progress::ProgressMode;
 

@@ -192,3 +192,24 @@ fn infinite_batch_seconds_is_a_usage_error_not_a_panic() {
     let err = fails_with(&mut sb.qsweep(&["run", p.to_str().unwrap(), "--batch-seconds", "inf"]), 2);
     assert!(err.contains("not a finite number") && !err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn two_shards_cover_every_trial_exactly_once_and_match_a_single_run() {
+    let (sharded, single) = (Sandbox::new(), Sandbox::new());
+    let p = sharded.fixture("tiny.yaml");
+    let a = sharded.run_json(&p, &["--shard", "1/2"]);
+    let b = sharded.run_json(&p, &["--shard", "2/2"]);
+    assert_eq!(count(&a, "executed") + count(&b, "executed"), 56);
+    assert!(count(&a, "executed") > 0 && count(&b, "executed") > 0);
+    let again = sharded.run_json(&p, &["--shard", "2/2"]);
+    assert_eq!(count(&again, "executed"), 0, "a requeued shard skips what is cached");
+    single.run_json(&single.fixture("tiny.yaml"), &[]);
+    let read = |sb: &Sandbox| {
+        let mut r: Vec<_> = Store::open(&sb.cache()).unwrap().read_all().unwrap();
+        r.sort_by_key(|r| r.key);
+        r.into_iter().map(|r| (r.key, r.outcome)).collect::<Vec<_>>()
+    };
+    assert!(read(&sharded) == read(&single));
+    let err = fails_with(&mut sharded.qsweep(&["run", p.to_str().unwrap(), "--shard", "3/2"]), 2);
+    assert!(err.contains("I/N"), "{err}");
+}

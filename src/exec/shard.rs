@@ -1,0 +1,98 @@
+//! Splitting a plan's trials into N disjoint shards of similar estimated cost, for job arrays.
+//!
+//! The partition is computed over *every* distinct trial of the plan, not only the missing ones,
+//! so it does not depend on what the cache holds when a shard starts: shards started at different
+//! times, or a requeued array task, agree on who runs what. Trials are taken longest-first (ties by
+//! key) and each goes to the shard with the least cost so far (LPT scheduling), deterministically.
+
+use super::estimated_cost;
+use crate::cache::Key;
+use crate::sim::TrialConfig;
+use std::collections::HashSet;
+
+/// Shard `I` of `N` (1-based, as `sbatch --array=1-N` numbers tasks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, 1..=count.
+    pub index: u32,
+    /// Number of shards.
+    pub count: u32,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("'{s}' is not a shard; write I/N with 1 ≤ I ≤ N, e.g. 2/8");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count): (u32, u32) =
+            (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+        if count == 0 || index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+}
+
+/// The keys of the trials that belong to `shard`, out of every distinct trial of a plan.
+pub fn shard_keys(trials: &[(&TrialConfig, u64, Key)], shard: Shard) -> HashSet<Key> {
+    let mut order: Vec<(f64, Key)> = trials.iter().map(|&(c, _, k)| (estimated_cost(c), k)).collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut load = vec![0.0f64; shard.count as usize];
+    let mut mine = HashSet::new();
+    for (cost, key) in order {
+        // The least-loaded shard; ties go to the lowest index.
+        let s = (0..load.len()).min_by(|&a, &b| load[a].total_cmp(&load[b]).then(a.cmp(&b))).unwrap_or(0);
+        load[s] += cost;
+        if s + 1 == shard.index as usize {
+            mine.insert(key);
+        }
+    }
+    mine
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::env::SystemKind;
+    use crate::sim::repr::ReprKind;
+    use crate::sim::Algorithm;
+
+    #[test]
+    fn shards_are_disjoint_cover_everything_and_balance_cost() {
+        let mut configs = Vec::new();
+        for res in 2..=9 {
+            for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
+                configs.push(TrialConfig::paper(
+                    SystemKind::CartPole,
+                    repr,
+                    Algorithm::QLambda,
+                    vec![res; 4],
+                    2,
+                ));
+            }
+        }
+        let trials: Vec<_> =
+            configs.iter().flat_map(|c| (0..5).map(move |s| (c, s, Key::of(c, s)))).collect();
+        let n = 4;
+        let parts: Vec<_> = (1..=n).map(|i| shard_keys(&trials, Shard { index: i, count: n })).collect();
+        let total: usize = parts.iter().map(HashSet::len).sum();
+        assert_eq!(total, trials.len());
+        let union: HashSet<_> = parts.iter().flatten().copied().collect();
+        assert_eq!(union.len(), trials.len());
+        let cost = |p: &HashSet<Key>| {
+            trials.iter().filter(|t| p.contains(&t.2)).map(|t| estimated_cost(t.0)).sum::<f64>()
+        };
+        let costs: Vec<f64> = parts.iter().map(cost).collect();
+        let (lo, hi) = costs.iter().fold((f64::MAX, 0.0f64), |(l, h), &c| (l.min(c), h.max(c)));
+        assert!(hi <= lo * 1.5, "unbalanced: {costs:?}");
+        assert_eq!(parts[1], shard_keys(&trials, Shard { index: 2, count: n }), "deterministic");
+    }
+
+    #[test]
+    fn shard_syntax() {
+        assert_eq!("3/8".parse::<Shard>(), Ok(Shard { index: 3, count: 8 }));
+        for bad in ["0/4", "5/4", "1/0", "x/2", "3"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+    }
+}
