@@ -169,7 +169,6 @@ fn expand<M: Resolve>(
         ranges[*j] = *r;
     }
     let env = M::env(&sys.params);
-    env.validate().map_err(|e| user_error(format!("{origin}: systems.{system}.params: {e}")))?;
     for (idx, e) in sys.experiments.iter().enumerate() {
         let mut ranges = ranges.clone();
         for (j, r) in &e.ranges.entries {

@@ -3,24 +3,13 @@
 
 use crate::helpers::{stdout, Sandbox};
 use serde_json::Value;
-use std::path::PathBuf;
-
-fn segments(sb: &Sandbox) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(sb.cache())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with("seg-"))
-        .collect();
-    v.sort();
-    v
-}
 
 #[test]
 fn truncated_and_garbage_segments_are_quarantined_and_their_trials_recomputed() {
     let sb = Sandbox::new();
     let p = sb.fixture("tiny.yaml");
     sb.run_json(&p, &["--batch-trials", "10"]);
-    let segs = segments(&sb);
+    let segs = sb.segment_paths();
     assert!(segs.len() >= 5);
     // Truncate one real segment (its trials are lost) and add garbage.
     let lost = qsweep::cache::store::read_segment(&segs[0], &|_| true).unwrap().len();
@@ -125,10 +114,10 @@ fn gc_drops_only_rows_no_given_pipeline_references_and_compacts() {
     let sb = Sandbox::new();
     let p = sb.fixture("tiny.yaml");
     sb.run_json(&p, &["--set", "seeds=3", "--batch-trials", "5"]);
-    let before = segments(&sb).len();
+    let before = sb.segments();
     let dry = stdout(&mut sb.qsweep(&["gc", p.to_str().unwrap(), "--dry-run"]));
     assert!(dry.starts_with("dry run: ") && dry.contains("56 rows kept, 28 removed"), "{dry}");
-    assert_eq!(segments(&sb).len(), before);
+    assert_eq!(sb.segments(), before);
     let out = stdout(&mut sb.qsweep(&["gc", p.to_str().unwrap()]));
     assert!(out.contains(&format!("{before} segments → 1, 56 rows kept, 28 removed")), "{out}");
     assert!(out.contains("MiB freed"), "{out}");

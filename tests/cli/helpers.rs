@@ -65,14 +65,20 @@ impl Sandbox {
         serde_json::from_slice(&out).expect("run --json prints JSON")
     }
 
+    /// The cache's segment files, sorted (none when the cache does not exist yet).
+    pub fn segment_paths(&self) -> Vec<PathBuf> {
+        let Ok(dir) = std::fs::read_dir(self.cache()) else { return Vec::new() };
+        let mut v: Vec<PathBuf> = dir
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with("seg-"))
+            .collect();
+        v.sort();
+        v
+    }
+
     /// Number of segment files in the cache.
     pub fn segments(&self) -> usize {
-        match std::fs::read_dir(self.cache()) {
-            Ok(d) => {
-                d.filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("seg-")).count()
-            }
-            Err(_) => 0,
-        }
+        self.segment_paths().len()
     }
 }
 
