@@ -7,6 +7,7 @@ pub mod cache;
 pub mod plan;
 pub mod report;
 pub mod sim;
+pub mod slurm;
 pub mod spec;
 
 pub mod cli;

@@ -7,6 +7,7 @@ mod pipeline_args;
 mod report;
 mod run;
 mod simulate;
+mod slurm;
 mod status;
 mod trial;
 mod verify;
@@ -41,6 +42,8 @@ pub enum Command {
     Verify(verify::VerifyArgs),
     /// Compact the cache; with pipelines given, drop rows none of them references.
     Gc(gc::GcArgs),
+    /// Print a script that submits a pipeline to Slurm: a job array of shards, then a report job.
+    Slurm(slurm::SlurmArgs),
 }
 
 /// Run a parsed command line; returns the process exit code.
@@ -54,5 +57,6 @@ pub fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Report(a) => report::run(a),
         Command::Verify(a) => verify::run(a),
         Command::Gc(a) => gc::run(a),
+        Command::Slurm(a) => slurm::run(a),
     }
 }

@@ -120,6 +120,6 @@ fn install_ctrlc() {
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(i32::from(crate::error::exit::INTERRUPTED));
         }
-        eprintln!("\ninterrupt: finishing running trials and flushing; press Ctrl-C again to stop now");
+        eprintln!("\ninterrupted (Ctrl-C or SIGTERM): storing finished trials, finishing running ones; press Ctrl-C again to stop now");
     });
 }

@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-/// Set by the Ctrl-C handler: workers start no new trials, the run flushes and stops.
+/// Set by the Ctrl-C / SIGTERM handler: workers start no new trials, the run flushes and stops.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// How to run.
@@ -147,7 +147,12 @@ pub fn execute(
                 Err(mpsc::RecvTimeoutError::Timeout) => progress.tick(),
                 Err(mpsc::RecvTimeoutError::Disconnected) => break flush(&mut batch, &mut report),
             }
-            if batch.len() >= opts.batch_trials || last_flush.elapsed() >= opts.batch_interval {
+            // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
+            // SIGKILL soon after) store what is finished at once rather than at the next batch.
+            if batch.len() >= opts.batch_trials
+                || last_flush.elapsed() >= opts.batch_interval
+                || INTERRUPTED.load(Ordering::Relaxed)
+            {
                 if let Err(e) = flush(&mut batch, &mut report) {
                     break Err(e);
                 }

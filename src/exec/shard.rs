@@ -8,7 +8,8 @@
 use super::estimated_cost;
 use crate::cache::Key;
 use crate::sim::TrialConfig;
-use std::collections::HashSet;
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashSet};
 
 /// Shard `I` of `N` (1-based, as `sbatch --array=1-N` numbers tasks).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,19 +36,25 @@ impl std::str::FromStr for Shard {
 
 /// The keys of the trials that belong to `shard`, out of every distinct trial of a plan.
 pub fn shard_keys(trials: &[(&TrialConfig, u64, Key)], shard: Shard) -> HashSet<Key> {
-    let mut order: Vec<(f64, Key)> = trials.iter().map(|&(c, _, k)| (estimated_cost(c), k)).collect();
+    let owner = assign(trials, shard.count);
+    trials.iter().zip(owner).filter(|&(_, s)| s == shard.index).map(|(t, _)| t.2).collect()
+}
+
+/// The shard (1..=count) of each trial, in the order given.
+pub fn assign(trials: &[(&TrialConfig, u64, Key)], count: u32) -> Vec<u32> {
+    let mut order: Vec<(f64, Key, usize)> =
+        trials.iter().enumerate().map(|(i, &(c, _, k))| (estimated_cost(c), k, i)).collect();
     order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    let mut load = vec![0.0f64; shard.count as usize];
-    let mut mine = HashSet::new();
-    for (cost, key) in order {
-        // The least-loaded shard; ties go to the lowest index.
-        let s = (0..load.len()).min_by(|&a, &b| load[a].total_cmp(&load[b]).then(a.cmp(&b))).unwrap_or(0);
-        load[s] += cost;
-        if s + 1 == shard.index as usize {
-            mine.insert(key);
-        }
+    // A min-heap of (load, shard): the least-loaded shard, ties to the lowest index. Loads are
+    // non-negative finite costs, so their bit patterns order like the values.
+    let mut heap: BinaryHeap<Reverse<(u64, u32)>> = (1..=count.max(1)).map(|s| Reverse((0, s))).collect();
+    let mut owner = vec![0; trials.len()];
+    for (cost, _, i) in order {
+        let Some(Reverse((load, s))) = heap.pop() else { break };
+        owner[i] = s;
+        heap.push(Reverse(((f64::from_bits(load) + cost).to_bits(), s)));
     }
-    mine
+    owner
 }
 
 #[cfg(test)]
@@ -86,6 +93,33 @@ mod tests {
         let (lo, hi) = costs.iter().fold((f64::MAX, 0.0f64), |(l, h), &c| (l.min(c), h.max(c)));
         assert!(hi <= lo * 1.5, "unbalanced: {costs:?}");
         assert_eq!(parts[1], shard_keys(&trials, Shard { index: 2, count: n }), "deterministic");
+    }
+
+    #[test]
+    fn assignment_is_plain_lpt() {
+        // The heap must pick exactly what a linear scan for the least-loaded shard picks.
+        let configs: Vec<_> = (2..=7)
+            .flat_map(|res| {
+                [ReprKind::Crisp, ReprKind::Fuzzy].map(|repr| {
+                    TrialConfig::paper(SystemKind::BallBeam, repr, Algorithm::Q0, vec![res, res], 3)
+                })
+            })
+            .collect();
+        let trials: Vec<_> =
+            configs.iter().flat_map(|c| (0..3).map(move |s| (c, s, Key::of(c, s)))).collect();
+        for n in 1..=7u32 {
+            let mut order: Vec<usize> = (0..trials.len()).collect();
+            let cost = |i: usize| estimated_cost(trials[i].0);
+            order.sort_by(|&a, &b| cost(b).total_cmp(&cost(a)).then(trials[a].2.cmp(&trials[b].2)));
+            let mut load = vec![0.0f64; n as usize];
+            let mut expected = vec![0; trials.len()];
+            for i in order {
+                let s = (0..load.len()).min_by(|&a, &b| load[a].total_cmp(&load[b]).then(a.cmp(&b))).unwrap();
+                load[s] += cost(i);
+                expected[i] = s as u32 + 1;
+            }
+            assert_eq!(assign(&trials, n), expected, "{n} shards");
+        }
     }
 
     #[test]

@@ -8,4 +8,5 @@ mod mutations;
 mod pipeline;
 mod report_files;
 mod simulate;
+mod slurm;
 mod trial;

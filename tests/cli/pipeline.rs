@@ -145,6 +145,16 @@ fn bad_pipelines_name_file_line_and_field_and_write_nothing() {
 
 #[test]
 fn ctrl_c_flushes_finished_trials_exits_130_and_a_rerun_finishes_the_rest() {
+    interrupt_flushes_exits_130_and_a_rerun_finishes_the_rest("-INT");
+}
+
+/// Slurm's time limit and scancel send SIGTERM (then SIGKILL): handled like Ctrl-C.
+#[test]
+fn sigterm_flushes_finished_trials_exits_130_and_a_rerun_finishes_the_rest() {
+    interrupt_flushes_exits_130_and_a_rerun_finishes_the_rest("-TERM");
+}
+
+fn interrupt_flushes_exits_130_and_a_rerun_finishes_the_rest(signal: &str) {
     let sb = Sandbox::new();
     // Mountain Car trials that never succeed: two 100,000-step episodes each, many seeds.
     let p = sb.write(
@@ -167,7 +177,7 @@ fn ctrl_c_flushes_finished_trials_exits_130_and_a_rerun_finishes_the_rest() {
         assert!(start.elapsed().as_secs() < 120, "no segment was written");
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    let killed = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let killed = std::process::Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap();
     assert!(killed.success());
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));

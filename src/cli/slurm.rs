@@ -1,0 +1,132 @@
+//! `qsweep slurm`: print a script that submits a pipeline to Slurm as a job array of shards plus
+//! a report job that waits for it.
+
+use super::pipeline_args::PipelineArgs;
+use crate::exec::shard::assign;
+use crate::slurm::{memory, plain_text, sbatch_option, time_limit, Submission};
+use clap::Args;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `qsweep slurm`.
+#[derive(Debug, Args)]
+pub struct SlurmArgs {
+    #[command(flatten)]
+    pub pipeline: PipelineArgs,
+    /// Number of array tasks N: task I runs `qsweep run --shard I/N`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub array: u32,
+    /// Run at most M tasks at once (sbatch --array=1-N%M).
+    #[arg(long, value_name = "M", value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_running: Option<u32>,
+    /// Slurm partition for both jobs.
+    #[arg(long, value_parser = plain_text)]
+    pub partition: Option<String>,
+    /// Time limit per task and for the report job: minutes, HH:MM:SS or D-HH:MM:SS.
+    #[arg(long, value_parser = time_limit)]
+    pub time: Option<String>,
+    /// CPUs per task; each task runs that many worker threads.
+    #[arg(long, default_value_t = 1, value_name = "C", value_parser = clap::value_parser!(u32).range(1..))]
+    pub cpus_per_task: u32,
+    /// Memory per task and for the report job (sbatch --mem), e.g. 2G.
+    #[arg(long, value_parser = memory)]
+    pub mem: Option<String>,
+    /// Slurm account to charge.
+    #[arg(long, value_parser = plain_text)]
+    pub account: Option<String>,
+    /// Job name [default: qsweep-<pipeline name>]; the report job appends -report.
+    #[arg(long, value_parser = plain_text)]
+    pub job_name: Option<String>,
+    /// Further sbatch option for both jobs, e.g. --sbatch-arg=--qos=long (repeatable).
+    #[arg(long, value_name = "OPTION", allow_hyphen_values = true, value_parser = sbatch_option)]
+    pub sbatch_arg: Vec<String>,
+    /// Directory for the jobs' log files (created by the script).
+    #[arg(long, default_value = "slurm-logs", value_name = "DIR")]
+    pub log_dir: PathBuf,
+    /// Report directory [default: reports/<pipeline name>].
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// The qsweep executable the jobs run [default: this one, by absolute path].
+    #[arg(long, value_name = "PATH", value_parser = plain_text)]
+    pub qsweep: Option<String>,
+}
+
+/// Run `qsweep slurm`: the script goes to stdout, a summary of the split to stderr.
+pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
+    // Plan now, so a broken pipeline fails here rather than in N jobs on the cluster.
+    let plan = a.pipeline.plan()?;
+    let workdir = std::env::current_dir()?;
+    let abs = |p: &Path| -> anyhow::Result<PathBuf> { Ok(std::path::absolute(p)?) };
+    let qsweep = match &a.qsweep {
+        Some(q) => q.clone(),
+        None => {
+            let exe = std::env::current_exe()?;
+            exe.to_str()
+                .ok_or_else(|| anyhow::anyhow!("the path of this executable is not UTF-8; pass --qsweep"))?
+                .to_string()
+        }
+    };
+    let submission = Submission {
+        pipeline_name: plan.name.clone(),
+        generated_by: std::env::args().map(|w| crate::slurm::quote(&w)).collect::<Vec<_>>().join(" "),
+        qsweep,
+        pipeline: abs(&a.pipeline.pipeline)?,
+        sets: a.pipeline.set.clone(),
+        yes: a.pipeline.yes,
+        cache: abs(&a.pipeline.cache_dir())?,
+        report_dir: abs(&a.out.clone().unwrap_or_else(|| Path::new("reports").join(&plan.name)))?,
+        tasks: a.array,
+        max_running: a.max_running,
+        cpus_per_task: a.cpus_per_task,
+        partition: a.partition,
+        time: a.time,
+        mem: a.mem,
+        account: a.account,
+        job_name: a.job_name.unwrap_or_else(|| format!("qsweep-{}", plan.name)),
+        log_dir: abs(&a.log_dir)?,
+        sbatch_args: a.sbatch_arg,
+        workdir,
+    };
+    let script = submission.render()?;
+    print!("{script}");
+
+    let unique = plan.unique_trials();
+    let cache_dir = a.pipeline.cache_dir();
+    let cached: HashSet<_> =
+        if cache_dir.is_dir() { a.pipeline.store()?.keys()?.keys } else { HashSet::new() };
+    let owner = assign(&unique, a.array);
+    let mut per_shard = vec![(0usize, 0usize); a.array as usize];
+    for (t, s) in unique.iter().zip(owner) {
+        let entry = &mut per_shard[s as usize - 1];
+        entry.0 += 1;
+        entry.1 += usize::from(!cached.contains(&t.2));
+    }
+    let sizes = |f: fn(&(usize, usize)) -> usize| {
+        let v: Vec<usize> = per_shard.iter().map(f).collect();
+        (v.iter().min().copied().unwrap_or(0), v.iter().max().copied().unwrap_or(0))
+    };
+    let ((lo, hi), (mlo, mhi)) = (sizes(|p| p.0), sizes(|p| p.1));
+    let missing: usize = per_shard.iter().map(|p| p.1).sum();
+    eprintln!(
+        "pipeline '{}': {} distinct trials ({missing} not cached) in {} shards of {lo}-{hi} trials \
+         ({mlo}-{mhi} to run)",
+        plan.name,
+        unique.len(),
+        a.array
+    );
+    if a.array as usize > unique.len() {
+        eprintln!(
+            "warning: {} tasks for {} trials: {} tasks will have nothing to run",
+            a.array,
+            unique.len(),
+            a.array as usize - unique.len()
+        );
+    }
+    if a.array > 1000 {
+        eprintln!(
+            "warning: Slurm's default MaxArraySize (1001) allows at most 1000 tasks; \
+             check `scontrol show config | grep MaxArraySize`"
+        );
+    }
+    Ok(0)
+}
