@@ -59,10 +59,13 @@ impl Submission {
         let (qsweep, pipeline, cache) = (quote(&self.qsweep), q(&self.pipeline)?, q(&self.cache)?);
         let logs = q(&self.log_dir)?;
         let mut common: Vec<String> = Vec::new();
-        for (flag, value) in [("partition", &self.partition), ("time", &self.time), ("mem", &self.mem)]
-            .into_iter()
-            .chain([("account", &self.account)])
-        {
+        let named = [
+            ("partition", &self.partition),
+            ("time", &self.time),
+            ("mem", &self.mem),
+            ("account", &self.account),
+        ];
+        for (flag, value) in named {
             if let Some(v) = value {
                 common.push(format!("--{flag}={}", quote(v)));
             }
@@ -97,7 +100,6 @@ impl Submission {
         writeln!(s, "set -euo pipefail")?;
         writeln!(s, "mkdir -p {logs}")?;
         writeln!(s)?;
-        writeln!(s, "array_job=$(sbatch --parsable \\")?;
         let mut opts = vec![
             format!("--job-name={}", quote(&self.job_name)),
             format!("--array={array}"),
@@ -105,27 +107,15 @@ impl Submission {
         ];
         opts.extend(common.iter().cloned());
         opts.push(format!("--output={}", log("%x-%A_%a.out")?));
-        for o in &opts {
-            writeln!(s, "    {o} \\")?;
-        }
-        writeln!(s, "    <<'QSWEEP_SHARD_JOB'")?;
-        writeln!(s, "#!/usr/bin/env bash")?;
-        writeln!(
-            s,
-            "# Task I runs shard I of {n}. N is written out rather than read from $SLURM_ARRAY_TASK_COUNT"
-        )?;
-        writeln!(s, "# so that resubmitting some tasks (sbatch --array=2,5 ...) keeps the same split.")?;
-        writeln!(s, "exec {qsweep} run {pipeline} --cache {cache}{tail} \\")?;
-        writeln!(
-            s,
-            "    --shard \"$SLURM_ARRAY_TASK_ID/{n}\" --jobs \"${{SLURM_CPUS_PER_TASK:-{}}}\" --no-report",
+        let body = format!(
+            "# Task I runs shard I of {n}. N is written out rather than read from $SLURM_ARRAY_TASK_COUNT\n\
+             # so that resubmitting some tasks (sbatch --array=2,5 ...) keeps the same split.\n\
+             exec {qsweep} run {pipeline} --cache {cache}{tail} \\\n    \
+             --shard \"$SLURM_ARRAY_TASK_ID/{n}\" --jobs \"${{SLURM_CPUS_PER_TASK:-{}}}\" --no-report\n",
             self.cpus_per_task
-        )?;
-        writeln!(s, "QSWEEP_SHARD_JOB")?;
-        writeln!(s, ")")?;
-        writeln!(s, "array_job=${{array_job%%;*}}  # --parsable prints ID or ID;CLUSTER")?;
+        );
+        sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
         writeln!(s)?;
-        writeln!(s, "report_job=$(sbatch --parsable \\")?;
         let mut opts = vec![
             format!("--job-name={}", quote(&format!("{}-report", self.job_name))),
             "--dependency=afterok:\"$array_job\"".to_string(),
@@ -135,15 +125,9 @@ impl Submission {
         ];
         opts.extend(common.iter().cloned());
         opts.push(format!("--output={}", log("%x-%j.out")?));
-        for o in &opts {
-            writeln!(s, "    {o} \\")?;
-        }
-        writeln!(s, "    <<'QSWEEP_REPORT_JOB'")?;
-        writeln!(s, "#!/usr/bin/env bash")?;
-        writeln!(s, "exec {qsweep} report {pipeline} --cache {cache}{tail} --out {}", q(&self.report_dir)?)?;
-        writeln!(s, "QSWEEP_REPORT_JOB")?;
-        writeln!(s, ")")?;
-        writeln!(s, "report_job=${{report_job%%;*}}")?;
+        let body =
+            format!("exec {qsweep} report {pipeline} --cache {cache}{tail} --out {}\n", q(&self.report_dir)?);
+        sbatch_call(&mut s, "report_job", &opts, "QSWEEP_REPORT_JOB", &body)?;
         writeln!(s)?;
         writeln!(
             s,
@@ -153,6 +137,21 @@ impl Submission {
         writeln!(s, "echo \"report: \"{}", path_word(&self.report_dir.join("index.html"))?)?;
         Ok(s)
     }
+}
+
+/// Append `VAR=$(sbatch --parsable OPTIONS <<'DELIMITER' ... )`: the job script is a quoted
+/// here-document, so sbatch receives it exactly as written.
+fn sbatch_call(s: &mut String, var: &str, opts: &[String], delimiter: &str, body: &str) -> std::fmt::Result {
+    writeln!(s, "{var}=$(sbatch --parsable \\")?;
+    for o in opts {
+        writeln!(s, "    {o} \\")?;
+    }
+    writeln!(s, "    <<'{delimiter}'")?;
+    writeln!(s, "#!/usr/bin/env bash")?;
+    s.push_str(body);
+    writeln!(s, "{delimiter}")?;
+    writeln!(s, ")")?;
+    writeln!(s, "{var}=${{{var}%%;*}}  # --parsable prints ID or ID;CLUSTER")
 }
 
 /// `s` as one shell word: unchanged when it is plainly safe, else single-quoted.
@@ -303,7 +302,7 @@ report_job=$(sbatch --parsable \
 exec /opt/qsweep/bin/qsweep report /home/ada/study/pipelines/quick.yaml --cache /home/ada/study/cache --set seeds=3 --out /home/ada/study/reports/quick
 QSWEEP_REPORT_JOB
 )
-report_job=${report_job%%;*}
+report_job=${report_job%%;*}  # --parsable prints ID or ID;CLUSTER
 
 echo "submitted array job $array_job (4 tasks) and report job $report_job (starts when all succeed)"
 echo "watch: squeue -j $array_job,$report_job   logs: "/home/ada/study/slurm-logs
