@@ -10,6 +10,11 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `qsweep slurm`.
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Example, on a login node with the cache on the shared filesystem:
+  qsweep slurm pipelines/paper.yaml --array 16 --time 2:00:00 --cpus-per-task 8 > submit.sh
+  bash submit.sh        # submits the array, then the report job (--dependency=afterok)
+Running submit.sh again is safe: every task skips the trials already cached.")]
 pub struct SlurmArgs {
     #[command(flatten)]
     pub pipeline: PipelineArgs,
