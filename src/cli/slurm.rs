@@ -73,7 +73,10 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     };
     let submission = Submission {
         pipeline_name: plan.name.clone(),
-        generated_by: std::env::args().map(|w| crate::slurm::quote(&w)).collect::<Vec<_>>().join(" "),
+        generated_by: std::env::args_os()
+            .map(|w| crate::slurm::quote(&w.to_string_lossy()))
+            .collect::<Vec<_>>()
+            .join(" "),
         qsweep,
         pipeline: abs(&a.pipeline.pipeline)?,
         sets: a.pipeline.set.clone(),
