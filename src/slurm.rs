@@ -55,9 +55,9 @@ pub struct Submission {
 impl Submission {
     /// The submission script.
     pub fn render(&self) -> anyhow::Result<String> {
-        let q = |p: &PathBuf| path_word(p);
-        let (qsweep, pipeline, cache) = (quote(&self.qsweep), q(&self.pipeline)?, q(&self.cache)?);
-        let logs = q(&self.log_dir)?;
+        let (qsweep, pipeline, cache) =
+            (quote(&self.qsweep), path_word(&self.pipeline)?, path_word(&self.cache)?);
+        let logs = path_word(&self.log_dir)?;
         let mut common: Vec<String> = Vec::new();
         let named = [
             ("partition", &self.partition),
@@ -70,7 +70,7 @@ impl Submission {
                 common.push(format!("--{flag}={}", quote(v)));
             }
         }
-        common.push(format!("--chdir={}", q(&self.workdir)?));
+        common.push(format!("--chdir={}", path_word(&self.workdir)?));
         common.extend(self.sbatch_args.iter().map(|a| quote(a)));
         let mut tail = String::new();
         for s in &self.sets {
@@ -128,8 +128,10 @@ impl Submission {
         ];
         opts.extend(common.iter().cloned());
         opts.push(format!("--output={}", log("%x-%j.out")?));
-        let body =
-            format!("exec {qsweep} report {pipeline} --cache {cache}{tail} --out {}\n", q(&self.report_dir)?);
+        let body = format!(
+            "exec {qsweep} report {pipeline} --cache {cache}{tail} --out {}\n",
+            path_word(&self.report_dir)?
+        );
         sbatch_call(&mut s, "report_job", &opts, "QSWEEP_REPORT_JOB", &body)?;
         writeln!(s)?;
         writeln!(

@@ -171,19 +171,10 @@ done
 [ "$(find cache -name 'seg-*.parquet' | wc -l)" = "$segments_before" ] || fail "the resubmission wrote segments"
 log "resubmission executed nothing"
 
-# A failing task (every trial of this pipeline diverges, so `qsweep run` exits 1) must keep the
-# report job from running: afterok is never satisfied and --kill-on-invalid-dep cancels it.
-cat >absurd.yaml <<'EOF'
-name: absurd
-seeds: 2
-systems:
-  cart-pole:
-    params: { gravity: 1.0e308 }
-    settings: { max_episodes: 5 }
-    experiments:
-      - { id: 1, repr: crisp, vary: { x == x_dot == theta == theta_dot: [2, 3] } }
-EOF
-"$QSWEEP" slurm absurd.yaml --array 4 --time 30 --cache "$tmp/work/cache-absurd" \
+# Failing tasks (every trial of tests/fixtures/pipelines/absurd.yaml diverges, so `qsweep run`
+# exits 1) must keep the report job from running: afterok is never satisfied and
+# --kill-on-invalid-dep cancels it.
+"$QSWEEP" slurm "$repo/tests/fixtures/pipelines/absurd.yaml" --array 4 --time 30 --cache "$tmp/work/cache-absurd" \
     --out "$tmp/work/report-absurd" >submit-absurd.sh
 submit_and_wait submit-absurd.sh
 failed=$(grep -c 'JobState=FAILED .*ExitCode=1:0' <<<"$jobs" || true)

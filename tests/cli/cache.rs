@@ -47,10 +47,7 @@ fn run_moves_an_unreadable_segment_aside_with_a_warning() {
 #[test]
 fn diverging_trials_are_stored_as_failed_and_the_run_exits_1() {
     let sb = Sandbox::new();
-    let p = sb.write(
-        "absurd.yaml",
-        "name: absurd\nseeds: 2\nsystems:\n  cart-pole:\n    params: { gravity: 1.0e308 }\n    settings: { max_episodes: 5 }\n    experiments:\n      - { id: 1, repr: crisp, vary: { x == x_dot == theta == theta_dot: [2] } }\n",
-    );
+    let p = sb.fixture("absurd.yaml");
     let out = sb.qsweep(&["run", p.to_str().unwrap(), "--json"]).assert().code(1).get_output().clone();
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!((v["executed"].as_u64(), v["failed"].as_u64()), (Some(4), Some(4)), "{v}");

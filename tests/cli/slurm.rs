@@ -117,10 +117,7 @@ fn slurm_script_runs_every_trial_once_then_the_report() {
 #[test]
 fn slurm_report_job_is_skipped_when_a_task_fails() {
     let sb = Sandbox::new();
-    let p = sb.write(
-        "absurd.yaml",
-        "name: absurd\nseeds: 2\nsystems:\n  cart-pole:\n    params: { gravity: 1.0e308 }\n    settings: { max_episodes: 5 }\n    experiments:\n      - { id: 1, repr: crisp, vary: { x == x_dot == theta == theta_dot: [2] } }\n",
-    );
+    let p = sb.fixture("absurd.yaml");
     let cache = sb.cache();
     let out = qsweep_slurm(&sb, &p, &cache, &["--array", "2"]);
     let script = sb.write("submit.sh", &String::from_utf8(out.stdout).unwrap());
