@@ -124,10 +124,10 @@ pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
         many if many.len() == dim => many.to_vec(),
         many => {
             return Err(user_error(format!(
-                "--resolution: {system} has {dim} state variables ({}); give {dim} values or one for all, got {}",
-                system.variables().join(","),
-                many.len()
-            )))
+            "--resolution: {system} has {dim} state variables ({}); give {dim} values or one for all, got {}",
+            system.variables().join(","),
+            many.len()
+        )))
         }
     };
     let actions = a.actions.unwrap_or(system.default_actions());

@@ -125,10 +125,19 @@ impl Plan {
     /// The plan of one variant alone (experiments of other variants dropped).
     pub fn only_variant(&self, id: &str) -> Plan {
         Plan {
-            experiments: self.experiments.iter().filter(|e| e.variant.as_deref() == Some(id)).cloned().collect(),
+            experiments: self
+                .experiments
+                .iter()
+                .filter(|e| e.variant.as_deref() == Some(id))
+                .cloned()
+                .collect(),
             variants: self.variants.iter().filter(|v| v.id == id).cloned().collect(),
             warnings: Vec::new(),
-            seeds: self.variants.iter().find(|v| v.id == id).map_or_else(|| self.seeds.clone(), |v| v.seeds.clone()),
+            seeds: self
+                .variants
+                .iter()
+                .find(|v| v.id == id)
+                .map_or_else(|| self.seeds.clone(), |v| v.seeds.clone()),
             ..self.clone_header()
         }
     }

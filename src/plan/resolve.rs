@@ -7,8 +7,8 @@ use crate::error::user_error;
 use crate::sim::config::{default_ranges, default_success, Success, TrialConfig};
 use crate::sim::env::{EnvParams, SystemKind};
 use crate::spec::{
-    format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings, SystemMarker, SystemSpec,
-    Target,
+    format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings,
+    SystemMarker, SystemSpec, Target,
 };
 use crate::spec::{BallBeamM, CartPoleM, MountainCarM};
 
@@ -122,7 +122,11 @@ pub fn plan(loaded: &LoadedSpec, max_trials: Option<usize>) -> anyhow::Result<Pl
 }
 
 /// Like [`plan`], with only the variants named in `select` (all when empty; `--variant`).
-pub fn plan_variants(loaded: &LoadedSpec, max_trials: Option<usize>, select: &[String]) -> anyhow::Result<Plan> {
+pub fn plan_variants(
+    loaded: &LoadedSpec,
+    max_trials: Option<usize>,
+    select: &[String],
+) -> anyhow::Result<Plan> {
     let spec = &loaded.spec;
     let origin = loaded.path.display().to_string();
     if loaded.variants.is_empty() && !select.is_empty() {
@@ -324,7 +328,8 @@ fn expand_experiment<M: Resolve>(
                     Target::Var(j) => resolution[j] = v as u32,
                     Target::Actions => actions = v as u32,
                     Target::Setting(name) => {
-                        let one = crate::spec::setting_level(name, v).map_err(|m| fail(format!("vary.{name}: {m}")))?;
+                        let one = crate::spec::setting_level(name, v)
+                            .map_err(|m| fail(format!("vary.{name}: {m}")))?;
                         axis_level.merge(&one);
                     }
                     Target::Param(name) => axis_params.push((name, v)),
@@ -414,8 +419,11 @@ mod tests {
             "name: t\nseeds: 1\nsystems:\n  cart-pole:\n    crisp: { alpha: 0.3, q_init: 5 }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q-lambda], vary: { alpha: [0.05, 0.2], q_init: [-1, 0] }, fixed: { x == x_dot == theta == theta_dot: 3 }, settings: { alpha: 0.4 } }\n      - { id: b, repr: fuzzy, algorithms: [q0], vary: { x == theta: [2, 3], gravity: [9.8, 9.81] }, fixed: { x_dot: 2, theta_dot: 2, actions: 3 } }\n      - { id: c, repr: crisp, algorithms: [q0], vary: { max_episodes: 10..11 }, fixed: { x: 2, x_dot: 2, theta: 2, theta_dot: 2 } }\n",
         );
         let a = &p.experiments[0];
-        let got: Vec<(Vec<f64>, f64, f64)> =
-            a.cells.iter().map(|c| (c.coords.clone(), c.config.learner.alpha, c.config.learner.q_init)).collect();
+        let got: Vec<(Vec<f64>, f64, f64)> = a
+            .cells
+            .iter()
+            .map(|c| (c.coords.clone(), c.config.learner.alpha, c.config.learner.q_init))
+            .collect();
         assert_eq!(
             got,
             vec![

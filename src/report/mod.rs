@@ -76,7 +76,10 @@ pub fn write_reports(
         .iter()
         .zip(&subs)
         .map(|(v, sub)| {
-            (variants::VariantInfo { id: v.id.clone(), title: v.title.clone() }, ReportData::build(sub, records))
+            (
+                variants::VariantInfo { id: v.id.clone(), title: v.title.clone() },
+                ReportData::build(sub, records),
+            )
         })
         .collect();
     files.extend(variants::write_comparison(dir, &per_variant)?);

@@ -13,6 +13,9 @@ pub struct VariantInfo {
 }
 
 /// Write the comparison files into `dir`; returns the files written.
-pub fn write_comparison(_dir: &Path, _variants: &[(VariantInfo, ReportData)]) -> anyhow::Result<Vec<PathBuf>> {
+pub fn write_comparison(
+    _dir: &Path,
+    _variants: &[(VariantInfo, ReportData)],
+) -> anyhow::Result<Vec<PathBuf>> {
     Ok(Vec::new())
 }

@@ -209,7 +209,8 @@ fn unknown_target(system: SystemKind, name: &str, axis: bool) -> String {
     if axis {
         all.extend(AXIS_SETTINGS.iter().copied().chain(params.iter().copied()));
     }
-    let hint = suggest(name, all.iter().copied()).map(|s| format!("; did you mean `{s}`?")).unwrap_or_default();
+    let hint =
+        suggest(name, all.iter().copied()).map(|s| format!("; did you mean `{s}`?")).unwrap_or_default();
     if axis {
         format!(
             "unknown axis `{name}` for {system}: an axis is a state variable ({}), `actions`, a numeric setting ({}) or a physical parameter ({}){hint}",
@@ -218,7 +219,10 @@ fn unknown_target(system: SystemKind, name: &str, axis: bool) -> String {
             params.join(", ")
         )
     } else {
-        format!("unknown variable `{name}` for {system}; its variables are {}, or `actions`{hint}", vars.join(", "))
+        format!(
+            "unknown variable `{name}` for {system}; its variables are {}, or `actions`{hint}",
+            vars.join(", ")
+        )
     }
 }
 
@@ -232,7 +236,9 @@ fn check_value(t: Target, v: f64, what: &str) -> Result<(), String> {
             Err(format!("{what}: {v} is not allowed; every variable needs at least 1 bin or fuzzy set"))
         }
         Target::Var(_) if v > f64::from(1u32 << 20) => Err(format!("{what}: {v} is too many bins")),
-        Target::Setting(name) => super::setting_level(name, v).map(|_| ()).map_err(|m| format!("{what}: {m}")),
+        Target::Setting(name) => {
+            super::setting_level(name, v).map(|_| ()).map_err(|m| format!("{what}: {m}"))
+        }
         _ => Ok(()),
     }
 }

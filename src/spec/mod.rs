@@ -32,8 +32,8 @@ pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference,
 pub use load::{load, load_str, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
-pub use variants::{LoadedVariant, VariantSpec};
 pub use values::{AxisValues, Finite, Positive, Seeds, SubUnit, Unit, Values};
+pub use variants::{LoadedVariant, VariantSpec};
 
 use crate::sim::config::{TieBreak, TraceKind};
 use crate::sim::env::{BallBeamParams, CartPoleParams, EnvParams, MountainCarParams, SystemKind};
@@ -343,7 +343,8 @@ pub fn safe_folder_name(s: &str) -> Result<(), String> {
     if ok {
         Ok(())
     } else {
-        Err("use 1-100 letters, digits, '-', '_' or '.', not starting with '.' (it names the report folder)".into())
+        Err("use 1-100 letters, digits, '-', '_' or '.', not starting with '.' (it names the report folder)"
+            .into())
     }
 }
 

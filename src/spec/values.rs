@@ -136,7 +136,9 @@ impl<'de> Deserialize<'de> for AxisValues {
                 let mut out: Vec<f64> = Vec::new();
                 while let Some(v) = seq.next_element::<f64>()? {
                     if !v.is_finite() {
-                        return Err(de::Error::custom(format!("{v} is not allowed; expected a finite number")));
+                        return Err(de::Error::custom(format!(
+                            "{v} is not allowed; expected a finite number"
+                        )));
                     }
                     if out.contains(&v) {
                         return Err(de::Error::custom(format!("value {v} is listed twice")));

@@ -42,7 +42,8 @@ pub struct VariantSpec {
 
 fn variant_id<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
     let s = String::deserialize(d)?;
-    safe_folder_name(&s).map_err(|why| de::Error::custom(format!("variant id `{s}` is not allowed: {why}")))?;
+    safe_folder_name(&s)
+        .map_err(|why| de::Error::custom(format!("variant id `{s}` is not allowed: {why}")))?;
     if s == "figures" {
         return Err(de::Error::custom(
             "variant id `figures` is not allowed: the comparison report keeps its figures there",
@@ -55,7 +56,9 @@ fn variant_id<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
 pub(super) fn variants<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<VariantSpec>, D::Error> {
     let v = Vec::<VariantSpec>::deserialize(d)?;
     if v.is_empty() {
-        return Err(de::Error::custom("variants: the list is empty; remove `variants:` or give at least one"));
+        return Err(de::Error::custom(
+            "variants: the list is empty; remove `variants:` or give at least one",
+        ));
     }
     for (i, e) in v.iter().enumerate() {
         if v[..i].iter().any(|o| o.id == e.id) {
@@ -93,7 +96,8 @@ pub fn resolve(
     overrides: &[Override],
 ) -> anyhow::Result<Vec<LoadedVariant>> {
     let Some(list) = &base.variants else { return Ok(Vec::new()) };
-    let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| user_error(format!("{origin}: {e}")))?;
+    let doc: serde_yaml::Value =
+        serde_yaml::from_str(text).map_err(|e| user_error(format!("{origin}: {e}")))?;
     let mut out = Vec::with_capacity(list.len());
     for (i, v) in list.iter().enumerate() {
         let mut d = doc.clone();
@@ -193,7 +197,11 @@ fn present_systems(base: &PipelineSpec) -> Vec<SystemKind> {
 
 /// Axes of the experiments in the override's scope (all systems for `defaults.*`, one system,
 /// or one experiment), as (system, experiment index, axis target names).
-fn varied_names(base: &PipelineSpec, system: SystemKind, only: Option<usize>) -> Vec<(usize, String, Vec<String>)> {
+fn varied_names(
+    base: &PipelineSpec,
+    system: SystemKind,
+    only: Option<usize>,
+) -> Vec<(usize, String, Vec<String>)> {
     fn names<M: super::SystemMarker>(
         s: &Option<super::SystemSpec<M>>,
         only: Option<usize>,
@@ -225,7 +233,9 @@ fn check_not_varied(base: &PipelineSpec, o: &Override) -> Result<(), String> {
     let last = p.last().map(String::as_str).unwrap_or_default();
     let (systems, only): (Vec<SystemKind>, Option<usize>) = match p.as_slice() {
         [d, _] if d == "defaults" => (present_systems(base), None),
-        [s, sys, level, _] if s == "systems" && ["settings", "crisp", "fuzzy", "params"].contains(&level.as_str()) => {
+        [s, sys, level, _]
+            if s == "systems" && ["settings", "crisp", "fuzzy", "params"].contains(&level.as_str()) =>
+        {
             (SystemKind::parse(sys).into_iter().collect(), None)
         }
         [s, sys, e, i, level, _] if s == "systems" && e == "experiments" && level == "settings" => {

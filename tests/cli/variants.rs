@@ -100,7 +100,8 @@ fn setting_axes_plan_one_cell_per_value_and_label_the_axis_by_name() {
         "tune.yaml",
         "name: tune\nseeds: 1\ndefaults: { max_episodes: 5 }\nsystems:\n  mountain-car:\n    success: { within: 400, max_episode_steps: 400 }\n    experiments:\n      - id: a\n        repr: crisp\n        algorithms: [q-lambda]\n        vary: { alpha: [0.05, 0.1, 0.2], lambda: [0.3, 0.9] }\n        fixed: { x: 4, x_dot: 4 }\n",
     );
-    let v: Value = serde_json::from_str(&stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"]))).unwrap();
+    let v: Value =
+        serde_json::from_str(&stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"]))).unwrap();
     assert_eq!(v["trials"], 6);
     let out = sb.path("rep");
     sb.qsweep(&["run", p.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()]).assert().success();
@@ -123,7 +124,10 @@ fn bad_variants_and_axes_are_usage_errors_with_a_location() {
             "variant `a`: set `systems.mountain-car.crisp.alpa`: unknown field `alpa`",
         ),
         ("variants:\n  - id: a\n    set: { defaults.gamma: high }\n", "variant `a`: set `defaults.gamma`"),
-        ("variants:\n  - id: a\n    set: { systems.cart-pole.crisp.alpha: 0.1 }\n", "the pipeline has no system `cart-pole`"),
+        (
+            "variants:\n  - id: a\n    set: { systems.cart-pole.crisp.alpha: 0.1 }\n",
+            "the pipeline has no system `cart-pole`",
+        ),
         ("variants:\n  - id: a\n    set: { systems.mountain-car.crisp.alpha: 0.3 }\n", "varies `alpha`"),
         ("variants:\n  - id: a\n    set: { defaults.alpha: 0.3 }\n", "varies `alpha`"),
         ("variants:\n  - id: a\n    set: { seeds: 0 }\n", "variant `a`: set `seeds`"),
@@ -145,4 +149,50 @@ fn bad_variants_and_axes_are_usage_errors_with_a_location() {
     let p = sb.write("axis2.yaml", &base.replace("alpha: [0.1, 0.2]", "alpha: [0.1, -2]"));
     let err = fails_with(&mut sb.qsweep(&["status", p.to_str().unwrap()]), 2);
     assert!(err.contains("axis2.yaml:6:") && err.contains("alpha"), "{err}");
+}
+
+/// `qsweep trial` builds its configuration through the pipeline path, so the same settings give
+/// the same configuration (and key) as a pipeline cell.
+#[test]
+fn trial_and_a_pipeline_cell_resolve_to_the_same_configuration() {
+    let sb = Sandbox::new();
+    let p = sb.write(
+        "one.yaml",
+        "name: one\nseeds: [3]\ndefaults: { max_episodes: 4, q_init: -0.5 }\nsystems:\n  cart-pole:\n    params: { gravity: 9.8 }\n    success: { steps: 300 }\n    experiments:\n      - { id: a, repr: fuzzy, algorithms: [q-lambda], vary: { actions: 3 }, fixed: { x: 2, x_dot: 3, theta: 2, theta_dot: 3 }, settings: { alpha: 0.2, width: 0.5 } }\n",
+    );
+    sb.run_json(&p, &[]);
+    let stored = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
+    assert_eq!(stored.len(), 1);
+    let out = stdout(crate::helpers::qsweep().args([
+        "trial",
+        "--env",
+        "cart-pole",
+        "--repr",
+        "fuzzy",
+        "--algorithm",
+        "q-lambda",
+        "--resolution",
+        "2,3,2,3",
+        "--actions",
+        "3",
+        "--seed",
+        "3",
+        "--max-episodes",
+        "4",
+        "--alpha",
+        "0.2",
+        "--param",
+        "gravity=9.8",
+        "--balance-steps",
+        "300",
+        "--set",
+        "q_init=-0.5",
+        "--set",
+        "width=0.5",
+        "--json",
+    ]));
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let from_trial: qsweep::sim::TrialConfig = serde_json::from_value(v["config"].clone()).unwrap();
+    assert_eq!(from_trial, stored[0].config);
+    assert_eq!(qsweep::cache::Key::of(&from_trial, 3), stored[0].key);
 }
