@@ -158,7 +158,9 @@ impl<DB: DrawingBackend> Canvas<DB> {
 fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str) -> Res {
     cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
     let (w, h) = cv.root.dim_in_pixel();
-    cv.text(title, (w as i32 / 2, HEADER_H as i32 / 2), 20.0, INK, HPos::Center, VPos::Center);
+    // Shrink a title that would not fit a one-column figure (about 0.52 em per character).
+    let size = (w as f64 / (0.52 * title.chars().count() as f64)).min(20.0);
+    cv.text(title, (w as i32 / 2, HEADER_H as i32 / 2), size, INK, HPos::Center, VPos::Center);
     let cols = columns(exps);
     for (r, e) in exps.iter().enumerate() {
         for (c, &alg) in cols.iter().enumerate() {
