@@ -43,7 +43,7 @@
 //! | `episodes_to_goal` | uint32, null | episodes up to and including the goal; null if never reached |
 //! | `episodes` | uint32 | episodes run |
 //! | `episodes_counted` | uint32 | what enters the cell's statistics: `episodes_to_goal`, or `max_episodes` if the goal was never reached |
-//! | `total_steps` | int64 | steps over all episodes |
+//! | `total_steps` | uint64 | steps over all episodes |
 //! | `stop` | utf8 | `goal`, `max-episodes`, `max-total-steps` or `diverged` |
 //! | `failure` | utf8, null | what went wrong, for diverged trials |
 //! | `episode_lengths` | list<uint32> | length of every episode, in order |
@@ -138,7 +138,7 @@ pub fn trials_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
     cols.u32_opt("episodes_to_goal", &trials, |t| out(t).episodes_to_goal);
     cols.u32("episodes", &trials, |t| out(t).episodes);
     cols.u32("episodes_counted", &trials, |t| t.counted);
-    cols.i64("total_steps", &trials, |t| i64::try_from(out(t).total_steps).unwrap_or(i64::MAX));
+    cols.u64("total_steps", &trials, |t| out(t).total_steps);
     cols.str("stop", &trials, |t| out(t).stop.name());
     cols.str_opt("failure", &trials, |t| out(t).failure.as_deref());
     cols.list_u32("episode_lengths", &trials, |t| &out(t).episode_lengths);
