@@ -61,15 +61,11 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let unique = match a.shard {
         Some(shard) => {
             let mine = crate::exec::shard::shard_keys(&unique, shard);
-            unique.into_iter().filter(|t| mine.contains(&t.2)).collect()
+            unique.into_iter().filter(|t| mine.contains(&t.key)).collect()
         }
         None => unique,
     };
-    let jobs: Vec<Job> = unique
-        .iter()
-        .filter(|(_, _, key)| !cached.contains(key))
-        .map(|&(config, seed, key)| Job { config, seed, key })
-        .collect();
+    let jobs: Vec<Job> = unique.iter().filter(|t| !cached.contains(&t.key)).copied().collect();
     let n_cached = unique.len() - jobs.len();
     let opts = ExecOptions {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
