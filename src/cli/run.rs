@@ -79,15 +79,16 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     })?;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        let v = serde_json::json!({
-            "pipeline": plan.name,
-            "executed": report.executed,
-            "cached": n_cached,
-            "failed": report.failed,
-            "interrupted": report.interrupted,
-            "seconds": seconds,
-        });
-        println!("{v}");
+        let v = super::json::RunSummary {
+            format_version: super::json::RunSummary::FORMAT_VERSION,
+            pipeline: plan.name.clone(),
+            executed: report.executed,
+            cached: n_cached,
+            failed: report.failed,
+            interrupted: report.interrupted,
+            seconds,
+        };
+        println!("{}", serde_json::to_string(&v)?);
     } else if !a.quiet {
         println!(
             "executed {}, cached {}, failed {} in {:.1} s",
