@@ -50,5 +50,5 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     }
-    Ok(0)
+    Ok(crate::error::exit::OK)
 }

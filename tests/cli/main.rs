@@ -3,8 +3,10 @@
 mod bad_pipelines;
 mod bench;
 mod cache;
+mod exit_codes;
 mod helpers;
 mod mutations;
+mod no_overwrite;
 mod pipeline;
 mod report_files;
 mod simulate;
