@@ -44,7 +44,13 @@ pub fn write(plan: &Plan, store: &Store, out: Option<&Path>, quiet: bool, force:
     let records: HashMap<_, _> = store.read(&keys)?.into_iter().map(|r| (r.key, r)).collect();
     let dir = out.map(Path::to_path_buf).unwrap_or_else(|| Path::new("reports").join(&plan.name));
     if !force {
-        if let Some(old) = crate::report::existing_trials(&dir)? {
+        let existing = crate::report::existing_trials(&dir).map_err(|e| {
+            e.context(format!(
+                "{} holds a report whose size cannot be read; replace it with --force",
+                dir.display()
+            ))
+        })?;
+        if let Some(old) = existing {
             anyhow::ensure!(
                 records.len() >= old,
                 "{} holds a report of {old} distinct trials, but the cache ({}) has only {} of this \

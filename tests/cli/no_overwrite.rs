@@ -78,3 +78,17 @@ fn read_only_commands_never_create_the_cache() {
     // A file where the cache should be is bad input too.
     Test::new().file("cache", "").args(["verify"]).status(2).stderr_contains("is not a directory").run();
 }
+
+#[test]
+fn an_unreadable_old_report_is_kept_unless_forced() {
+    let done = Test::new()
+        .pipeline("tiny.yaml")
+        .file("cache/.keep", "")
+        .file("reports/tiny/trials.parquet", "not parquet")
+        .args(["report", "tiny.yaml"])
+        .status(1)
+        .stderr_contains("reports/tiny holds a report whose size cannot be read; replace it with --force")
+        .run();
+    assert_eq!(std::fs::read(done.sandbox.path("reports/tiny/trials.parquet")).unwrap(), b"not parquet");
+    done.then().args(["report", "tiny.yaml", "--force"]).stdout_contains("(0 of 56 planned").run();
+}
