@@ -154,7 +154,10 @@ done
 
 log "single-machine run of the same pipeline"
 "$QSWEEP" run "$pipeline" --quiet --cache "$tmp/work/cache-single" --out "$tmp/work/report-single"
-python3 "$here/compare.py" "$tmp/work/cache" "$tmp/work/cache-single" "$executed"
+# pandas lives in the venv scripts/test sets up (Debian's system python3 has none).
+python=$repo/.venv/bin/python
+[ -x "$python" ] || python=python3
+"$python" "$here/compare.py" "$tmp/work/cache" "$tmp/work/cache-single" "$executed"
 for f in table3.md table3.csv table3.tex cells.parquet; do
     cmp "report-slurm/$f" "report-single/$f" || fail "report file $f differs from the single-machine run's"
 done

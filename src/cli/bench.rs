@@ -52,5 +52,5 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
             super::json::BenchReport { format_version: super::json::BenchReport::FORMAT_VERSION, results };
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
-    Ok(0)
+    Ok(crate::error::exit::OK)
 }

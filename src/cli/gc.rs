@@ -1,8 +1,8 @@
 //! `qsweep gc`: compact the cache and drop rows no given pipeline references.
 
-use super::pipeline_args::cache_dir;
+use super::pipeline_args::{cache_dir, require_cache};
 use crate::cache::Store;
-use crate::error::user_error;
+use crate::error::exit;
 use crate::plan::plan;
 use crate::spec::load;
 use clap::Args;
@@ -25,9 +25,7 @@ pub struct GcArgs {
 /// Run `qsweep gc`.
 pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     let dir = cache_dir(a.cache.as_ref());
-    if !dir.is_dir() {
-        return Err(user_error(format!("cache {} does not exist", dir.display())));
-    }
+    require_cache(&dir)?;
     let mut keep: Option<HashSet<_>> = None;
     for p in &a.pipelines {
         let planned = plan(&load(p, &[])?, None)?;
@@ -59,5 +57,5 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         r.duplicates,
         r.stale_temps,
     );
-    Ok(0)
+    Ok(exit::OK)
 }

@@ -6,7 +6,7 @@ use crate::error::user_error;
 use crate::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
 use crate::spec::{load, Override};
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Pipeline file, overrides and cache location.
 #[derive(Debug, Args)]
@@ -51,6 +51,20 @@ impl PipelineArgs {
         let dir = self.cache_dir();
         Store::open(&dir).map_err(|e| anyhow::anyhow!("cache {}: {e}", dir.display()))
     }
+}
+
+/// Fail with a usage error (exit 2) unless `dir` is an existing directory: the read-only
+/// commands (`report`, `verify`, `gc`) never create a cache, and a missing one is almost always a
+/// mistyped `--cache`/`QSWEEP_CACHE` or the wrong working directory.
+pub fn require_cache(dir: &Path) -> anyhow::Result<()> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    let what = if dir.exists() { "is not a directory" } else { "does not exist" };
+    Err(user_error(format!(
+        "cache {} {what}; give the cache of an earlier `qsweep run` with --cache DIR or QSWEEP_CACHE",
+        dir.display()
+    )))
 }
 
 /// Resolve the cache directory from an explicit flag, the environment, or the default.

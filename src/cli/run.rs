@@ -102,13 +102,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         return Ok(crate::error::exit::INTERRUPTED);
     }
     if !a.no_report {
-        super::report::write(&plan, &store, a.out.as_deref(), a.quiet || a.json)?;
+        super::report::write(&plan, &store, a.out.as_deref(), a.quiet || a.json, false)?;
     }
     if report.failed > 0 {
         eprintln!("{} trials failed (diverged); see the `failure` column of trials.parquet", report.failed);
         return Ok(crate::error::exit::FAILURE);
     }
-    Ok(0)
+    Ok(crate::error::exit::OK)
 }
 
 fn install_ctrlc() {

@@ -56,5 +56,5 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<u8> {
         writeln!(out, "{},{action},{},{},{}", i + 1, row(s), t.reward, u8::from(t.terminal))?;
     }
     out.flush()?;
-    Ok(0)
+    Ok(crate::error::exit::OK)
 }

@@ -137,5 +137,5 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
              check `scontrol show config | grep MaxArraySize`"
         );
     }
-    Ok(0)
+    Ok(crate::error::exit::OK)
 }

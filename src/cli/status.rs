@@ -25,8 +25,13 @@ pub struct StatusArgs {
 /// Run `qsweep status`.
 pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
-    let store = a.pipeline.store()?;
-    let scan = store.keys()?;
+    // A dry run before the first run stays useful: a missing cache means every trial is missing,
+    // and status (read-only) does not create it.
+    let store = a.pipeline.cache_dir().is_dir().then(|| a.pipeline.store()).transpose()?;
+    let scan = match &store {
+        Some(store) => store.keys()?,
+        None => crate::cache::store::KeyScan::default(),
+    };
     let cached = &scan.keys;
     let mut rows = Vec::new();
     for e in &plan.experiments {
@@ -85,20 +90,25 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             );
         }
         println!(
-            "total: {} trials, {} cached, {} missing (cache: {})",
+            "total: {} trials, {} cached, {} missing (cache: {}{})",
             unique.len(),
             unique_hit,
             unique.len() - unique_hit,
-            a.pipeline.cache_dir().display()
+            a.pipeline.cache_dir().display(),
+            if store.is_none() { ", does not exist yet" } else { "" }
         );
         for d in &scan.damaged {
             println!("damaged segment: {d}");
         }
     }
     if a.explain && unique_hit < unique.len() {
-        explain(&plan, &store.read_all()?, cached);
+        let records = match &store {
+            Some(store) => store.read_all()?,
+            None => Vec::new(),
+        };
+        explain(&plan, &records, cached);
     }
-    Ok(0)
+    Ok(crate::error::exit::OK)
 }
 
 type Position = (String, String, String, Vec<u32>, u32, u64);

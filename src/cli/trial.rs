@@ -258,5 +258,5 @@ pub fn run(a: TrialArgs) -> anyhow::Result<u8> {
         let rate = out.total_steps as f64 / seconds.max(1e-9);
         println!("{} steps in {:.3} s ({:.2} M steps/s)", out.total_steps, seconds, rate / 1e6);
     }
-    Ok(if out.failure.is_some() { crate::error::exit::FAILURE } else { 0 })
+    Ok(if out.failure.is_some() { crate::error::exit::FAILURE } else { crate::error::exit::OK })
 }

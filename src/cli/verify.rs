@@ -1,8 +1,9 @@
 //! `qsweep verify`: read every cache segment in full, like `git fsck`; move damaged ones aside.
 
-use super::pipeline_args::cache_dir;
+use super::pipeline_args::{cache_dir, require_cache};
 use crate::cache::verify::QUARANTINE;
 use crate::cache::Store;
+use crate::error::exit;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -17,10 +18,11 @@ pub struct VerifyArgs {
     pub no_quarantine: bool,
 }
 
-/// Run `qsweep verify`: exit 0 when every segment is intact, 1 when damage was found.
+/// Run `qsweep verify`: exit 0 when every segment is intact, 1 when damage was found, 2 when the
+/// cache does not exist.
 pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     let dir = cache_dir(a.cache.as_ref());
-    anyhow::ensure!(dir.is_dir(), "cache {} does not exist", dir.display());
+    require_cache(&dir)?;
     let store = Store::open(&dir)?;
     let report = store.verify()?;
     for d in &report.damaged {
@@ -42,5 +44,5 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
             format!("; their trials run again on the next `qsweep run` (segments kept in {QUARANTINE}/)")
         }
     );
-    Ok(if report.damaged.is_empty() { 0 } else { crate::error::exit::FAILURE })
+    Ok(if report.damaged.is_empty() { exit::OK } else { exit::FAILURE })
 }

@@ -1,6 +1,7 @@
 //! `index.html`: one self-contained page (inline CSS, no script, no network) with the pipeline's
-//! name and description, trial counts, Table III, each system's figure (`figures/<system>.svg`,
-//! referenced by relative path) and a cell table per experiment, plus links to the data files.
+//! name and description, trial counts, Table III, each system's figure (the SVG of
+//! `figures/<system>.svg`, inlined so the page alone shows everything) and a cell table per
+//! experiment, plus links to the data files and the figure files.
 
 use super::model::{ReportData, BEST_RULE, CENSORING};
 use super::table::{cell_table, render, table3, Html};
@@ -11,16 +12,17 @@ body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;m
 h1{margin-bottom:.2em}h2{margin-top:2em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;margin:1em 0;font-size:.9em}
 caption{caption-side:top;text-align:left;padding:.3em 0;color:#444}
-th,td{border-bottom:1px solid #ddd;padding:.25em .6em;text-align:left;white-space:nowrap}
+th,td{border-bottom:1px solid #ddd;padding:.25em .5em;text-align:left;white-space:nowrap}
+th{white-space:normal;vertical-align:bottom}
 th{background:#f3f3f3}td.r,th.r{text-align:right;font-variant-numeric:tabular-nums}
 tr.best td{background:#ffecec;font-weight:600}
-figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
+figure{margin:1em 0}figure svg{display:block;max-width:100%;height:auto;border:1px solid #eee}
 .meta{color:#555}nav a{margin-right:1em}code{background:#f3f3f3;padding:0 .2em}
 .scroll{overflow-x:auto}
 ";
 
-/// The page.
-pub fn page(data: &ReportData, figures: &[(String, (u32, u32))]) -> String {
+/// The page; `figures` holds each system's name and its figure as SVG text.
+pub fn page(data: &ReportData, figures: &[(String, String)]) -> String {
     let plan = data.plan;
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
@@ -69,16 +71,18 @@ pub fn page(data: &ReportData, figures: &[(String, (u32, u32))]) -> String {
 
     for s in systems {
         h.push_str(&format!("<h2 id=\"{}\">{}</h2>\n", s.name(), esc(s.title())));
-        if let Some((_, (w, ht))) = figures.iter().find(|(n, _)| n == s.name()) {
+        if let Some((_, svg)) = figures.iter().find(|(n, _)| n == s.name()) {
             h.push_str(&format!(
-                "<figure><img src=\"figures/{0}.svg\" width=\"{w}\" height=\"{ht}\" alt=\"{1}: heatmaps of mean \
-                 episodes per experiment and algorithm\">\n<figcaption>Mean episodes to the learning goal per cell; \
+                "<figure>{1}\n<figcaption>Mean episodes to the learning goal per cell; \
                  red outline: the best cell (Table III); hatched with *: some trials never reached the goal; \
-                 grey: no trials. {2} <a href=\"figures/{0}.png\">PNG</a> · \
+                 grey: no trials. {2} Files: <a href=\"figures/{0}.png\">PNG</a> · \
                  <a href=\"figures/{0}.svg\">SVG</a></figcaption></figure>\n",
                 s.name(),
-                esc(s.title()),
-                esc(BEST_RULE)
+                inline_svg(
+                    svg,
+                    &format!("{}: heatmaps of mean episodes per experiment and algorithm", s.title())
+                ),
+                esc(BEST_RULE),
             ));
         }
         for e in data.experiments.iter().filter(|e| e.exp.system == s) {
@@ -90,4 +94,11 @@ pub fn page(data: &ReportData, figures: &[(String, (u32, u32))]) -> String {
     }
     h.push_str(&format!("<p class=\"meta\">{}</p>\n</body>\n</html>\n", esc(CENSORING)));
     h
+}
+
+/// An SVG file's text for inlining in HTML: labelled as one image for screen readers, and without
+/// the `xmlns` attribute, which HTML does not need (so the page names no URL at all).
+fn inline_svg(svg: &str, label: &str) -> String {
+    let svg = svg.trim().replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1);
+    svg.replacen("<svg ", &format!("<svg role=\"img\" aria-label=\"{}\" ", esc(label)), 1)
 }

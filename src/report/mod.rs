@@ -4,7 +4,7 @@
 //!   experiment and algorithm, with the paper's values when the pipeline gives them);
 //! - `cells.parquet`, `trials.parquet`: the data behind it (schemas in [`parquet`]);
 //! - `figures/<system>.svg` and `.png`: the paper's Figures 5–7 (see [`figures`]);
-//! - `index.html`: one self-contained page with all of the above.
+//! - `index.html`: one self-contained page with all of the above (the figures inlined as SVG).
 //!
 //! Trials missing from the records are left out and counted. Every file is written atomically
 //! (a temporary file in the same directory, then a rename), and the output is a pure function of
@@ -117,15 +117,14 @@ pub fn write_report(
     put("table3.tex", table::render(&t3, &table::Latex).as_bytes())?;
     put("cells.parquet", &parquet::cells_parquet(&data)?)?;
     put("trials.parquet", &parquet::trials_parquet(&data)?)?;
-    let mut sizes = Vec::new();
+    let mut svgs = Vec::new();
     for system in data.systems() {
         let (svg, png) = figures::render(&data, system)?;
         put(&format!("figures/{}.svg", system.name()), svg.as_bytes())?;
         put(&format!("figures/{}.png", system.name()), &png)?;
-        let exps: Vec<_> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
-        sizes.push((system.name().to_string(), figures::figure_size(&exps)));
+        svgs.push((system.name().to_string(), svg));
     }
-    put("index.html", html::page(&data, &sizes).as_bytes())?;
+    put("index.html", html::page(&data, &svgs).as_bytes())?;
 
     let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
     Ok(ReportSummary {
@@ -137,4 +136,35 @@ pub fn write_report(
         trials_missing: data.trials_planned - data.trials_present,
         files,
     })
+}
+
+/// How many distinct trials the report already in `dir` holds (distinct `key`s of its
+/// `trials.parquet`); `None` when there is no report there. Lets `qsweep report` refuse to replace
+/// a report with a smaller one.
+pub fn existing_trials(dir: &Path) -> anyhow::Result<Option<usize>> {
+    use ::parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+    use ::parquet::arrow::ProjectionMask;
+    use arrow::array::{Array, StringArray};
+    let path = dir.join("trials.parquet");
+    if !path.exists() {
+        return Ok(None);
+    }
+    let read = || -> anyhow::Result<usize> {
+        let builder = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(&path)?)?;
+        let idx = builder.schema().index_of("key")?;
+        let mask = ProjectionMask::roots(builder.parquet_schema(), [idx]);
+        let mut keys = std::collections::HashSet::new();
+        for batch in builder.with_projection(mask).build()? {
+            let batch = batch?;
+            let col = batch
+                .column(0)
+                .as_any()
+                .downcast_ref::<StringArray>()
+                .ok_or_else(|| anyhow::anyhow!("column `key` is not a string column"))?;
+            keys.extend(col.iter().flatten().map(str::to_owned));
+            anyhow::ensure!(col.null_count() == 0, "column `key` has nulls");
+        }
+        Ok(keys.len())
+    };
+    read().map(Some).with_context(|| format!("cannot read the existing report's {}", path.display()))
 }

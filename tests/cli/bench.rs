@@ -1,6 +1,6 @@
 //! `qsweep bench` from the command line: JSON shape, filtering and argument errors.
 
-use crate::helpers::qsweep;
+use crate::helpers::{qsweep, Test};
 
 #[test]
 fn json_lists_config_steps_seconds_and_rate() {
@@ -23,9 +23,10 @@ fn json_lists_config_steps_seconds_and_rate() {
 
 #[test]
 fn unknown_filter_and_bad_budget_are_usage_errors() {
-    let out = qsweep().args(["bench", "--filter", "no-such-system"]).output().unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("cart-pole/fuzzy/q-lambda/4^4/2a"));
-    let out = qsweep().args(["bench", "--steps", "0"]).output().unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    Test::new()
+        .args(["bench", "--filter", "no-such-system"])
+        .status(2)
+        .stderr_contains("cart-pole/fuzzy/q-lambda/4^4/2a")
+        .run();
+    Test::new().args(["bench", "--steps", "0"]).status(2).run();
 }

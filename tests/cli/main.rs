@@ -3,9 +3,11 @@
 mod bad_pipelines;
 mod bench;
 mod cache;
+mod exit_codes;
 mod helpers;
 mod json_formats;
 mod mutations;
+mod no_overwrite;
 mod pipeline;
 mod report_files;
 mod schemas;

@@ -173,7 +173,7 @@ fn quick_report_is_complete_valid_and_deterministic() {
     for exp in ["1", "2"] {
         let row =
             md.lines().find(|l| l.starts_with(&format!("| Cart-Pole | {exp} | Q(0)-learning"))).unwrap();
-        assert!(row.contains("200.00 ± 0.00†"), "{row}");
+        assert!(row.contains("400.00 ± 0.00†"), "{row}");
     }
     assert!(md.contains("lowest mean among the cells where every seed reached"));
     assert!(md.contains("count at the episode cap"));

@@ -1,0 +1,131 @@
+//! The README's exit-code table, checked against every subcommand: the table lists exactly the
+//! `qsweep::error::exit` constants, and each subcommand exits with each code that applies to it.
+
+use crate::helpers::{repo, Test};
+use qsweep::error::exit;
+use std::collections::BTreeSet;
+
+/// The codes of the README's "Exit codes" table.
+fn readme_codes() -> BTreeSet<i32> {
+    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    let section = readme.split("### Exit codes").nth(1).expect("README has an Exit codes section");
+    section
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .filter_map(|l| l.split('|').nth(1)?.trim().parse().ok())
+        .collect()
+}
+
+#[test]
+fn the_readme_table_lists_exactly_the_exit_constants() {
+    let constants: BTreeSet<i32> =
+        [exit::OK, exit::FAILURE, exit::USAGE, exit::INTERRUPTED].into_iter().map(i32::from).collect();
+    assert_eq!(readme_codes(), constants);
+}
+
+/// One invocation per (subcommand, code) that applies. 130 (interrupted) applies to `run` only and
+/// needs a signal mid-run: `pipeline::ctrl_c_flushes_finished_trials_exits_130_…` and
+/// `pipeline::sigterm_…` cover it.
+#[test]
+fn every_subcommand_exits_with_the_documented_codes() {
+    let ok = i32::from(exit::OK);
+    let failure = i32::from(exit::FAILURE);
+    let usage = i32::from(exit::USAGE);
+    let trial =
+        ["trial", "--env", "cart-pole", "--repr", "crisp", "--resolution", "2,2,2,2", "--algorithm", "q0"];
+    let mut covered: BTreeSet<(&str, i32)> = BTreeSet::new();
+    let mut case = |name: &'static str, code: i32, t: Test| {
+        t.status(code).run();
+        covered.insert((name, code));
+    };
+
+    case(
+        "bench",
+        ok,
+        Test::new().args(["bench", "--steps", "1000", "--repeat", "1", "--filter", "cart-pole"]),
+    );
+    case("bench", usage, Test::new().args(["bench", "--steps", "many"]));
+
+    case(
+        "simulate",
+        ok,
+        Test::new().args(["simulate", "--env", "cart-pole", "--state", "0,0,0,0", "--actions", "10"]),
+    );
+    case(
+        "simulate",
+        usage,
+        Test::new().args(["simulate", "--env", "pendulum", "--state", "0", "--actions", "1"]),
+    );
+
+    case("trial", ok, Test::new().args(trial).args(["--max-episodes", "3"]));
+    case("trial", usage, Test::new().args(trial).args(["--alpha", "0"]));
+    case("trial", failure, Test::new().args(trial).args(["--max-episodes", "3", "--param", "gravity=1e308"]));
+
+    case(
+        "run",
+        ok,
+        Test::new().pipeline("tiny.yaml").args(["run", "tiny.yaml", "--set", "seeds=1", "--quiet"]),
+    );
+    case("run", usage, Test::new().pipeline("tiny.yaml").args(["run", "tiny.yaml", "--set", "sedes=1"]));
+    case("run", failure, Test::new().pipeline("absurd.yaml").args(["run", "absurd.yaml", "--quiet"]));
+
+    case("status", ok, Test::new().pipeline("tiny.yaml").args(["status", "tiny.yaml"]));
+    case(
+        "status",
+        usage,
+        Test::new().pipeline("tiny.yaml").args(["status", "tiny.yaml", "--set", "seeds=x"]),
+    );
+
+    // report, verify and gc share one code for a missing cache: 2, bad input.
+    let cached = || {
+        Test::new()
+            .pipeline("tiny.yaml")
+            .args(["run", "tiny.yaml", "--set", "seeds=1", "--quiet"])
+            .run()
+            .then()
+    };
+    case("report", ok, cached().args(["report", "tiny.yaml", "--set", "seeds=1"]).stderr_lacks("error"));
+    case("report", usage, Test::new().pipeline("tiny.yaml").args(["report", "tiny.yaml"]));
+    // Fewer trials than the report it would replace.
+    case(
+        "report",
+        failure,
+        cached().file("empty/.keep", "").args([
+            "report",
+            "tiny.yaml",
+            "--set",
+            "seeds=1",
+            "--cache",
+            "empty",
+        ]),
+    );
+
+    case("verify", ok, cached().args(["verify"]));
+    case("verify", usage, Test::new().args(["verify"]));
+    case("verify", failure, Test::new().file("cache/seg-bad.parquet", "not parquet").args(["verify"]));
+
+    case("gc", ok, cached().args(["gc", "--dry-run"]));
+    case("gc", usage, Test::new().args(["gc"]));
+
+    case("slurm", ok, Test::new().pipeline("tiny.yaml").args(["slurm", "tiny.yaml", "--array", "2"]));
+    case("slurm", usage, Test::new().pipeline("tiny.yaml").args(["slurm", "tiny.yaml", "--array", "0"]));
+
+    // Every subcommand has a success and a bad-input case.
+    let help = String::from_utf8(crate::helpers::qsweep().arg("--help").output().unwrap().stdout).unwrap();
+    let subcommands: Vec<&str> = help
+        .split("Commands:")
+        .nth(1)
+        .unwrap()
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .take_while(|w| *w != "Options:")
+        .filter(|w| *w != "help")
+        .collect();
+    assert!(subcommands.len() >= 9, "{help}");
+    for s in subcommands {
+        for code in [ok, usage] {
+            assert!(covered.contains(&(s, code)), "no exit-code case for `qsweep {s}` exiting {code}");
+        }
+    }
+}
