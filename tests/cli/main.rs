@@ -3,6 +3,7 @@
 mod bad_pipelines;
 mod bench;
 mod cache;
+mod feasible;
 mod helpers;
 mod mutations;
 mod pipeline;
