@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod feasible;
 mod gc;
 pub mod json;
 mod pipeline_args;
@@ -29,6 +30,8 @@ pub struct Cli {
 pub enum Command {
     /// Measure the engine's steps per second on the standard configurations.
     Bench(bench::BenchArgs),
+    /// Longest survival over every deterministic policy of a small crisp table, from the start state.
+    Feasible(feasible::FeasibleArgs),
     /// Roll a system forward under given action values and print the trajectory as CSV.
     Simulate(simulate::SimulateArgs),
     /// Run one trial (one configuration, one seed) and print its outcome.
@@ -51,6 +54,7 @@ pub enum Command {
 pub fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Bench(a) => bench::run(a),
+        Command::Feasible(a) => feasible::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Trial(a) => trial::run(a),
         Command::Run(a) => run::run(a),

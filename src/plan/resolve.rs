@@ -112,6 +112,15 @@ impl Settings {
         if let Some(v) = self.max_total_steps {
             c.limits.max_total_steps = v;
         }
+        if let Some(v) = self.truncation {
+            c.limits.truncation = v;
+        }
+        if let Some(v) = self.start {
+            c.start = v;
+        }
+        if let Some(v) = self.binning {
+            c.repr.binning = v;
+        }
     }
 }
 

@@ -1,8 +1,8 @@
 //! The fully resolved configuration of one trial: every value the simulation reads, nothing
 //! implicit. Pipelines expand to these; the cache key hashes their canonical JSON encoding.
 
-use super::env::{EnvParams, SystemKind, TaskKind};
-use super::repr::ReprKind;
+use super::env::{EnvParams, StartKind, SystemKind, TaskKind};
+use super::repr::{Binning, ReprKind};
 use serde::{Deserialize, Serialize};
 
 /// Q(0) or Q(λ).
@@ -69,6 +69,10 @@ pub struct ReprConfig {
     pub width: f64,
     /// Fuzzy only: memberships below this are skipped (0 = exact; 0 for crisp).
     pub prune: f64,
+    /// Crisp only: where the bin edges lie (midpoint for fuzzy). Left out of the canonical JSON
+    /// when it is the default, so configurations from before the setting keep their keys.
+    #[serde(default, skip_serializing_if = "Binning::is_default")]
+    pub binning: Binning,
 }
 
 /// Learning rule and its hyperparameters (Table II).
@@ -116,6 +120,25 @@ pub enum Success {
     },
 }
 
+/// What the learner does with the last transition of an episode cut off by the episode step limit
+/// (Mountain Car's `max_episode_steps`; a TimeLimit in Gymnasium's terms).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Truncation {
+    /// The cut is not an end of the task: δ = r + γ max Q(s′, ·) − Q(s, a), as for any other step.
+    #[default]
+    Bootstrap,
+    /// The cut is treated as terminal: δ = r − Q(s, a), as code that learns from gym's `done` does.
+    Terminal,
+}
+
+impl Truncation {
+    /// Whether this is the default (left out of the canonical JSON).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 /// Caps and success criterion of a trial.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Limits {
@@ -125,6 +148,10 @@ pub struct Limits {
     pub max_episodes: u32,
     /// Most steps a trial runs (checked at episode ends).
     pub max_total_steps: u64,
+    /// How an episode cut off at the step limit is learned from. Left out of the canonical JSON
+    /// when it is the default, so configurations from before the setting keep their keys.
+    #[serde(default, skip_serializing_if = "Truncation::is_default")]
+    pub truncation: Truncation,
 }
 
 impl Limits {
@@ -150,6 +177,10 @@ pub struct TrialConfig {
     pub learner: LearnerConfig,
     /// Caps and success criterion.
     pub limits: Limits,
+    /// Where episodes start: the fixed start state or Gymnasium's `reset()` distribution. Left out
+    /// of the canonical JSON when it is the default, so older configurations keep their keys.
+    #[serde(default, skip_serializing_if = "StartKind::is_default")]
+    pub start: StartKind,
 }
 
 /// Table II hyperparameters.
@@ -227,6 +258,7 @@ impl TrialConfig {
                 ranges: default_ranges(system),
                 width: if fuzzy { DEFAULT_WIDTH } else { 0.0 },
                 prune: if fuzzy { DEFAULT_PRUNE } else { 0.0 },
+                binning: Binning::Midpoint,
             },
             actions,
             learner: LearnerConfig {
@@ -245,7 +277,9 @@ impl TrialConfig {
                 success: default_success(system),
                 max_episodes: DEFAULT_MAX_EPISODES,
                 max_total_steps: DEFAULT_MAX_TOTAL_STEPS,
+                truncation: Truncation::Bootstrap,
             },
+            start: StartKind::Fixed,
         };
         c.normalize();
         c
@@ -257,8 +291,16 @@ impl TrialConfig {
     }
 
     /// Reset settings that cannot affect the outcome to fixed values, so they never change a key:
-    /// Q(0) has no traces, crisp bins have no width.
+    /// Q(0) has no traces, crisp bins have no width, fuzzy sets have no bin edges, a survival
+    /// task's episode cut is its goal (the trial ends right after, so how the cut step is learned
+    /// from never matters), and Ball-Beam has no Gymnasium start distribution.
     pub fn normalize(&mut self) {
+        if TaskKind::of(self.system()) == TaskKind::Survival {
+            self.limits.truncation = Truncation::Bootstrap;
+        }
+        if self.system() == SystemKind::BallBeam {
+            self.start = StartKind::Fixed;
+        }
         if self.learner.algorithm == Algorithm::Q0 {
             self.learner.lambda = 0.0;
             self.learner.traces = TraceKind::Accumulating;
@@ -268,6 +310,8 @@ impl TrialConfig {
         if self.repr.kind == ReprKind::Crisp {
             self.repr.width = 0.0;
             self.repr.prune = 0.0;
+        } else {
+            self.repr.binning = Binning::Midpoint;
         }
     }
 

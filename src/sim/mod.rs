@@ -4,6 +4,7 @@
 pub mod actions;
 pub mod config;
 pub mod env;
+pub mod feasible;
 pub mod learner;
 pub mod repr;
 pub mod rng;
@@ -16,3 +17,5 @@ pub use trial::{run_trial, Outcome, StopReason};
 mod pinned_tests;
 #[cfg(test)]
 mod reference_tests;
+#[cfg(test)]
+mod settings_tests;

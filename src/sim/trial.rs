@@ -3,8 +3,8 @@
 //! pure function of its inputs, on any thread.
 
 use super::actions::action_set;
-use super::config::{Success, TieBreak, TrialConfig};
-use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, TaskKind};
+use super::config::{Success, TieBreak, TrialConfig, Truncation};
+use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, TaskKind};
 use super::learner::Learner;
 use super::repr::{Activations, Crisp, Fuzzy, ReprKind, Representation};
 use super::rng::TrialRng;
@@ -67,7 +67,7 @@ pub fn run_trial(cfg: &TrialConfig, seed: u64) -> Outcome {
 fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E) -> Outcome {
     let r = &cfg.repr;
     match r.kind {
-        ReprKind::Crisp => run(cfg, seed, env, Crisp::new(&r.resolution, &r.ranges)),
+        ReprKind::Crisp => run(cfg, seed, env, Crisp::with_binning(&r.resolution, &r.ranges, r.binning)),
         ReprKind::Fuzzy => run(cfg, seed, env, Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune)),
     }
 }
@@ -99,11 +99,41 @@ fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize,
     (a, true)
 }
 
-fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, mut env: E, repr: R) -> Outcome {
+fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, env: E, repr: R) -> Outcome {
+    let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner);
+    episodes(cfg, seed, env, repr, &mut learner)
+}
+
+/// A trial's outcome and its final Q parameters (for tests of single updates).
+#[cfg(test)]
+pub(crate) fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
+    fn go<E: Environment>(cfg: &TrialConfig, seed: u64, env: E) -> (Outcome, Vec<f64>) {
+        let r = &cfg.repr;
+        assert_eq!(r.kind, ReprKind::Crisp);
+        let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
+        let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
+        let o = episodes(cfg, seed, env, repr, &mut learner);
+        (o, learner.params().to_vec())
+    }
+    match &cfg.env {
+        EnvParams::BallBeam(p) => go(cfg, seed, BallBeam::new(p.clone())),
+        EnvParams::CartPole(p) => go(cfg, seed, CartPole::new(p.clone())),
+        EnvParams::MountainCar(p) => go(cfg, seed, MountainCar::new(p.clone())),
+    }
+}
+
+fn episodes<E: Environment, R: Representation>(
+    cfg: &TrialConfig,
+    seed: u64,
+    mut env: E,
+    repr: R,
+    learner: &mut Learner,
+) -> Outcome {
     let l = &cfg.learner;
     let actions = action_set(cfg.env.action_max(), cfg.actions);
     let na = actions.len();
-    let mut learner = Learner::new(repr.n_features(), na, repr.max_active(), l);
+    let gym_start = cfg.start == StartKind::Gym;
+    let cut_is_terminal = cfg.limits.truncation == Truncation::Terminal;
     let mut rng = TrialRng::new(seed);
     let (mut phi, mut phi_next) = (Activations::default(), Activations::default());
     let (mut qs, mut qs_next) = (vec![0.0; na], vec![0.0; na]);
@@ -123,7 +153,11 @@ fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, mut env:
     };
 
     for episode in 1..=cfg.limits.max_episodes {
-        env.reset();
+        if gym_start {
+            env.reset_gym(&mut rng);
+        } else {
+            env.reset();
+        }
         learner.clear_traces();
         repr.activate(env.state(), &mut phi);
         learner.q_values(&phi, &mut qs);
@@ -136,7 +170,8 @@ fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, mut env:
             let t = env.step(actions[a]);
             len += 1;
             let s = env.state();
-            let target = if t.terminal {
+            // At the episode step limit, `terminal` truncation learns as if the task ended there.
+            let target = if t.terminal || (cut_is_terminal && len >= cap) {
                 t.reward
             } else {
                 repr.activate(s, &mut phi_next);

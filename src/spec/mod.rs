@@ -35,8 +35,9 @@ pub use overrides::Override;
 pub use values::{AxisValues, Finite, Positive, Seeds, SubUnit, Unit, Values};
 pub use variants::{LoadedVariant, VariantSpec};
 
-use crate::sim::config::{TieBreak, TraceKind};
-use crate::sim::env::{BallBeamParams, CartPoleParams, EnvParams, MountainCarParams, SystemKind};
+use crate::sim::config::{TieBreak, TraceKind, Truncation};
+use crate::sim::env::{BallBeamParams, CartPoleParams, EnvParams, MountainCarParams, StartKind, SystemKind};
+use crate::sim::repr::Binning;
 use serde::de::{self, DeserializeOwned, Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -236,6 +237,15 @@ pub struct Settings {
     /// Step cap per trial.
     #[serde(default, deserialize_with = "opt_at_least_one_u64")]
     pub max_total_steps: Option<u64>,
+    /// An episode cut off at the step limit: bootstrap from its last state, or treat it as terminal.
+    #[serde(default)]
+    pub truncation: Option<Truncation>,
+    /// Episode start states: fixed, or Gymnasium's `reset()` distribution.
+    #[serde(default)]
+    pub start: Option<StartKind>,
+    /// Crisp bin edges: midpoint (equal bins) or digitize (`np.digitize` over `np.linspace(lo, hi, n)`).
+    #[serde(default)]
+    pub binning: Option<Binning>,
 }
 
 /// A settings level that sets only `name` to `v`, through the same typed, range-checked parse as

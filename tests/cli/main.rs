@@ -4,6 +4,7 @@ mod bad_pipelines;
 mod bench;
 mod cache;
 mod exit_codes;
+mod feasible;
 mod helpers;
 mod json_formats;
 mod mutations;

@@ -2,6 +2,7 @@
 //! CartPole-v1 step, with the paper's g = 9.81). Reward eq. (24): 0, or −1 on failure.
 
 use super::{scalar_params, Environment, State, TaskKind, Transition};
+use crate::sim::rng::TrialRng;
 use serde::{Deserialize, Serialize};
 
 /// Cart-Pole's physical constants and failure limits; defaults are the paper's.
@@ -55,6 +56,10 @@ scalar_params!(CartPoleParams {
     theta_limit_deg
 });
 
+/// Gymnasium's CartPole `reset()`: every variable ~ U(−0.05, 0.05)
+/// (`self.np_random.uniform(low=-0.05, high=0.05, size=(4,))`).
+pub const GYM_START: [f64; 2] = [-0.05, 0.05];
+
 impl CartPoleParams {
     /// θ limit in radians, computed as Gymnasium does (`12 * 2 * pi / 360`) so limits agree bit for bit.
     pub fn theta_limit_rad(&self) -> f64 {
@@ -89,6 +94,14 @@ impl Environment for CartPole {
 
     fn reset(&mut self) {
         self.state = self.p.start;
+    }
+
+    fn reset_gym(&mut self, rng: &mut TrialRng) {
+        // numpy's uniform(low, high) is low + (high − low)·u; x, ẋ, θ, θ̇ in that order.
+        let [lo, hi] = GYM_START;
+        for v in &mut self.state {
+            *v = lo + (hi - lo) * rng.unit();
+        }
     }
 
     fn set_state(&mut self, state: &[f64]) {

@@ -9,9 +9,10 @@ mod cart_pole;
 mod mountain_car;
 
 pub use ball_beam::{BallBeam, BallBeamParams};
-pub use cart_pole::{CartPole, CartPoleParams};
-pub use mountain_car::{MountainCar, MountainCarParams};
+pub use cart_pole::{CartPole, CartPoleParams, GYM_START as CART_POLE_GYM_START};
+pub use mountain_car::{MountainCar, MountainCarParams, GYM_START_X as MOUNTAIN_CAR_GYM_START_X};
 
+use super::rng::TrialRng;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -39,6 +40,35 @@ pub enum TaskKind {
     GoalReaching,
 }
 
+/// Where episodes start.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StartKind {
+    /// The system's fixed start state (`params.start`; Cart-Pole and Ball-Beam at rest at 0,
+    /// Mountain Car at x = −0.5 at rest), every episode.
+    #[default]
+    Fixed,
+    /// Gymnasium's `reset()` distribution, drawn from the trial's random stream at each episode
+    /// start: Cart-Pole U(−0.05, 0.05) per variable (CartPole-v0/v1), Mountain Car x ~ U(−0.6, −0.4)
+    /// and ẋ = 0 (MountainCar-v0). Ball-Beam has no Gymnasium environment and keeps its fixed start.
+    Gym,
+}
+
+impl StartKind {
+    /// Whether this is the default (left out of the canonical JSON).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// YAML / command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fixed => "fixed",
+            Self::Gym => "gym",
+        }
+    }
+}
+
 /// A discrete-time control system driven by real-valued actions.
 pub trait Environment {
     /// Number of state variables.
@@ -47,6 +77,12 @@ pub trait Environment {
     const TASK: TaskKind;
     /// Return to the configured start state.
     fn reset(&mut self);
+    /// Start an episode from Gymnasium's `reset()` distribution, drawn from `rng` (the fixed start
+    /// where Gymnasium has no such system).
+    fn reset_gym(&mut self, rng: &mut TrialRng) {
+        let _ = rng;
+        self.reset();
+    }
     /// Overwrite the current state (first `DIM` entries are used).
     fn set_state(&mut self, state: &[f64]);
     /// The current state.

@@ -3,6 +3,7 @@
 //! the left wall. Reward eq. (25): 1 (terminal) at the goal x ≥ goal, −1 otherwise.
 
 use super::{scalar_params, Environment, State, TaskKind, Transition};
+use crate::sim::rng::TrialRng;
 use serde::{Deserialize, Serialize};
 
 /// Mountain Car constants; defaults are the paper's (and MountainCar-v0's).
@@ -44,6 +45,10 @@ impl Default for MountainCarParams {
 
 scalar_params!(MountainCarParams { force, gravity, x_min, x_max, v_max, goal, action_max });
 
+/// MountainCar-v0's `reset()`: x ~ U(−0.6, −0.4), ẋ = 0
+/// (`np.array([self.np_random.uniform(low=-0.6, high=-0.4), 0])`).
+pub const GYM_START_X: [f64; 2] = [-0.6, -0.4];
+
 /// The Mountain Car system.
 #[derive(Debug, Clone)]
 pub struct MountainCar {
@@ -65,6 +70,11 @@ impl Environment for MountainCar {
 
     fn reset(&mut self) {
         self.state = [self.p.start[0], self.p.start[1], 0.0, 0.0];
+    }
+
+    fn reset_gym(&mut self, rng: &mut TrialRng) {
+        let [lo, hi] = GYM_START_X;
+        self.state = [lo + (hi - lo) * rng.unit(), 0.0, 0.0, 0.0];
     }
 
     fn set_state(&mut self, state: &[f64]) {

@@ -1,9 +1,51 @@
-//! Crisp discretisation: `n` uniform bins per variable over `[lo, hi]`; values outside the range
-//! fall into the edge bin. The state's bin tuple is one table row (weight 1).
+//! Crisp discretisation: `n` bins per variable over `[lo, hi]`, placed by a [`Binning`] rule; values
+//! outside the range fall into the edge bins. The state's bin tuple is one table row (weight 1).
+//!
+//! `midpoint` (the default) splits `[lo, hi]` into `n` equal bins: edges at `lo + k (hi − lo) / n`,
+//! k = 1..n−1 (2 bins of a symmetric range split at 0). This is also what tutorials that write
+//! `np.digitize(x, np.linspace(lo, hi, n + 1)[1:-1])` get.
+//!
+//! `digitize` is the other common tutorial convention, `np.digitize(x, np.linspace(lo, hi, n)) - 1`
+//! ("np.digitize is 1-indexed, so subtract one"), clipped to the n bins `0..n−1`: its edges are
+//! `np.linspace(lo, hi, n)[1:]`, i.e. `lo + k (hi − lo) / (n − 1)`, k = 1..n−1 (the last is `hi`).
+//! So bin 0 is everything below the second grid point, and the top bin holds only `x ≥ hi`:
+//! over [−2, 2], 4 bins are (−∞, −2/3), [−2/3, 2/3), [2/3, 2), [2, ∞), and 2 bins split at 2.
+//! (Python code that forgets the clip indexes −1 for `x < lo`, which wraps to the top bin; qsweep
+//! clips it to bin 0 instead.) The variant `min(np.digitize(x, np.linspace(lo, hi, n)), n - 1)`,
+//! without the `- 1`, is this one mirrored (edges `linspace(lo, hi, n)[:-1]`); for the paper's
+//! symmetric ranges, start states and action sets the two give the same results up to mirroring.
 
 use super::{strides, Activations, Representation};
+use serde::{Deserialize, Serialize};
 
-/// Uniform bins per state variable.
+/// Where crisp bin edges lie (see the module documentation for the exact edges).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Binning {
+    /// `n` equal bins over `[lo, hi]` (2 bins of a symmetric range split at 0).
+    #[default]
+    Midpoint,
+    /// `np.digitize(x, np.linspace(lo, hi, n)) - 1` clipped to `0..n−1`: inner edges
+    /// `np.linspace(lo, hi, n)[1:]` (2 bins split at `hi`).
+    Digitize,
+}
+
+impl Binning {
+    /// Whether this is the default (left out of the canonical JSON).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// YAML / command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Midpoint => "midpoint",
+            Self::Digitize => "digitize",
+        }
+    }
+}
+
+/// Crisp bins per state variable.
 #[derive(Debug, Clone)]
 pub struct Crisp {
     lo: Vec<f64>,
@@ -11,21 +53,47 @@ pub struct Crisp {
     bins: Vec<u32>,
     strides: Vec<u32>,
     n_features: usize,
+    /// `digitize` only: the inner edges per variable, ascending (empty for `midpoint`).
+    edges: Option<Vec<Vec<f64>>>,
 }
 
 impl Crisp {
-    /// Bins per variable over the given `[lo, hi]` ranges (lo < hi, bins ≥ 1).
+    /// Equal (`midpoint`) bins per variable over the given `[lo, hi]` ranges (lo < hi, bins ≥ 1).
     pub fn new(bins: &[u32], ranges: &[[f64; 2]]) -> Self {
+        Self::with_binning(bins, ranges, Binning::Midpoint)
+    }
+
+    /// Bins per variable over the given `[lo, hi]` ranges (lo < hi, bins ≥ 1), placed by `binning`.
+    pub fn with_binning(bins: &[u32], ranges: &[[f64; 2]], binning: Binning) -> Self {
         assert_eq!(bins.len(), ranges.len());
         let lo = ranges.iter().map(|r| r[0]).collect();
         let scale = ranges.iter().zip(bins).map(|(r, &n)| f64::from(n) / (r[1] - r[0])).collect();
         let n_features = bins.iter().map(|&b| b as usize).product();
-        Self { lo, scale, bins: bins.to_vec(), strides: strides(bins), n_features }
+        let edges = match binning {
+            Binning::Midpoint => None,
+            Binning::Digitize => {
+                Some(ranges.iter().zip(bins).map(|(r, &n)| linspace(r[0], r[1], n)[1..].to_vec()).collect())
+            }
+        };
+        Self { lo, scale, bins: bins.to_vec(), strides: strides(bins), n_features, edges }
+    }
+
+    /// The upper edges of bins 0..n−2 of one variable (bin k is `[edge k−1, edge k)`).
+    pub fn edges(&self, var: usize) -> Vec<f64> {
+        match &self.edges {
+            Some(e) => e[var].clone(),
+            None => (1..self.bins[var]).map(|k| self.lo[var] + f64::from(k) / self.scale[var]).collect(),
+        }
     }
 
     /// Bin of one variable's value.
     #[inline(always)]
     pub fn bin(&self, var: usize, value: f64) -> u32 {
+        if let Some(edges) = &self.edges {
+            // np.digitize(x, linspace)[right=False] − 1, clipped at 0: the number of inner edges
+            // ≤ x. A NaN compares false everywhere and lands in bin 0.
+            return edges[var].partition_point(|&e| e <= value) as u32;
+        }
         let t = (value - self.lo[var]) * self.scale[var];
         // Negative, NaN and too-large values land in the edge bins. For t ≥ 0 the saturating cast
         // truncates, which is floor; and floor(t) ≥ 0 exactly when t ≥ 0. So this is bin =
@@ -46,6 +114,18 @@ impl Crisp {
         }
         index
     }
+}
+
+/// `np.linspace(lo, hi, n)` as numpy computes it: `lo + k·step` with `step = (hi − lo)/(n − 1)`,
+/// the last point set to `hi` exactly.
+fn linspace(lo: f64, hi: f64, n: u32) -> Vec<f64> {
+    if n == 1 {
+        return vec![lo];
+    }
+    let step = (hi - lo) / f64::from(n - 1);
+    let mut v: Vec<f64> = (0..n).map(|k| f64::from(k) * step + lo).collect();
+    v[n as usize - 1] = hi;
+    v
 }
 
 impl Representation for Crisp {
@@ -79,6 +159,47 @@ mod tests {
         assert_eq!(c.bin(0, 0.34), 2);
         assert_eq!(c.bin(0, 1.0), 2);
         assert_eq!(c.bin(0, 9.0), 2);
+    }
+
+    #[test]
+    fn digitize_edges_are_the_linspace_grid_without_its_first_point() {
+        // np.linspace(-2, 2, 4) = [-2, -2/3, 2/3, 2]; np.digitize(x, ·) - 1, clipped to 0..3.
+        let c = Crisp::with_binning(&[4], &[[-2.0, 2.0]], Binning::Digitize);
+        let third = -2.0 + 4.0 / 3.0; // numpy's second point: 1·step + lo
+        assert_eq!(c.edges(0), vec![third, 2.0 * (4.0 / 3.0) - 2.0, 2.0]);
+        for (x, bin) in [
+            (-9.0, 0), // below lo: Python's −1 would wrap to bin 3; clipped to 0
+            (-2.0, 0),
+            (-0.67, 0),
+            (third, 1), // np.digitize is right-open: an edge belongs to the bin above
+            (0.0, 1),
+            (0.66, 1),
+            (0.67, 2),
+            (1.99, 2),
+            (2.0, 3), // only x ≥ hi reaches the top bin
+            (9.0, 3),
+            (f64::NAN, 0),
+        ] {
+            assert_eq!(c.bin(0, x), bin, "x = {x}");
+        }
+        // Two bins: np.linspace(lo, hi, 2) = [lo, hi], so the split is at hi.
+        let c = Crisp::with_binning(&[2, 1], &[[-2.0, 2.0], [0.0, 1.0]], Binning::Digitize);
+        assert_eq!(c.edges(0), vec![2.0]);
+        assert_eq!(c.edges(1), Vec::<f64>::new());
+        assert_eq!((c.bin(0, 1.999), c.bin(0, 2.0), c.bin(1, 5.0), c.bin(1, -5.0)), (0, 1, 0, 0));
+        // Three bins over the paper's Cart-Pole θ range: edges at 0 and at θ_max.
+        let th = 12.0 * 2.0 * std::f64::consts::PI / 360.0;
+        let c = Crisp::with_binning(&[3], &[[-th, th]], Binning::Digitize);
+        assert_eq!(c.edges(0), vec![0.0, th]);
+        assert_eq!((c.bin(0, -1e-9), c.bin(0, 0.0), c.bin(0, th * 0.999)), (0, 1, 1));
+    }
+
+    #[test]
+    fn midpoint_edges_split_symmetric_ranges_at_zero() {
+        let c = Crisp::new(&[2, 4], &[[-2.0, 2.0], [-2.0, 2.0]]);
+        assert_eq!(c.edges(0), vec![0.0]);
+        assert_eq!(c.edges(1), vec![-1.0, 0.0, 1.0]);
+        assert_eq!((c.bin(0, -1e-12), c.bin(0, 0.0)), (0, 1));
     }
 
     #[test]

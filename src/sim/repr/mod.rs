@@ -5,7 +5,7 @@
 mod crisp;
 mod fuzzy;
 
-pub use crisp::Crisp;
+pub use crisp::{Binning, Crisp};
 pub use fuzzy::{Fuzzy, HALF_CROSSING_WIDTH, MAX_SETS};
 
 use serde::{Deserialize, Serialize};

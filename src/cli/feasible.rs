@@ -1,0 +1,277 @@
+//! `qsweep feasible`: the longest survival any deterministic policy of a small crisp table reaches
+//! from the start state (an exhaustive search; see `sim::feasible`), with a policy that reaches it.
+
+use super::args;
+use super::simulate::env_params;
+use crate::error::user_error;
+use crate::sim::config::TrialConfig;
+use crate::sim::env::{BallBeam, CartPole, EnvParams, Environment, StartKind, State, SystemKind};
+use crate::sim::feasible::{search, Feasibility};
+use crate::sim::repr::{Binning, Crisp, ReprKind};
+use crate::sim::rng::TrialRng;
+use crate::sim::Algorithm;
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+
+/// Bin-edge rules on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum BinningArg {
+    /// n equal bins over [lo, hi] (2 bins of a symmetric range split at 0).
+    Midpoint,
+    /// np.digitize(x, np.linspace(lo, hi, n)) - 1 clipped to 0..n-1 (2 bins split at hi).
+    Digitize,
+}
+
+/// Start-state rules on the command line.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum StartArg {
+    /// The system's fixed start state (cart-pole and ball-beam: all zeros).
+    Fixed,
+    /// The first episode's start a trial with --seed draws from Gymnasium's reset() distribution.
+    Gym,
+}
+
+/// Arguments of `qsweep feasible`.
+#[derive(Debug, Args)]
+#[command(after_help = "Example: no policy over Cart-Pole's 16 midpoint cells balances long:\n  \
+    qsweep feasible --env cart-pole --resolution 2 --actions 2\n\
+    With the velocity splits moved to -0.4 (ranges centred there), one balances 100,000 steps:\n  \
+    qsweep feasible --env cart-pole --resolution 2 --range x_dot=-2.4,1.6 --range theta_dot=-2.4,1.6")]
+pub struct FeasibleArgs {
+    /// Survival system: cart-pole or ball-beam.
+    #[arg(long, value_parser = args::system)]
+    pub env: SystemKind,
+    /// Bins per state variable, comma-separated in state order (one value = all variables).
+    #[arg(long, value_parser = args::count_list)]
+    pub resolution: args::Counts,
+    /// Number of actions n of A_n (eq. 22) [default: the system's fixed set: 2 cart-pole, 3 ball-beam].
+    #[arg(long, value_parser = args::action_count)]
+    pub actions: Option<u32>,
+    /// Override a physical parameter, e.g. --param gravity=9.8 (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = args::param)]
+    pub params: Vec<(String, f64)>,
+    /// Bin range of one variable, e.g. --range x_dot=-3,3 (repeatable) [default: the pipeline defaults].
+    #[arg(long = "range", value_name = "VAR=LO,HI", allow_hyphen_values = true)]
+    pub ranges: Vec<String>,
+    /// Where the bin edges lie (the pipeline setting `binning`).
+    #[arg(long, value_enum, default_value = "midpoint")]
+    pub binning: BinningArg,
+    /// Start state: fixed, or the first start a trial with --seed draws under `start: gym`.
+    #[arg(long, value_enum, default_value = "fixed")]
+    pub start: StartArg,
+    /// Seed whose first gym start is searched from (with --start gym).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Explicit start state, comma-separated in state order (overrides --start).
+    #[arg(long, value_parser = args::finite_list, allow_hyphen_values = true)]
+    pub state: Option<args::Floats>,
+    /// Survival goal: stop as soon as a policy survives this many steps.
+    #[arg(long, default_value_t = 100_000)]
+    pub max_steps: u64,
+    /// Most action assignments to try; beyond it the answer is a lower bound.
+    #[arg(long, default_value_t = 50_000_000)]
+    pub max_nodes: u64,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One visited cell of the best policy.
+#[derive(Debug, Serialize)]
+struct CellAction {
+    /// Bin index per variable.
+    bins: Vec<u32>,
+    /// `[lo, hi)` of each bin (±inf at the open ends).
+    intervals: Vec<[f64; 2]>,
+    /// The action value (force, tilt).
+    action: f64,
+}
+
+/// The JSON report.
+#[derive(Debug, Serialize)]
+struct Report {
+    system: SystemKind,
+    resolution: Vec<u32>,
+    actions: u32,
+    ranges: Vec<[f64; 2]>,
+    binning: &'static str,
+    start: Vec<f64>,
+    max_steps: u64,
+    max_nodes: u64,
+    #[serde(flatten)]
+    result: Feasibility,
+    policy_cells: Vec<CellAction>,
+}
+
+fn parse_range(system: SystemKind, s: &str) -> anyhow::Result<(usize, [f64; 2])> {
+    let bad = || user_error(format!("--range: '{s}' is not VAR=LO,HI (e.g. x_dot=-3,3)"));
+    let (name, value) = s.split_once('=').ok_or_else(bad)?;
+    let j =
+        crate::spec::variable_index(system, name.trim()).map_err(|e| user_error(format!("--range: {e}")))?;
+    let v = args::finite_list(value).map_err(|e| user_error(format!("--range {s}: {e}")))?.0;
+    match v[..] {
+        [lo, hi] if lo < hi => Ok((j, [lo, hi])),
+        _ => Err(bad()),
+    }
+}
+
+/// The start state `--start`/`--state` ask for.
+fn start_state(a: &FeasibleArgs, env: &EnvParams) -> anyhow::Result<State> {
+    let dim = a.env.dim();
+    if let Some(s) = &a.state {
+        if s.0.len() != dim {
+            return Err(user_error(format!(
+                "--state: {} needs {dim} values ({}), got {}",
+                a.env,
+                a.env.variables().join(","),
+                s.0.len()
+            )));
+        }
+        let mut out = [0.0; 4];
+        out[..dim].copy_from_slice(&s.0);
+        return Ok(out);
+    }
+    Ok(match (a.start, env) {
+        (StartArg::Fixed, _) => env.start(),
+        (StartArg::Gym, EnvParams::CartPole(p)) => {
+            let mut e = CartPole::new(p.clone());
+            e.reset_gym(&mut TrialRng::new(a.seed));
+            *e.state()
+        }
+        (StartArg::Gym, EnvParams::BallBeam(p)) => {
+            let mut e = BallBeam::new(p.clone());
+            e.reset_gym(&mut TrialRng::new(a.seed));
+            *e.state()
+        }
+        (StartArg::Gym, EnvParams::MountainCar(_)) => env.start(),
+    })
+}
+
+/// Run `qsweep feasible`.
+pub fn run(a: FeasibleArgs) -> anyhow::Result<u8> {
+    let system = a.env;
+    if system == SystemKind::MountainCar {
+        return Err(user_error(
+            "--env: mountain-car is a goal-reaching task; the feasibility search is for survival tasks (cart-pole, ball-beam)",
+        ));
+    }
+    let dim = system.dim();
+    let resolution = match a.resolution.0[..] {
+        [n] => vec![n; dim],
+        ref r => r.to_vec(),
+    };
+    let actions = a.actions.unwrap_or(system.default_actions());
+    let mut c = TrialConfig::paper(system, ReprKind::Crisp, Algorithm::Q0, resolution, actions);
+    c.env = env_params(system, &a.params)?;
+    for r in &a.ranges {
+        let (j, lohi) = parse_range(system, r)?;
+        c.repr.ranges[j] = lohi;
+    }
+    c.repr.binning = match a.binning {
+        BinningArg::Midpoint => Binning::Midpoint,
+        BinningArg::Digitize => Binning::Digitize,
+    };
+    c.start = match a.start {
+        StartArg::Fixed => StartKind::Fixed,
+        StartArg::Gym => StartKind::Gym,
+    };
+    c.validate().map_err(|e| user_error(format!("--resolution/--actions/--range: {e}")))?;
+    let cells: u64 = c.repr.resolution.iter().map(|&n| u64::from(n)).product();
+    if cells > 1 << 24 {
+        return Err(user_error(format!(
+            "--resolution: {cells} cells is too many for the search (limit 2^24)"
+        )));
+    }
+    let start = start_state(&a, &c.env)?;
+    let result = search(&c, &start, a.max_steps, a.max_nodes).map_err(user_error)?;
+    let crisp = Crisp::with_binning(&c.repr.resolution, &c.repr.ranges, c.repr.binning);
+    let action_values = crate::sim::actions::action_set(c.env.action_max(), c.actions);
+    let strides = crate::sim::repr::strides(&c.repr.resolution);
+    let policy_cells: Vec<CellAction> = result
+        .policy
+        .iter()
+        .enumerate()
+        .filter_map(|(cell, a)| a.map(|a| (cell, a)))
+        .map(|(cell, action)| {
+            let bins: Vec<u32> =
+                strides.iter().zip(&c.repr.resolution).map(|(&s, &n)| (cell as u32 / s) % n).collect();
+            let intervals = bins
+                .iter()
+                .enumerate()
+                .map(|(j, &b)| {
+                    let e = crisp.edges(j);
+                    let lo = if b == 0 { f64::NEG_INFINITY } else { e[b as usize - 1] };
+                    let hi = e.get(b as usize).copied().unwrap_or(f64::INFINITY);
+                    [lo, hi]
+                })
+                .collect();
+            CellAction { bins, intervals, action: action_values[action as usize] }
+        })
+        .collect();
+    let report = Report {
+        system,
+        resolution: c.repr.resolution.clone(),
+        actions: c.actions,
+        ranges: c.repr.ranges.clone(),
+        binning: c.repr.binning.name(),
+        start: start[..dim].to_vec(),
+        max_steps: a.max_steps,
+        max_nodes: a.max_nodes,
+        result,
+        policy_cells,
+    };
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_text(&report, system);
+    }
+    Ok(0)
+}
+
+fn print_text(r: &Report, system: SystemKind) {
+    let f = &r.result;
+    let res: Vec<String> = r.resolution.iter().map(u32::to_string).collect();
+    println!(
+        "{system}: {} crisp cells ({}), {} actions, {} bins, start {:?}",
+        f.policy.len(),
+        res.join("/"),
+        r.actions,
+        r.binning,
+        r.start
+    );
+    let verdict = if f.survives {
+        format!("a policy survives {} steps (the --max-steps goal)", r.max_steps)
+    } else if f.complete {
+        format!("no policy survives more than {} steps (exhaustive)", f.best)
+    } else {
+        format!("at least {} steps; search incomplete after {} nodes (--max-nodes)", f.best, f.nodes)
+    };
+    println!("longest episode: {verdict}");
+    println!("searched {} nodes, {} simulation steps", f.nodes, f.steps);
+    println!(
+        "policy ({} of {} cells visited; the others may take any action):",
+        r.policy_cells.len(),
+        f.policy.len()
+    );
+    let vars = system.variables();
+    for c in &r.policy_cells {
+        let parts: Vec<String> = vars
+            .iter()
+            .zip(&c.intervals)
+            .map(|(v, [lo, hi])| format!("{v} in [{}, {})", short(*lo), short(*hi)))
+            .collect();
+        println!("  {} -> {}", parts.join(", "), c.action);
+    }
+}
+
+fn short(v: f64) -> String {
+    if v.is_infinite() {
+        if v > 0.0 {
+            "inf".into()
+        } else {
+            "-inf".into()
+        }
+    } else {
+        format!("{}", (v * 1e6).round() / 1e6)
+    }
+}

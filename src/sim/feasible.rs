@@ -1,0 +1,291 @@
+//! Feasibility of a crisp table: the longest episode that any deterministic policy (one action per
+//! cell) survives from one start state, found without enumerating the policies.
+//!
+//! From a fixed start state the dynamics are deterministic, so a policy's episode is one trajectory,
+//! and only the cells that trajectory visits matter. The search follows the trajectory and branches
+//! only when it enters a cell whose action is not assigned yet, trying every action there and undoing
+//! the assignment on the way back (depth first). Each leaf is a partial policy that fixes exactly the
+//! cells its trajectory visits, and every full policy extends exactly one leaf with the same
+//! episode, so the longest leaf episode is the longest over all policies. It stops early when a
+//! branch survives `max_steps` (a policy reaches the survival goal), and after `max_nodes`
+//! assignments (the answer is then a lower bound).
+
+use super::actions::action_set;
+use super::config::TrialConfig;
+use super::env::{BallBeam, CartPole, EnvParams, Environment, State, TaskKind};
+use super::repr::{Crisp, Representation};
+use serde::Serialize;
+
+/// What the search found.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Feasibility {
+    /// Longest episode found, in steps, the failing step included (a trial's episode length);
+    /// `max_steps` when a policy survived that long.
+    pub best: u64,
+    /// A policy survived `max_steps` steps (the search stopped there).
+    pub survives: bool,
+    /// The search covered every policy (or found a survivor): `best` is the true maximum.
+    pub complete: bool,
+    /// Action assignments tried (search-tree nodes).
+    pub nodes: u64,
+    /// Simulation steps run in total.
+    pub steps: u64,
+    /// Per cell (row-major over the bins, last variable fastest), the action index of a policy
+    /// that achieves `best`; `None` for cells its episode never visits (any action does).
+    pub policy: Vec<Option<u32>>,
+}
+
+/// Where one rollout ended.
+enum End {
+    /// The system failed; the episode had this many steps.
+    Failed(u64),
+    /// `max_steps` steps without failure.
+    Survived,
+    /// The trajectory entered an unassigned cell at this state after this many steps.
+    Branch(u32, State, u64),
+}
+
+/// A branch point: the unassigned cell, the state entering it, steps so far, how many actions were
+/// tried, and whether they are tried from the largest down.
+struct Frame {
+    cell: u32,
+    state: State,
+    len: u64,
+    next: u32,
+    down: bool,
+}
+
+/// Which way a simple balancing controller would push from `state`: positive for the largest action
+/// first. Only the order in which actions are tried depends on it (the search stays exhaustive), so
+/// that a policy surviving `max_steps` is usually found early.
+type Preference = fn(&State) -> f64;
+
+/// Cart-Pole: push towards the side the pole falls to (gains of a rough linear-quadratic regulator).
+fn cart_pole_preference(s: &State) -> f64 {
+    s[0] + 1.6 * s[1] + 18.0 * s[2] + 3.0 * s[3]
+}
+
+/// Ball-Beam: tilt against the ball's position and velocity.
+fn ball_beam_preference(s: &State) -> f64 {
+    -(s[0] + s[1])
+}
+
+/// Longest survival over all deterministic policies of `cfg`'s crisp table (its system, parameters,
+/// ranges, binning and action set) from `start`. `Err` for a goal-reaching system.
+pub fn search(
+    cfg: &TrialConfig,
+    start: &State,
+    max_steps: u64,
+    max_nodes: u64,
+) -> Result<Feasibility, String> {
+    let r = &cfg.repr;
+    let crisp = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
+    let actions = action_set(cfg.env.action_max(), cfg.actions);
+    match &cfg.env {
+        EnvParams::CartPole(p) => Ok(run(
+            CartPole::new(p.clone()),
+            &crisp,
+            &actions,
+            start,
+            max_steps,
+            max_nodes,
+            cart_pole_preference,
+        )),
+        EnvParams::BallBeam(p) => Ok(run(
+            BallBeam::new(p.clone()),
+            &crisp,
+            &actions,
+            start,
+            max_steps,
+            max_nodes,
+            ball_beam_preference,
+        )),
+        EnvParams::MountainCar(_) => Err(format!(
+            "{} is a goal-reaching task; the feasibility search is for survival tasks (cart-pole, ball-beam)",
+            cfg.system()
+        )),
+    }
+}
+
+const UNSET: u32 = u32::MAX;
+
+fn run<E: Environment>(
+    mut env: E,
+    crisp: &Crisp,
+    actions: &[f64],
+    start: &State,
+    max_steps: u64,
+    max_nodes: u64,
+    prefer: Preference,
+) -> Feasibility {
+    debug_assert_eq!(E::TASK, TaskKind::Survival);
+    let mut policy = vec![UNSET; crisp.n_features()];
+    let mut out =
+        Feasibility { best: 0, survives: false, complete: true, nodes: 0, steps: 0, policy: Vec::new() };
+    let mut stack: Vec<Frame> = Vec::new();
+    // Returns true when the search can stop (a survivor was found).
+    let settle = |end: End, policy: &[u32], out: &mut Feasibility, stack: &mut Vec<Frame>| -> bool {
+        let len = match end {
+            End::Branch(cell, state, len) => {
+                stack.push(Frame { cell, state, len, next: 0, down: prefer(&state) > 0.0 });
+                return false;
+            }
+            End::Failed(len) => len,
+            End::Survived => max_steps,
+        };
+        if len > out.best || out.policy.is_empty() {
+            out.best = len;
+            out.policy = policy.iter().map(|&a| (a != UNSET).then_some(a)).collect();
+        }
+        if len >= max_steps {
+            out.survives = true;
+            return true;
+        }
+        false
+    };
+    let first = rollout(&mut env, crisp, actions, &policy, start, 0, max_steps, &mut out.steps);
+    if settle(first, &policy, &mut out, &mut stack) {
+        return out;
+    }
+    while let Some(f) = stack.last_mut() {
+        if f.next as usize == actions.len() {
+            policy[f.cell as usize] = UNSET;
+            stack.pop();
+            continue;
+        }
+        if out.nodes >= max_nodes {
+            out.complete = false;
+            break;
+        }
+        let na = actions.len() as u32;
+        policy[f.cell as usize] = if f.down { na - 1 - f.next } else { f.next };
+        f.next += 1;
+        out.nodes += 1;
+        let (state, len) = (f.state, f.len);
+        let end = rollout(&mut env, crisp, actions, &policy, &state, len, max_steps, &mut out.steps);
+        if settle(end, &policy, &mut out, &mut stack) {
+            break;
+        }
+    }
+    out
+}
+
+/// Follow `policy` from `state` (after `len` steps) until failure, `max_steps`, or an unassigned cell.
+#[allow(clippy::too_many_arguments)]
+fn rollout<E: Environment>(
+    env: &mut E,
+    crisp: &Crisp,
+    actions: &[f64],
+    policy: &[u32],
+    state: &State,
+    mut len: u64,
+    max_steps: u64,
+    steps: &mut u64,
+) -> End {
+    env.set_state(&state[..E::DIM]);
+    loop {
+        if len >= max_steps {
+            return End::Survived;
+        }
+        let cell = crisp.feature(env.state());
+        let a = policy[cell as usize];
+        if a == UNSET {
+            return End::Branch(cell, *env.state(), len);
+        }
+        let t = env.step(actions[a as usize]);
+        len += 1;
+        *steps += 1;
+        if t.terminal {
+            return End::Failed(len);
+        }
+    }
+}
+
+/// Episode length of one full policy (one action index per cell) from `start`, up to `max_steps`:
+/// the brute-force check of [`search`].
+pub fn episode_length(cfg: &TrialConfig, policy: &[u32], start: &State, max_steps: u64) -> u64 {
+    fn go<E: Environment>(
+        mut env: E,
+        crisp: &Crisp,
+        actions: &[f64],
+        policy: &[u32],
+        start: &State,
+        max: u64,
+    ) -> u64 {
+        let mut steps = 0;
+        match rollout(&mut env, crisp, actions, policy, start, 0, max, &mut steps) {
+            End::Failed(len) => len,
+            End::Survived => max,
+            End::Branch(..) => unreachable!("a full policy assigns every cell"),
+        }
+    }
+    let r = &cfg.repr;
+    let crisp = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
+    let actions = action_set(cfg.env.action_max(), cfg.actions);
+    match &cfg.env {
+        EnvParams::CartPole(p) => go(CartPole::new(p.clone()), &crisp, &actions, policy, start, max_steps),
+        EnvParams::BallBeam(p) => go(BallBeam::new(p.clone()), &crisp, &actions, policy, start, max_steps),
+        EnvParams::MountainCar(_) => panic!("episode_length is for survival tasks"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::env::SystemKind;
+    use crate::sim::repr::{Binning, ReprKind};
+    use crate::sim::Algorithm;
+
+    fn cart_pole(res: Vec<u32>) -> TrialConfig {
+        TrialConfig::paper(SystemKind::CartPole, ReprKind::Crisp, Algorithm::Q0, res, 2)
+    }
+
+    const ZERO: State = [0.0; 4];
+
+    #[test]
+    fn no_policy_over_sixteen_midpoint_cells_balances_more_than_623_steps() {
+        let c = cart_pole(vec![2; 4]);
+        let f = search(&c, &ZERO, 100_000, u64::MAX).unwrap();
+        assert_eq!((f.best, f.survives, f.complete), (623, false, true), "{f:?}");
+        let policy: Vec<u32> = f.policy.iter().map(|a| a.unwrap_or(0)).collect();
+        assert_eq!(episode_length(&c, &policy, &ZERO, 100_000), 623, "the reported policy achieves it");
+    }
+
+    #[test]
+    fn brute_force_over_all_65536_policies_agrees() {
+        let c = cart_pole(vec![2; 4]);
+        let best = (0u32..1 << 16)
+            .map(|bits| {
+                let policy: Vec<u32> = (0..16).map(|cell| (bits >> cell) & 1).collect();
+                episode_length(&c, &policy, &ZERO, 100_000)
+            })
+            .max()
+            .unwrap();
+        assert_eq!(best, 623);
+    }
+
+    #[test]
+    fn velocity_splits_at_minus_0_4_admit_a_balancing_policy() {
+        // Ranges centred on −0.4 put the midpoint edge of ẋ and θ̇ there.
+        let mut c = cart_pole(vec![2; 4]);
+        c.repr.ranges[1] = [-2.4, 1.6];
+        c.repr.ranges[3] = [-2.4, 1.6];
+        let f = search(&c, &ZERO, 100_000, u64::MAX).unwrap();
+        assert!(f.survives && f.complete && f.best == 100_000, "{f:?}");
+        let policy: Vec<u32> = f.policy.iter().map(|a| a.unwrap_or(0)).collect();
+        assert_eq!(episode_length(&c, &policy, &ZERO, 100_000), 100_000);
+    }
+
+    #[test]
+    fn the_node_budget_makes_the_answer_a_lower_bound() {
+        let c = cart_pole(vec![2; 4]);
+        let f = search(&c, &ZERO, 100_000, 3).unwrap();
+        assert_eq!((f.nodes, f.complete, f.survives), (3, false, false));
+        assert!(f.best <= 623);
+        let mut d = c.clone();
+        d.repr.binning = Binning::Digitize;
+        assert!(search(&d, &ZERO, 100_000, u64::MAX).unwrap().complete);
+        let mc = TrialConfig::paper(SystemKind::MountainCar, ReprKind::Crisp, Algorithm::Q0, vec![2, 2], 3);
+        assert!(search(&mc, &ZERO, 10, 10).is_err());
+    }
+}
