@@ -7,6 +7,7 @@ pub mod env;
 pub mod learner;
 pub mod repr;
 pub mod rng;
+pub mod rules;
 pub mod trial;
 
 pub use config::{Algorithm, TrialConfig};

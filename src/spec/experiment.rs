@@ -2,8 +2,11 @@
 //! resolution grid in Table I's notation — `vary` holds the varied axes `v(·)`, each a group of
 //! variables sharing one value (`x == theta`), `fixed` the constants `c(·)`.
 
+use super::load::at_field;
+use super::values::{CheckedKey, CheckedValue};
 use super::{variable_index, Ranges, Settings, SystemMarker, Values};
 use crate::sim::repr::ReprKind;
+use crate::sim::rules;
 use crate::sim::Algorithm;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
@@ -141,14 +144,12 @@ fn parse_targets(system: crate::sim::env::SystemKind, key: &str) -> Result<Vec<T
     Ok(out)
 }
 
-fn check_value(t: Target, v: u32, what: &str) -> Result<(), String> {
+/// A grid value for a target: an action count, or bins / fuzzy sets (the representation's own
+/// limit is checked when trials are resolved).
+fn check_value(t: Target, v: u32) -> Result<(), String> {
     match t {
-        Target::Actions if v < 2 => Err(format!("{what}: {v} actions is not allowed; A_n needs n ≥ 2")),
-        Target::Var(_) if v < 1 => {
-            Err(format!("{what}: {v} is not allowed; every variable needs at least 1 bin or fuzzy set"))
-        }
-        Target::Var(_) if v > 1 << 20 => Err(format!("{what}: {v} is too many bins")),
-        _ => Ok(()),
+        Target::Actions => rules::actions(v).map(drop),
+        Target::Var(_) => rules::resolution(v, None).map(drop),
     }
 }
 
@@ -168,29 +169,44 @@ impl<'de, M: SystemMarker> Deserialize<'de> for AxesRaw<M> {
             }
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<AxesRaw<M>, A::Error> {
                 let mut axes: Vec<Axis> = Vec::new();
-                while let Some(key) = map.next_key::<String>()? {
-                    let targets = parse_targets(M::SYSTEM, &key).map_err(de::Error::custom)?;
+                let too_many = |n: usize| {
+                    format!(
+                        "{n} axes given; an experiment varies 1 or 2 axes (the heatmap's rows and columns)"
+                    )
+                };
+                while let Some(targets) = map.next_key_seed(CheckedKey(|key: String| {
+                    let targets = parse_targets(M::SYSTEM, &key)?;
+                    if axes.len() == 2 {
+                        return Err(too_many(3));
+                    }
                     let label = targets_label(M::SYSTEM, &targets);
-                    let values: Values = map.next_value()?;
                     for &t in &targets {
-                        for &v in &values.0 {
-                            check_value(t, v, &format!("vary.{label}")).map_err(de::Error::custom)?;
-                        }
                         if let Some(prev) = axes.iter().find(|a| a.targets.contains(&t)) {
-                            return Err(de::Error::custom(format!(
-                                "vary: `{}` appears in `{}` and in `{label}`; each variable belongs to one axis",
+                            return Err(format!(
+                                "`{}` appears in `{}` and in `{label}`; each variable belongs to one axis",
                                 target_name(M::SYSTEM, t),
                                 prev.label
-                            )));
+                            ));
                         }
                     }
-                    axes.push(Axis { label, targets, values: values.0 });
+                    Ok(targets)
+                }))? {
+                    let values = map.next_value_seed(CheckedValue(
+                        |values: Values| {
+                            for &t in &targets {
+                                for &v in &values.0 {
+                                    check_value(t, v)?;
+                                }
+                            }
+                            Ok(values.0)
+                        },
+                        PhantomData,
+                    ))?;
+                    let label = targets_label(M::SYSTEM, &targets);
+                    axes.push(Axis { label, targets, values });
                 }
-                if axes.is_empty() || axes.len() > 2 {
-                    return Err(de::Error::custom(format!(
-                        "vary: {} axes given; an experiment varies 1 or 2 axes (the heatmap's rows and columns)",
-                        axes.len()
-                    )));
+                if axes.is_empty() {
+                    return Err(de::Error::custom(too_many(0)));
                 }
                 Ok(AxesRaw(axes, PhantomData))
             }
@@ -221,19 +237,18 @@ impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
             }
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<FixedRaw<M>, A::Error> {
                 let mut out: Vec<(Target, u32)> = Vec::new();
-                while let Some(key) = map.next_key::<String>()? {
-                    let targets = parse_targets(M::SYSTEM, &key).map_err(de::Error::custom)?;
-                    let v: u32 = map.next_value()?;
-                    for t in targets {
-                        check_value(t, v, &format!("fixed.{key}")).map_err(de::Error::custom)?;
-                        if out.iter().any(|(o, _)| *o == t) {
-                            return Err(de::Error::custom(format!(
-                                "fixed: `{}` is set twice",
-                                target_name(M::SYSTEM, t)
-                            )));
-                        }
-                        out.push((t, v));
+                while let Some(targets) = map.next_key_seed(CheckedKey(|key: String| {
+                    let targets = parse_targets(M::SYSTEM, &key)?;
+                    match targets.iter().find(|t| out.iter().any(|(o, _)| o == *t)) {
+                        Some(&t) => Err(format!("`{}` is set twice", target_name(M::SYSTEM, t))),
+                        None => Ok(targets),
                     }
+                }))? {
+                    let v = map.next_value_seed(CheckedValue(
+                        |v: u32| targets.iter().try_for_each(|&t| check_value(t, v)).map(|()| v),
+                        PhantomData,
+                    ))?;
+                    out.extend(targets.into_iter().map(|t| (t, v)));
                 }
                 Ok(FixedRaw(out, PhantomData))
             }
@@ -262,49 +277,45 @@ impl<'de, M: SystemMarker> Deserialize<'de> for ExperimentSpec<M> {
         let fixed = raw.fixed.0;
         for (t, _) in &fixed {
             if let Some(a) = axes.iter().find(|a| a.targets.contains(t)) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: `{}` is both varied (in `{}`) and fixed; remove one",
-                    raw.id,
-                    target_name(system, *t),
-                    a.label
-                )));
+                return Err(at_field(
+                    &["fixed"],
+                    format!(
+                        "`{}` is both varied (in `{}`) and fixed; remove one",
+                        target_name(system, *t),
+                        a.label
+                    ),
+                ));
             }
         }
         for j in 0..system.dim() {
             let t = Target::Var(j);
             if !axes.iter().any(|a| a.targets.contains(&t)) && !fixed.iter().any(|(f, _)| *f == t) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: variable `{}` has no resolution; add it to `vary` (e.g. `{} == ...`) or to `fixed`",
-                    raw.id,
-                    system.variables()[j],
-                    system.variables()[j]
-                )));
+                return Err(at_field(
+                    &["vary"],
+                    format!(
+                        "variable `{}` has no resolution; add it to `vary` (e.g. `{} == ...`) or to `fixed`",
+                        system.variables()[j],
+                        system.variables()[j]
+                    ),
+                ));
             }
         }
         let mut algorithms = Vec::new();
         for a in raw.algorithms {
             if algorithms.contains(&a) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: algorithm {} is listed twice",
-                    raw.id,
-                    a.name()
-                )));
+                return Err(at_field(&["algorithms"], format!("algorithm {} is listed twice", a.name())));
             }
             algorithms.push(a);
         }
         if algorithms.is_empty() {
-            return Err(de::Error::custom(format!(
-                "experiment {}: algorithms is empty; use [q0, q-lambda]",
-                raw.id
-            )));
+            return Err(at_field(&["algorithms"], "the list is empty; use [q0, q-lambda]"));
         }
         for a in raw.reference.keys() {
             if !algorithms.contains(a) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: reference for {} but the experiment does not run it",
-                    raw.id,
-                    a.name()
-                )));
+                return Err(at_field(
+                    &["reference", a.name()],
+                    format!("reference for {} but the experiment does not run it", a.name()),
+                ));
             }
         }
         Ok(ExperimentSpec {
