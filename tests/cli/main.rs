@@ -3,6 +3,7 @@
 mod bad_pipelines;
 mod bench;
 mod cache;
+mod error_locations;
 mod helpers;
 mod mutations;
 mod pipeline;

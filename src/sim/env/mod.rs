@@ -208,7 +208,8 @@ impl EnvParams {
     /// The first parameter that breaks its rule (see `sim::rules`), with the message, if any.
     pub fn invalid_field(&self) -> Option<(&'static str, String)> {
         use super::rules::{FINITE, POSITIVE};
-        let (positive, finite): (Vec<(&'static str, f64)>, Vec<(&'static str, f64)>) = match self {
+        type Fields = Vec<(&'static str, f64)>;
+        let (positive, finite): (Fields, Fields) = match self {
             Self::BallBeam(p) => (
                 vec![("tau", p.tau), ("beam_length", p.beam_length)],
                 vec![
