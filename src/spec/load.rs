@@ -107,20 +107,24 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
 /// numbers), the message, and serde_yaml's own position (exact only for syntax and key errors).
 struct Failure {
     path: Vec<String>,
+    /// How many segments of `path` the message shows: all, but the key itself where the message
+    /// names it (an unknown or duplicate key: `systems.cart-pole: unknown field `mass``).
+    shown: usize,
     msg: String,
     yaml_at: Option<(usize, usize)>,
 }
 
 impl Failure {
     fn at(path: &[&str], msg: &str) -> Self {
-        Self { path: path.iter().map(|s| s.to_string()).collect(), msg: msg.to_string(), yaml_at: None }
+        let path: Vec<String> = path.iter().map(|s| s.to_string()).collect();
+        Self { shown: path.len(), path, msg: msg.to_string(), yaml_at: None }
     }
 
     /// `PATH: MESSAGE`, with a "did you mean" where one helps.
     fn message(&self) -> String {
-        match self.path.is_empty() {
-            true => improve(&self.msg),
-            false => format!("{}: {}", self.path.join("."), improve(&self.msg)),
+        match self.shown.min(self.path.len()) {
+            0 => improve(&self.msg),
+            n => format!("{}: {}", self.path[..n].join("."), improve(&self.msg)),
         }
     }
 }
@@ -128,7 +132,7 @@ impl Failure {
 impl From<serde_yaml::Error> for Failure {
     fn from(e: serde_yaml::Error) -> Self {
         let (msg, yaml_at) = split_location(&e);
-        Self { path: Vec::new(), msg, yaml_at }
+        Self { path: Vec::new(), shown: 0, msg, yaml_at }
     }
 }
 
@@ -174,6 +178,8 @@ where
         if let Some(field) = f.msg.strip_prefix("duplicate field `").and_then(|r| r.split('`').next()) {
             path.push(field.to_string());
         }
+        let names_key = ["unknown field `", "duplicate field `"].iter().any(|p| f.msg.starts_with(p));
+        f.shown = path.len() - usize::from(names_key && !path.is_empty());
         f.path = path;
         f
     })

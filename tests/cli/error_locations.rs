@@ -269,7 +269,7 @@ fn errors_about_a_whole_section_point_at_its_key() {
             At::BallBeam,
             "crisp: { gamma: 0.9, alpah: 0.1 }",
             "alpah:",
-            "systems.ball-beam.crisp.alpah",
+            "systems.ball-beam.crisp",
             "did you mean `alpha`?",
         ),
         (
