@@ -168,7 +168,7 @@ where
         if let Some(n) = (1..=path.len()).rev().find(|&n| f.msg.starts_with(&format!("{}: ", shown(n)))) {
             f.msg = f.msg[shown(n).len() + 2..].to_string();
         }
-        if let Some(rest) = f.msg.strip_prefix(FIELD) {
+        if let Some((_, rest)) = f.msg.split_once(FIELD) {
             if let Some((sub, msg)) = rest.split_once(FIELD) {
                 path.extend(sub.split(SEP).map(String::from));
                 f.msg = msg.to_string();
