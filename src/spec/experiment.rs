@@ -4,7 +4,8 @@
 
 use super::load::at_field;
 use super::values::{CheckedKey, CheckedValue};
-use super::{variable_index, Ranges, Settings, SystemMarker, Values};
+use super::{suggest, variable_index, AxisValues, Ranges, Settings, SystemMarker};
+use crate::sim::env::{EnvParams, SystemKind};
 use crate::sim::repr::ReprKind;
 use crate::sim::rules;
 use crate::sim::Algorithm;
@@ -21,17 +22,59 @@ pub enum Target {
     Var(usize),
     /// The number of actions n of A_n.
     Actions,
+    /// A numeric setting ([`AXIS_SETTINGS`]), e.g. `alpha` (axes only).
+    Setting(&'static str),
+    /// A physical parameter of the system, e.g. `gravity` (axes only).
+    Param(&'static str),
 }
+
+impl Target {
+    /// Whether the target takes a count (bins, sets, actions) rather than any number.
+    pub fn is_count(self) -> bool {
+        matches!(self, Target::Var(_) | Target::Actions)
+    }
+}
+
+/// Numeric settings that a `vary` axis may sweep (the keys of a `settings:` section).
+pub const AXIS_SETTINGS: &[&str] = &[
+    "epsilon",
+    "gamma",
+    "alpha",
+    "lambda",
+    "q_init",
+    "trace_cutoff",
+    "width",
+    "prune",
+    "max_episodes",
+    "max_total_steps",
+];
 
 /// A varied axis: a group of targets that share each value.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
-    /// Table I-style label, e.g. `x == theta`.
+    /// Table I-style label, e.g. `x == theta` or `alpha`.
     pub label: String,
     /// The grouped targets.
     pub targets: Vec<Target>,
-    /// Values, in file order.
-    pub values: Vec<u32>,
+    /// Values, in file order (whole numbers for bins, sets and actions).
+    pub values: Vec<f64>,
+}
+
+impl Axis {
+    /// Whether the axis sweeps counts (bins, sets, actions) rather than a setting or parameter.
+    pub fn is_count(&self) -> bool {
+        self.targets.iter().all(|t| t.is_count())
+    }
+}
+
+/// A grid value as written in labels: whole numbers without a decimal point, others in their
+/// shortest round-trip form.
+pub fn format_value(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v}")
+    }
 }
 
 /// A published result to compare with (e.g. the paper's Table III row).
@@ -129,10 +172,23 @@ fn id_string<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
     d.deserialize_any(V)
 }
 
-fn parse_targets(system: crate::sim::env::SystemKind, key: &str) -> Result<Vec<Target>, String> {
+/// The targets named by a `vary`/`fixed` key such as `x == theta`; `axis` also allows numeric
+/// settings and physical parameters.
+fn parse_targets(system: SystemKind, key: &str, axis: bool) -> Result<Vec<Target>, String> {
+    let params = EnvParams::default_for(system).param_names();
     let mut out = Vec::new();
     for name in key.split("==").map(str::trim) {
-        let t = if name == "actions" { Target::Actions } else { Target::Var(variable_index(system, name)?) };
+        let t = if name == "actions" {
+            Target::Actions
+        } else if let Ok(j) = variable_index(system, name) {
+            Target::Var(j)
+        } else if let (true, Some(s)) = (axis, AXIS_SETTINGS.iter().find(|s| **s == name)) {
+            Target::Setting(s)
+        } else if let (true, Some(p)) = (axis, params.iter().find(|p| **p == name)) {
+            Target::Param(p)
+        } else {
+            return Err(unknown_target(system, name, axis));
+        };
         if out.contains(&t) {
             return Err(format!("`{key}` names `{name}` twice"));
         }
@@ -141,15 +197,49 @@ fn parse_targets(system: crate::sim::env::SystemKind, key: &str) -> Result<Vec<T
     if out.contains(&Target::Actions) && out.len() > 1 {
         return Err(format!("`{key}`: actions cannot share a value with state variables"));
     }
+    if out.iter().any(|t| t.is_count()) && out.iter().any(|t| !t.is_count()) {
+        return Err(format!(
+            "`{key}`: bins and actions cannot share a value with settings or parameters; give them separate axes"
+        ));
+    }
     Ok(out)
 }
 
-/// A grid value for a target: an action count, or bins / fuzzy sets (the representation's own
-/// limit is checked when trials are resolved).
-fn check_value(t: Target, v: u32) -> Result<(), String> {
+fn unknown_target(system: SystemKind, name: &str, axis: bool) -> String {
+    let vars = system.variables();
+    let params = EnvParams::default_for(system).param_names();
+    let mut all: Vec<&str> = vars.iter().copied().chain(["actions"]).collect();
+    if axis {
+        all.extend(AXIS_SETTINGS.iter().copied().chain(params.iter().copied()));
+    }
+    let hint =
+        suggest(name, all.iter().copied()).map(|s| format!("; did you mean `{s}`?")).unwrap_or_default();
+    if axis {
+        format!(
+            "unknown axis `{name}` for {system}: an axis is a state variable ({}), `actions`, a numeric setting ({}) or a physical parameter ({}){hint}",
+            vars.join(", "),
+            AXIS_SETTINGS.join(", "),
+            params.join(", ")
+        )
+    } else {
+        format!(
+            "unknown variable `{name}` for {system}; its variables are {}, or `actions`{hint}",
+            vars.join(", ")
+        )
+    }
+}
+
+/// A grid value for a target: a whole count for bins and actions (their rules in `sim::rules`;
+/// the representation's own limit is checked when trials are resolved), a setting's own rule.
+fn check_value(t: Target, v: f64) -> Result<(), String> {
+    if t.is_count() && !(v.fract() == 0.0 && v >= 0.0 && v <= f64::from(u32::MAX)) {
+        return Err(format!("{v} is not allowed; bins, fuzzy sets and actions are whole numbers"));
+    }
     match t {
-        Target::Actions => rules::actions(v).map(drop),
-        Target::Var(_) => rules::resolution(v, None).map(drop),
+        Target::Actions => rules::actions(v as u32).map(drop),
+        Target::Var(_) => rules::resolution(v as u32, None).map(drop),
+        Target::Setting(name) => super::setting_level(name, v).map(drop),
+        _ => Ok(()),
     }
 }
 
@@ -175,7 +265,7 @@ impl<'de, M: SystemMarker> Deserialize<'de> for AxesRaw<M> {
                     )
                 };
                 while let Some(targets) = map.next_key_seed(CheckedKey(|key: String| {
-                    let targets = parse_targets(M::SYSTEM, &key)?;
+                    let targets = parse_targets(M::SYSTEM, &key, true)?;
                     if axes.len() == 2 {
                         return Err(too_many(3));
                     }
@@ -192,7 +282,7 @@ impl<'de, M: SystemMarker> Deserialize<'de> for AxesRaw<M> {
                     Ok(targets)
                 }))? {
                     let values = map.next_value_seed(CheckedValue(
-                        |values: Values| {
+                        |values: AxisValues| {
                             for &t in &targets {
                                 for &v in &values.0 {
                                     check_value(t, v)?;
@@ -238,14 +328,14 @@ impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<FixedRaw<M>, A::Error> {
                 let mut out: Vec<(Target, u32)> = Vec::new();
                 while let Some(targets) = map.next_key_seed(CheckedKey(|key: String| {
-                    let targets = parse_targets(M::SYSTEM, &key)?;
+                    let targets = parse_targets(M::SYSTEM, &key, false)?;
                     match targets.iter().find(|t| out.iter().any(|(o, _)| o == *t)) {
                         Some(&t) => Err(format!("`{}` is set twice", target_name(M::SYSTEM, t))),
                         None => Ok(targets),
                     }
                 }))? {
                     let v = map.next_value_seed(CheckedValue(
-                        |v: u32| targets.iter().try_for_each(|&t| check_value(t, v)).map(|()| v),
+                        |v: u32| targets.iter().try_for_each(|&t| check_value(t, f64::from(v))).map(|()| v),
                         PhantomData,
                     ))?;
                     out.extend(targets.into_iter().map(|t| (t, v)));
@@ -258,14 +348,15 @@ impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
 }
 
 /// Name of a target for messages and labels.
-pub fn target_name(system: crate::sim::env::SystemKind, t: Target) -> &'static str {
+pub fn target_name(system: SystemKind, t: Target) -> &'static str {
     match t {
         Target::Var(j) => system.variables()[j],
         Target::Actions => "actions",
+        Target::Setting(s) | Target::Param(s) => s,
     }
 }
 
-fn targets_label(system: crate::sim::env::SystemKind, targets: &[Target]) -> String {
+fn targets_label(system: SystemKind, targets: &[Target]) -> String {
     targets.iter().map(|&t| target_name(system, t)).collect::<Vec<_>>().join(" == ")
 }
 

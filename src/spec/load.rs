@@ -3,7 +3,7 @@
 //! allowed. serde_path_to_error gives the path; `locate` finds it in the text.
 
 use super::locate::locate_prefix;
-use super::{suggest, Override, PipelineSpec};
+use super::{suggest, LoadedVariant, Override, PipelineSpec};
 use crate::error::user_error;
 use serde_path_to_error::Segment;
 use std::path::{Path, PathBuf};
@@ -18,6 +18,8 @@ pub struct LoadedSpec {
     pub spec: PipelineSpec,
     /// The file it was read from.
     pub path: PathBuf,
+    /// Its variants, resolved (empty when the pipeline declares none).
+    pub variants: Vec<LoadedVariant>,
 }
 
 /// Read, parse and type a pipeline file, then apply `--set` overrides.
@@ -44,7 +46,8 @@ pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
         user_error(format!("{shown}:{line}: the file is not valid UTF-8 (byte {at}); save it as UTF-8"))
     })?;
     let spec = load_str(&text, &shown.to_string(), overrides)?;
-    Ok(LoadedSpec { spec, path: path.to_path_buf() })
+    let variants = super::variants::resolve(&spec, &text, &shown.to_string(), overrides)?;
+    Ok(LoadedSpec { spec, path: path.to_path_buf(), variants })
 }
 
 /// Parse pipeline text; `origin` names it in messages.
@@ -197,6 +200,17 @@ pub(super) fn at_field<E: serde::de::Error>(sub: &[&str], msg: impl std::fmt::Di
     E::custom(format!("{FIELD}{}{FIELD}{msg}", sub.join(&SEP.to_string())))
 }
 
+/// A typing error's message without its position, with "did you mean" where it helps.
+pub(super) fn message(e: &serde_yaml::Error) -> String {
+    let msg = split_location(e).0;
+    // A field marker from `at_field` (no path tracking here): show the sub-path as words.
+    let msg = match msg.split_once(FIELD).and_then(|(head, rest)| Some((head, rest.split_once(FIELD)?))) {
+        Some((head, (sub, tail))) => format!("{head}{}: {tail}", sub.replace(SEP, ".")),
+        None => msg,
+    };
+    improve(&msg)
+}
+
 /// serde_yaml's message without its " at line L column C" suffix, and the location.
 fn split_location(e: &serde_yaml::Error) -> (String, Option<(usize, usize)>) {
     let full = e.to_string();
@@ -227,6 +241,12 @@ fn improve(msg: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn field_markers_read_as_paths_where_no_path_is_tracked() {
+        let e: serde_yaml::Error = at_field(&["params", "tau"], "-1 is not allowed here");
+        assert_eq!(message(&e), "params.tau: -1 is not allowed here");
+    }
 
     #[test]
     fn unknown_fields_get_a_suggestion() {

@@ -11,3 +11,4 @@ mod report_files;
 mod simulate;
 mod slurm;
 mod trial;
+mod variants;
