@@ -1,6 +1,8 @@
-//! Value parsers shared by subcommands: finite numbers, comma lists, NAME=VALUE pairs.
+//! Value parsers shared by subcommands: finite numbers, comma lists, NAME=VALUE pairs. Range
+//! rules come from `sim::rules`, the same ones pipeline files and `TrialConfig::validate` use.
 
 use crate::sim::env::SystemKind;
+use crate::sim::rules::{self, Real};
 
 /// A system name.
 pub fn system(s: &str) -> Result<SystemKind, String> {
@@ -11,11 +13,12 @@ pub fn system(s: &str) -> Result<SystemKind, String> {
 /// A finite floating-point number.
 pub fn finite(s: &str) -> Result<f64, String> {
     let v: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(format!("'{s}' is not a finite number"))
-    }
+    rules::FINITE.check(v)
+}
+
+fn ruled(rule: Real, s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number; expected {}", rule.expect))?;
+    rule.check(v)
 }
 
 /// A comma-separated list of finite numbers.
@@ -38,8 +41,7 @@ pub struct Counts(pub Vec<u32>);
 pub fn count_list(s: &str) -> Result<Counts, String> {
     s.split(',')
         .map(|p| match p.trim().parse::<u32>() {
-            Ok(0) => Err("0 is not allowed; each variable needs at least 1 bin or fuzzy set".to_string()),
-            Ok(v) => Ok(v),
+            Ok(v) => rules::resolution(v, None),
             Err(_) => Err(format!("'{p}' is not a positive integer")),
         })
         .collect::<Result<_, _>>()
@@ -52,31 +54,44 @@ pub fn param(s: &str) -> Result<(String, f64), String> {
     Ok((name.trim().to_string(), finite(value)?))
 }
 
-/// A probability-like value in [0, 1].
+/// A probability-like value in [0, 1] (ε, γ, λ).
 pub fn unit(s: &str) -> Result<f64, String> {
-    let v = finite(s)?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("{v} is outside [0, 1]"))
-    }
+    ruled(rules::UNIT, s)
 }
 
-/// A finite value > 0.
+/// A finite value > 0 (α, width).
 pub fn positive(s: &str) -> Result<f64, String> {
-    let v = finite(s)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("{v} must be > 0"))
-    }
+    ruled(rules::POSITIVE, s)
+}
+
+/// A cutoff in [0, 1) (prune, trace cutoff).
+pub fn sub_unit(s: &str) -> Result<f64, String> {
+    ruled(rules::SUB_UNIT, s)
+}
+
+/// A cap or count ≥ 1 (max episodes, max total steps).
+pub fn at_least_one(s: &str) -> Result<u64, String> {
+    let v: u64 = s.trim().parse().map_err(|_| format!("'{s}' is not an integer ≥ 1"))?;
+    rules::at_least_one(v)
+}
+
+/// An episode cap: 1 to 2^32 − 1.
+pub fn episodes(s: &str) -> Result<u32, String> {
+    let v = at_least_one(s)?;
+    u32::try_from(v)
+        .map_err(|_| format!("{v} is not allowed here; expected an integer from 1 to {}", u32::MAX))
+}
+
+/// A step count held in 32 bits (balance steps): 1 to 2^32 − 1.
+pub fn steps(s: &str) -> Result<u64, String> {
+    let v: u64 = s.trim().parse().map_err(|_| format!("'{s}' is not an integer ≥ 1"))?;
+    rules::steps(v)
 }
 
 /// An action count n ≥ 2.
 pub fn action_count(s: &str) -> Result<u32, String> {
     match s.trim().parse::<u32>() {
-        Ok(n) if n >= 2 => Ok(n),
-        Ok(n) => Err(format!("{n} actions is too few; A_n needs n ≥ 2")),
+        Ok(n) => rules::actions(n),
         Err(_) => Err(format!("'{s}' is not an integer ≥ 2")),
     }
 }

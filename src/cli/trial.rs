@@ -84,19 +84,19 @@ pub struct TrialArgs {
     #[arg(long, value_parser = args::positive)]
     pub width: Option<f64>,
     /// Fuzzy memberships below this are skipped; 0 is exact [default: 1e-3].
-    #[arg(long, value_parser = args::finite)]
+    #[arg(long, value_parser = args::sub_unit)]
     pub prune: Option<f64>,
     /// Q(λ) traces below this are dropped; 0 keeps every trace [default: 1e-10].
-    #[arg(long, value_parser = args::finite)]
+    #[arg(long, value_parser = args::sub_unit)]
     pub trace_cutoff: Option<f64>,
     /// Episode cap [default: 1000].
-    #[arg(long)]
+    #[arg(long, value_parser = args::episodes)]
     pub max_episodes: Option<u32>,
     /// Step cap over the whole trial [default: 10,000,000].
-    #[arg(long)]
+    #[arg(long, value_parser = args::at_least_one)]
     pub max_total_steps: Option<u64>,
     /// Steps without failure that reach the goal (survival tasks) [default: 100,000].
-    #[arg(long)]
+    #[arg(long, value_parser = args::steps)]
     pub balance_steps: Option<u64>,
     /// Override a physical parameter, e.g. --param gravity=9.8 (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = args::param)]

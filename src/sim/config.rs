@@ -3,6 +3,7 @@
 
 use super::env::{EnvParams, StartKind, SystemKind, TaskKind};
 use super::repr::{Binning, ReprKind};
+use super::rules;
 use serde::{Deserialize, Serialize};
 
 /// Q(0) or Q(λ).
@@ -328,18 +329,8 @@ impl TrialConfig {
                 self.repr.resolution.len()
             ));
         }
-        let max = match self.repr.kind {
-            ReprKind::Crisp => 1 << 20,
-            ReprKind::Fuzzy => super::repr::MAX_SETS as u32,
-        };
-        if let Some(r) = self.repr.resolution.iter().find(|&&r| r < 1 || r > max) {
-            return Err(format!(
-                "resolution: {r} is not allowed; each variable needs 1 to {max} {}",
-                match self.repr.kind {
-                    ReprKind::Crisp => "bins",
-                    ReprKind::Fuzzy => "fuzzy sets",
-                }
-            ));
+        for &r in &self.repr.resolution {
+            rules::resolution(r, Some(self.repr.kind)).map_err(|e| format!("resolution: {e}"))?;
         }
         let features: u64 = self.repr.resolution.iter().map(|&r| u64::from(r)).product();
         if features * u64::from(self.actions) > 1 << 27 {
@@ -355,64 +346,47 @@ impl TrialConfig {
             ));
         }
         for (name, r) in system.variables().iter().zip(&self.repr.ranges) {
-            if !(r[0].is_finite() && r[1].is_finite() && r[0] < r[1]) {
-                return Err(format!("ranges.{name}: [{}, {}] must be finite with lo < hi", r[0], r[1]));
-            }
+            rules::bounds(r[0], r[1]).map_err(|e| format!("ranges.{name}: {e}"))?;
         }
         if self.repr.kind == ReprKind::Fuzzy {
-            if !(self.repr.width.is_finite() && self.repr.width > 0.0) {
-                return Err(format!("width: {} must be > 0", self.repr.width));
-            }
-            if !(0.0..1.0).contains(&self.repr.prune) {
-                return Err(format!("prune: {} must be in [0, 1)", self.repr.prune));
-            }
+            rules::POSITIVE.check(self.repr.width).map_err(|e| format!("width: {e}"))?;
+            rules::SUB_UNIT.check(self.repr.prune).map_err(|e| format!("prune: {e}"))?;
         }
-        if self.actions < 2 || self.actions > 1024 {
-            return Err(format!("actions: {} is not allowed; use 2 to 1024", self.actions));
-        }
+        rules::actions(self.actions).map_err(|e| format!("actions: {e}"))?;
         let l = &self.learner;
-        let unit = |name: &str, v: f64| {
-            if (0.0..=1.0).contains(&v) {
-                Ok(())
-            } else {
-                Err(format!("{name}: {v} must be in [0, 1]"))
+        let checks = [
+            ("epsilon", rules::UNIT, l.epsilon),
+            ("gamma", rules::UNIT, l.gamma),
+            ("lambda", rules::UNIT, l.lambda),
+            ("alpha", rules::POSITIVE, l.alpha),
+            ("q_init", rules::FINITE, l.q_init),
+            ("trace_cutoff", rules::SUB_UNIT, l.trace_cutoff),
+        ];
+        for (name, rule, v) in checks {
+            rule.check(v).map_err(|e| format!("{name}: {e}"))?;
+        }
+        rules::at_least_one(u64::from(self.limits.max_episodes)).map_err(|e| format!("max_episodes: {e}"))?;
+        rules::at_least_one(self.limits.max_total_steps).map_err(|e| format!("max_total_steps: {e}"))?;
+        match (&self.limits.success, TaskKind::of(system)) {
+            (Success::Balance { steps }, TaskKind::Survival) => {
+                rules::steps(*steps).map_err(|e| format!("success.steps: {e}"))?;
             }
-        };
-        unit("epsilon", l.epsilon)?;
-        unit("gamma", l.gamma)?;
-        unit("lambda", l.lambda)?;
-        if !(l.alpha.is_finite() && l.alpha > 0.0) {
-            return Err(format!("alpha: {} must be > 0", l.alpha));
-        }
-        if !l.q_init.is_finite() {
-            return Err(format!("q_init: {} must be finite", l.q_init));
-        }
-        if !(0.0..1.0).contains(&l.trace_cutoff) {
-            return Err(format!("trace_cutoff: {} must be in [0, 1)", l.trace_cutoff));
-        }
-        if self.limits.max_episodes < 1 {
-            return Err("max_episodes: must be at least 1".into());
-        }
-        if self.limits.max_total_steps < 1 {
-            return Err("max_total_steps: must be at least 1".into());
-        }
-        let task = TaskKind::of(system);
-        match (&self.limits.success, task) {
-            (Success::Balance { steps }, TaskKind::Survival) if *steps >= 1 && *steps <= u64::from(u32::MAX) => Ok(()),
-            (Success::Reach { within, streak, max_episode_steps }, TaskKind::GoalReaching)
-                if *within >= 1 && *streak >= 1 && *max_episode_steps >= 1 && *max_episode_steps <= u64::from(u32::MAX) =>
-            {
-                Ok(())
+            (Success::Reach { within, streak, max_episode_steps }, TaskKind::GoalReaching) => {
+                rules::at_least_one(*within).map_err(|e| format!("success.within: {e}"))?;
+                rules::at_least_one(u64::from(*streak)).map_err(|e| format!("success.streak: {e}"))?;
+                rules::steps(*max_episode_steps).map_err(|e| format!("success.max_episode_steps: {e}"))?;
             }
-            (Success::Balance { .. }, TaskKind::Survival) => Err("success.steps: must be 1 to 4294967295".into()),
-            (Success::Reach { .. }, TaskKind::GoalReaching) => {
-                Err("success: within, streak and max_episode_steps must be ≥ 1 (max_episode_steps ≤ 4294967295)".into())
+            (_, TaskKind::Survival) => {
+                return Err(format!("success: {system} is a survival task; use `{}`", rules::BALANCE_SYNTAX))
             }
-            (_, TaskKind::Survival) => Err(format!("success: {system} is a survival task; use {{kind: balance, steps: N}}")),
-            (_, TaskKind::GoalReaching) => Err(format!(
-                "success: {system} is a goal-reaching task; use {{kind: reach, within: N, streak: K, max_episode_steps: M}}"
-            )),
+            (_, TaskKind::GoalReaching) => {
+                return Err(format!(
+                    "success: {system} is a goal-reaching task; use `{}`",
+                    rules::REACH_SYNTAX
+                ))
+            }
         }
+        Ok(())
     }
 }
 

@@ -8,6 +8,7 @@ pub mod feasible;
 pub mod learner;
 pub mod repr;
 pub mod rng;
+pub mod rules;
 pub mod trial;
 
 pub use config::{Algorithm, TrialConfig};

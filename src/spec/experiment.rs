@@ -2,9 +2,12 @@
 //! resolution grid in Table I's notation — `vary` holds the varied axes `v(·)`, each a group of
 //! variables sharing one value (`x == theta`), `fixed` the constants `c(·)`.
 
+use super::load::at_field;
+use super::values::{CheckedKey, CheckedValue};
 use super::{suggest, variable_index, AxisValues, Ranges, Settings, SystemMarker};
 use crate::sim::env::{EnvParams, SystemKind};
 use crate::sim::repr::ReprKind;
+use crate::sim::rules;
 use crate::sim::Algorithm;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
@@ -226,19 +229,16 @@ fn unknown_target(system: SystemKind, name: &str, axis: bool) -> String {
     }
 }
 
-fn check_value(t: Target, v: f64, what: &str) -> Result<(), String> {
+/// A grid value for a target: a whole count for bins and actions (their rules in `sim::rules`;
+/// the representation's own limit is checked when trials are resolved), a setting's own rule.
+fn check_value(t: Target, v: f64) -> Result<(), String> {
     if t.is_count() && !(v.fract() == 0.0 && v >= 0.0 && v <= f64::from(u32::MAX)) {
-        return Err(format!("{what}: {v} is not allowed; bins, fuzzy sets and actions are whole numbers"));
+        return Err(format!("{v} is not allowed; bins, fuzzy sets and actions are whole numbers"));
     }
     match t {
-        Target::Actions if v < 2.0 => Err(format!("{what}: {v} actions is not allowed; A_n needs n ≥ 2")),
-        Target::Var(_) if v < 1.0 => {
-            Err(format!("{what}: {v} is not allowed; every variable needs at least 1 bin or fuzzy set"))
-        }
-        Target::Var(_) if v > f64::from(1u32 << 20) => Err(format!("{what}: {v} is too many bins")),
-        Target::Setting(name) => {
-            super::setting_level(name, v).map(|_| ()).map_err(|m| format!("{what}: {m}"))
-        }
+        Target::Actions => rules::actions(v as u32).map(drop),
+        Target::Var(_) => rules::resolution(v as u32, None).map(drop),
+        Target::Setting(name) => super::setting_level(name, v).map(drop),
         _ => Ok(()),
     }
 }
@@ -259,29 +259,44 @@ impl<'de, M: SystemMarker> Deserialize<'de> for AxesRaw<M> {
             }
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<AxesRaw<M>, A::Error> {
                 let mut axes: Vec<Axis> = Vec::new();
-                while let Some(key) = map.next_key::<String>()? {
-                    let targets = parse_targets(M::SYSTEM, &key, true).map_err(de::Error::custom)?;
+                let too_many = |n: usize| {
+                    format!(
+                        "{n} axes given; an experiment varies 1 or 2 axes (the heatmap's rows and columns)"
+                    )
+                };
+                while let Some(targets) = map.next_key_seed(CheckedKey(|key: String| {
+                    let targets = parse_targets(M::SYSTEM, &key, true)?;
+                    if axes.len() == 2 {
+                        return Err(too_many(3));
+                    }
                     let label = targets_label(M::SYSTEM, &targets);
-                    let values: AxisValues = map.next_value()?;
                     for &t in &targets {
-                        for &v in &values.0 {
-                            check_value(t, v, &format!("vary.{label}")).map_err(de::Error::custom)?;
-                        }
                         if let Some(prev) = axes.iter().find(|a| a.targets.contains(&t)) {
-                            return Err(de::Error::custom(format!(
-                                "vary: `{}` appears in `{}` and in `{label}`; each variable belongs to one axis",
+                            return Err(format!(
+                                "`{}` appears in `{}` and in `{label}`; each variable belongs to one axis",
                                 target_name(M::SYSTEM, t),
                                 prev.label
-                            )));
+                            ));
                         }
                     }
-                    axes.push(Axis { label, targets, values: values.0 });
+                    Ok(targets)
+                }))? {
+                    let values = map.next_value_seed(CheckedValue(
+                        |values: AxisValues| {
+                            for &t in &targets {
+                                for &v in &values.0 {
+                                    check_value(t, v)?;
+                                }
+                            }
+                            Ok(values.0)
+                        },
+                        PhantomData,
+                    ))?;
+                    let label = targets_label(M::SYSTEM, &targets);
+                    axes.push(Axis { label, targets, values });
                 }
-                if axes.is_empty() || axes.len() > 2 {
-                    return Err(de::Error::custom(format!(
-                        "vary: {} axes given; an experiment varies 1 or 2 axes (the heatmap's rows and columns)",
-                        axes.len()
-                    )));
+                if axes.is_empty() {
+                    return Err(de::Error::custom(too_many(0)));
                 }
                 Ok(AxesRaw(axes, PhantomData))
             }
@@ -312,19 +327,18 @@ impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
             }
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<FixedRaw<M>, A::Error> {
                 let mut out: Vec<(Target, u32)> = Vec::new();
-                while let Some(key) = map.next_key::<String>()? {
-                    let targets = parse_targets(M::SYSTEM, &key, false).map_err(de::Error::custom)?;
-                    let v: u32 = map.next_value()?;
-                    for t in targets {
-                        check_value(t, f64::from(v), &format!("fixed.{key}")).map_err(de::Error::custom)?;
-                        if out.iter().any(|(o, _)| *o == t) {
-                            return Err(de::Error::custom(format!(
-                                "fixed: `{}` is set twice",
-                                target_name(M::SYSTEM, t)
-                            )));
-                        }
-                        out.push((t, v));
+                while let Some(targets) = map.next_key_seed(CheckedKey(|key: String| {
+                    let targets = parse_targets(M::SYSTEM, &key, false)?;
+                    match targets.iter().find(|t| out.iter().any(|(o, _)| o == *t)) {
+                        Some(&t) => Err(format!("`{}` is set twice", target_name(M::SYSTEM, t))),
+                        None => Ok(targets),
                     }
+                }))? {
+                    let v = map.next_value_seed(CheckedValue(
+                        |v: u32| targets.iter().try_for_each(|&t| check_value(t, f64::from(v))).map(|()| v),
+                        PhantomData,
+                    ))?;
+                    out.extend(targets.into_iter().map(|t| (t, v)));
                 }
                 Ok(FixedRaw(out, PhantomData))
             }
@@ -354,49 +368,45 @@ impl<'de, M: SystemMarker> Deserialize<'de> for ExperimentSpec<M> {
         let fixed = raw.fixed.0;
         for (t, _) in &fixed {
             if let Some(a) = axes.iter().find(|a| a.targets.contains(t)) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: `{}` is both varied (in `{}`) and fixed; remove one",
-                    raw.id,
-                    target_name(system, *t),
-                    a.label
-                )));
+                return Err(at_field(
+                    &["fixed"],
+                    format!(
+                        "`{}` is both varied (in `{}`) and fixed; remove one",
+                        target_name(system, *t),
+                        a.label
+                    ),
+                ));
             }
         }
         for j in 0..system.dim() {
             let t = Target::Var(j);
             if !axes.iter().any(|a| a.targets.contains(&t)) && !fixed.iter().any(|(f, _)| *f == t) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: variable `{}` has no resolution; add it to `vary` (e.g. `{} == ...`) or to `fixed`",
-                    raw.id,
-                    system.variables()[j],
-                    system.variables()[j]
-                )));
+                return Err(at_field(
+                    &["vary"],
+                    format!(
+                        "variable `{}` has no resolution; add it to `vary` (e.g. `{} == ...`) or to `fixed`",
+                        system.variables()[j],
+                        system.variables()[j]
+                    ),
+                ));
             }
         }
         let mut algorithms = Vec::new();
         for a in raw.algorithms {
             if algorithms.contains(&a) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: algorithm {} is listed twice",
-                    raw.id,
-                    a.name()
-                )));
+                return Err(at_field(&["algorithms"], format!("algorithm {} is listed twice", a.name())));
             }
             algorithms.push(a);
         }
         if algorithms.is_empty() {
-            return Err(de::Error::custom(format!(
-                "experiment {}: algorithms is empty; use [q0, q-lambda]",
-                raw.id
-            )));
+            return Err(at_field(&["algorithms"], "the list is empty; use [q0, q-lambda]"));
         }
         for a in raw.reference.keys() {
             if !algorithms.contains(a) {
-                return Err(de::Error::custom(format!(
-                    "experiment {}: reference for {} but the experiment does not run it",
-                    raw.id,
-                    a.name()
-                )));
+                return Err(at_field(
+                    &["reference", a.name()],
+                    format!("reference for {} but the experiment does not run it", a.name()),
+                ));
             }
         }
         Ok(ExperimentSpec {

@@ -1,8 +1,11 @@
-//! Reading a pipeline file: every failure becomes one message naming the file, line and column,
-//! the field, and what is allowed.
+//! Reading a pipeline file: every failure becomes one message `FILE:LINE:COL: PATH: MESSAGE`
+//! naming the file, the line and column of the field's key, the field's dotted path and what is
+//! allowed. serde_path_to_error gives the path; `locate` finds it in the text.
 
+use super::locate::locate_prefix;
 use super::{suggest, LoadedVariant, Override, PipelineSpec};
 use crate::error::user_error;
+use serde_path_to_error::Segment;
 use std::path::{Path, PathBuf};
 
 /// Largest pipeline file accepted.
@@ -54,47 +57,158 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
             "{origin}: the file is empty; a pipeline needs at least name, seeds and systems"
         )));
     }
-    let located = |e: serde_yaml::Error| {
-        let (msg, loc) = split_location(&e);
-        let mut msg = improve(&msg);
-        if let Some((line, col)) = loc {
-            if let Some(src) = text.lines().nth(line.saturating_sub(1)) {
+    let located = |mut e: Failure| {
+        if serde_yaml::from_str::<serde_yaml::Value>(text).err().map(|v| split_location(&v))
+            == Some((e.msg.clone(), e.yaml_at))
+        {
+            // A syntax error: serde_yaml's position is exact and the path means little.
+            e.path.clear();
+        }
+        let at = if e.path.is_empty() { None } else { locate_prefix(text, &e.path).map(|(_, p)| p) };
+        let mut msg = e.message();
+        match at.or(e.yaml_at) {
+            Some((line, col)) => {
+                let src = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
                 if src.contains('\t') && msg.contains("cannot start any token") {
                     msg.push_str("; YAML does not allow tabs for indentation, use spaces");
                 }
+                user_error(format!("{origin}:{line}:{col}: {msg}"))
             }
-            user_error(format!("{origin}:{line}:{col}: {msg}"))
-        } else {
-            user_error(format!("{origin}: {msg}"))
+            None => user_error(format!("{origin}: {msg}")),
         }
     };
     // Typed parse of the text itself first, so every error has a position.
-    let spec: PipelineSpec = serde_yaml::from_str(text).map_err(located)?;
+    let spec: PipelineSpec = typed(serde_yaml::Deserializer::from_str(text)).map_err(located)?;
     if spec.systems.ball_beam.is_none()
         && spec.systems.cart_pole.is_none()
         && spec.systems.mountain_car.is_none()
     {
-        return Err(user_error(format!(
-            "{origin}: systems is empty; add ball-beam, cart-pole or mountain-car"
+        return Err(located(Failure::at(
+            &["systems"],
+            "the section is empty; add ball-beam, cart-pole or mountain-car",
         )));
     }
     if overrides.is_empty() {
         return Ok(spec);
     }
-    let mut doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(located)?;
+    let mut doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| located(Failure::from(e)))?;
     for o in overrides {
         o.apply(&mut doc).map_err(user_error)?;
     }
-    let sets: Vec<&str> = overrides.iter().map(|o| o.raw.as_str()).collect();
-    serde_yaml::from_value(doc).map_err(|e| {
-        let (msg, _) = split_location(&e);
-        user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), improve(&msg)))
+    // The overridden values have no line in the file: name the field and the --set argument
+    // that put it there (all of them when the error is about a section they only touch).
+    typed(doc).map_err(|e| {
+        let from: Vec<&Override> =
+            overrides.iter().filter(|o| o.path.starts_with(&e.path) || e.path.starts_with(&o.path)).collect();
+        let from = if from.is_empty() { overrides.iter().collect() } else { from };
+        let sets: Vec<&str> = from.iter().map(|o| o.raw.as_str()).collect();
+        user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
     })
+}
+
+/// A typed-parse failure: the dotted path of the field (keys, and sequence indices as decimal
+/// numbers), the message, and serde_yaml's own position (exact only for syntax and key errors).
+struct Failure {
+    path: Vec<String>,
+    /// How many segments of `path` the message shows: all, but the key itself where the message
+    /// names it (an unknown or duplicate key: `systems.cart-pole: unknown field `mass``).
+    shown: usize,
+    msg: String,
+    yaml_at: Option<(usize, usize)>,
+}
+
+impl Failure {
+    fn at(path: &[&str], msg: &str) -> Self {
+        let path: Vec<String> = path.iter().map(|s| s.to_string()).collect();
+        Self { shown: path.len(), path, msg: msg.to_string(), yaml_at: None }
+    }
+
+    /// `PATH: MESSAGE`, with a "did you mean" where one helps.
+    fn message(&self) -> String {
+        match self.shown.min(self.path.len()) {
+            0 => improve(&self.msg),
+            n => format!("{}: {}", self.path[..n].join("."), improve(&self.msg)),
+        }
+    }
+}
+
+impl From<serde_yaml::Error> for Failure {
+    fn from(e: serde_yaml::Error) -> Self {
+        let (msg, yaml_at) = split_location(&e);
+        Self { path: Vec::new(), shown: 0, msg, yaml_at }
+    }
+}
+
+/// Deserialise a pipeline, keeping the path of a failing field.
+fn typed<'de, D>(d: D) -> Result<PipelineSpec, Failure>
+where
+    D: serde::Deserializer<'de, Error = serde_yaml::Error>,
+{
+    serde_path_to_error::deserialize(d).map_err(|e| {
+        let mut path: Vec<String> = Vec::new();
+        let mut is_index: Vec<bool> = Vec::new();
+        for seg in e.path().iter() {
+            match seg {
+                Segment::Map { key } | Segment::Enum { variant: key } => path.push(key.clone()),
+                Segment::Seq { index } => path.push(index.to_string()),
+                Segment::Unknown => break,
+            }
+            is_index.push(matches!(seg, Segment::Seq { .. }));
+        }
+        let mut f = Failure::from(e.into_inner());
+        // serde_yaml starts the message with the path of the section where it noticed the error
+        // (`systems.ball-beam.experiments[0]: `): drop it, the full path replaces it.
+        let shown = |n: usize| {
+            path[..n].iter().enumerate().fold(String::new(), |mut out, (i, seg)| {
+                match &is_index[i] {
+                    true => out.push_str(&format!("[{seg}]")),
+                    false if out.is_empty() => out.push_str(seg),
+                    false => out.push_str(&format!(".{seg}")),
+                }
+                out
+            })
+        };
+        if let Some(n) = (1..=path.len()).rev().find(|&n| f.msg.starts_with(&format!("{}: ", shown(n)))) {
+            f.msg = f.msg[shown(n).len() + 2..].to_string();
+        }
+        if let Some((_, rest)) = f.msg.split_once(FIELD) {
+            if let Some((sub, msg)) = rest.split_once(FIELD) {
+                path.extend(sub.split(SEP).map(String::from));
+                f.msg = msg.to_string();
+            }
+        }
+        // serde's "duplicate field" is raised by the section: name the field given twice.
+        if let Some(field) = f.msg.strip_prefix("duplicate field `").and_then(|r| r.split('`').next()) {
+            path.push(field.to_string());
+        }
+        let names_key = ["unknown field `", "duplicate field `"].iter().any(|p| f.msg.starts_with(p));
+        f.shown = path.len() - usize::from(names_key && !path.is_empty());
+        f.path = path;
+        f
+    })
+}
+
+/// Marks the sub-path that [`at_field`] puts before a message.
+const FIELD: char = '\u{1f}';
+/// Separates the sub-path's segments.
+const SEP: char = '\u{1e}';
+
+/// An error about a field below the value being deserialised (a check that sees the whole
+/// section, e.g. one parameter of `params`, or the `id` of one experiment in the list): `sub` is
+/// the field's path relative to that value, which `load_str` adds to the error's path.
+pub(super) fn at_field<E: serde::de::Error>(sub: &[&str], msg: impl std::fmt::Display) -> E {
+    E::custom(format!("{FIELD}{}{FIELD}{msg}", sub.join(&SEP.to_string())))
 }
 
 /// A typing error's message without its position, with "did you mean" where it helps.
 pub(super) fn message(e: &serde_yaml::Error) -> String {
-    improve(&split_location(e).0)
+    let msg = split_location(e).0;
+    // A field marker from `at_field` (no path tracking here): show the sub-path as words.
+    let msg = match msg.split_once(FIELD).and_then(|(head, rest)| Some((head, rest.split_once(FIELD)?))) {
+        Some((head, (sub, tail))) => format!("{head}{}: {tail}", sub.replace(SEP, ".")),
+        None => msg,
+    };
+    improve(&msg)
 }
 
 /// serde_yaml's message without its " at line L column C" suffix, and the location.
@@ -127,6 +241,12 @@ fn improve(msg: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn field_markers_read_as_paths_where_no_path_is_tracked() {
+        let e: serde_yaml::Error = at_field(&["params", "tau"], "-1 is not allowed here");
+        assert_eq!(message(&e), "params.tau: -1 is not allowed here");
+    }
 
     #[test]
     fn unknown_fields_get_a_suggestion() {

@@ -23,7 +23,7 @@
 
 mod experiment;
 mod load;
-mod locate;
+pub mod locate;
 mod overrides;
 mod values;
 mod variants;
@@ -32,16 +32,19 @@ pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference,
 pub use load::{load, load_str, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
-pub use values::{AxisValues, Finite, Positive, Seeds, SubUnit, Unit, Values};
+pub use values::{AtLeastOne, AxisValues, Bounds, Finite, Positive, Seeds, SubUnit, Unit, Values};
 pub use variants::{LoadedVariant, VariantSpec};
 
 use crate::sim::config::{TieBreak, TraceKind, Truncation};
 use crate::sim::env::{BallBeamParams, CartPoleParams, EnvParams, MountainCarParams, StartKind, SystemKind};
 use crate::sim::repr::Binning;
+use crate::sim::rules;
+use load::at_field;
 use serde::de::{self, DeserializeOwned, Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::marker::PhantomData;
+use values::CheckedKey;
 
 /// A whole pipeline file.
 #[derive(Debug, Clone, Deserialize)]
@@ -99,11 +102,13 @@ pub trait SystemMarker: fmt::Debug + Clone + 'static {
     fn env(p: &Self::Params) -> EnvParams;
 }
 
-/// Physical parameters, validated inside deserialisation so errors carry the file position.
+/// Physical parameters, validated together inside deserialisation; an error names the parameter.
 fn valid_params<'de, M: SystemMarker, D: Deserializer<'de>>(d: D) -> Result<M::Params, D::Error> {
     let p = M::Params::deserialize(d)?;
-    M::env(&p).validate().map_err(|e| de::Error::custom(format!("params: {e}")))?;
-    Ok(p)
+    match M::env(&p).invalid_field() {
+        Some((name, e)) => Err(at_field(&[name], e)),
+        None => Ok(p),
+    }
 }
 
 /// Marker for Ball-Beam.
@@ -173,7 +178,7 @@ pub struct SystemSpec<M: SystemMarker> {
 #[serde(deny_unknown_fields)]
 pub struct BalanceSpec {
     /// Steps without failure that reach the learning goal.
-    #[serde(deserialize_with = "at_least_one_u64")]
+    #[serde(deserialize_with = "step_count")]
     pub steps: u64,
 }
 
@@ -188,7 +193,7 @@ pub struct ReachSpec {
     #[serde(default, deserialize_with = "opt_at_least_one_u64")]
     pub streak: Option<u64>,
     /// Episodes are cut off after this many steps.
-    #[serde(default, deserialize_with = "opt_at_least_one_u64")]
+    #[serde(default, deserialize_with = "opt_step_count")]
     pub max_episode_steps: Option<u64>,
 }
 
@@ -289,18 +294,15 @@ impl<'de, M: SystemMarker> Deserialize<'de> for Ranges<M> {
             }
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Ranges<M>, A::Error> {
                 let mut out = Ranges::default();
-                while let Some(name) = map.next_key::<String>()? {
-                    let j = variable_index(M::SYSTEM, &name).map_err(de::Error::custom)?;
-                    let [lo, hi]: [f64; 2] = map.next_value()?;
-                    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                        return Err(de::Error::custom(format!(
-                            "ranges.{name}: [{lo}, {hi}] must be two finite numbers with lo < hi"
-                        )));
+                while let Some(j) = map.next_key_seed(CheckedKey(|name: String| {
+                    let j = variable_index(M::SYSTEM, &name)?;
+                    match out.entries.iter().any(|(k, _)| *k == j) {
+                        true => Err(format!("`{name}` is given twice")),
+                        false => Ok(j),
                     }
-                    if out.entries.iter().any(|(k, _)| *k == j) {
-                        return Err(de::Error::custom(format!("ranges.{name} is given twice")));
-                    }
-                    out.entries.push((j, [lo, hi]));
+                }))? {
+                    let Bounds(b) = map.next_value()?;
+                    out.entries.push((j, b));
                 }
                 Ok(out)
             }
@@ -367,24 +369,21 @@ fn safe_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
 fn experiments<'de, M: SystemMarker, D: Deserializer<'de>>(d: D) -> Result<Vec<ExperimentSpec<M>>, D::Error> {
     let v = Vec::<ExperimentSpec<M>>::deserialize(d)?;
     if v.is_empty() {
-        return Err(de::Error::custom("experiments: the list is empty; give at least one experiment"));
+        return Err(de::Error::custom("the list is empty; give at least one experiment"));
     }
     for (i, e) in v.iter().enumerate() {
         if v[..i].iter().any(|o| o.id == e.id) {
-            return Err(de::Error::custom(format!(
-                "experiments[{i}]: id {} is used twice; ids must be unique per system",
-                e.id
-            )));
+            return Err(at_field(
+                &[&i.to_string(), "id"],
+                format!("id {} is used twice; ids must be unique per system", e.id),
+            ));
         }
     }
     Ok(v)
 }
 
 fn at_least_one_u64<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
-    match u64::deserialize(d)? {
-        0 => Err(de::Error::custom("0 is not allowed; expected an integer ≥ 1")),
-        v => Ok(v),
-    }
+    AtLeastOne::deserialize(d).map(|v| v.0)
 }
 
 fn opt_at_least_one_u64<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
@@ -392,8 +391,14 @@ fn opt_at_least_one_u64<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, 
 }
 
 fn opt_at_least_one_u32<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
-    match u32::deserialize(d)? {
-        0 => Err(de::Error::custom("0 is not allowed; expected an integer ≥ 1")),
-        v => Ok(Some(v)),
-    }
+    let v = rules::at_least_one(u64::from(u32::deserialize(d)?)).map_err(de::Error::custom)?;
+    Ok(Some(v as u32))
+}
+
+fn step_count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+    rules::steps(u64::deserialize(d)?).map_err(de::Error::custom)
+}
+
+fn opt_step_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    step_count(d).map(Some)
 }

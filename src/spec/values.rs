@@ -1,12 +1,14 @@
-//! Range-checked scalar types for pipeline files. Validating inside `Deserialize` lets serde_yaml
-//! attach the file position to every "value out of range" error.
+//! Range-checked scalar types for pipeline files, each applying its rule from `sim::rules`.
+//! Validating inside `Deserialize` puts every "value out of range" error at the value's own path,
+//! which `load` turns into the file position of the field.
 
+use crate::sim::rules;
 use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
 macro_rules! checked_f64 {
-    ($name:ident, $doc:literal, $ok:expr, $expect:literal) => {
+    ($name:ident, $doc:literal, $rule:expr) => {
         #[doc = $doc]
         #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
         #[serde(transparent)]
@@ -14,32 +16,37 @@ macro_rules! checked_f64 {
 
         impl<'de> Deserialize<'de> for $name {
             fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-                let v = f64::deserialize(d)?;
-                let ok: fn(f64) -> bool = $ok;
-                if ok(v) {
-                    Ok(Self(v))
-                } else {
-                    Err(de::Error::custom(format!("{v} is not allowed here; expected {}", $expect)))
-                }
+                $rule.check(f64::deserialize(d)?).map(Self).map_err(de::Error::custom)
             }
         }
     };
 }
 
-checked_f64!(Unit, "A number in [0, 1] (ε, γ, λ).", |v| (0.0..=1.0).contains(&v), "a number in [0, 1]");
-checked_f64!(
-    Positive,
-    "A finite number > 0 (α, width).",
-    |v| v.is_finite() && v > 0.0,
-    "a finite number > 0"
-);
-checked_f64!(Finite, "Any finite number.", |v| v.is_finite(), "a finite number");
-checked_f64!(
-    SubUnit,
-    "A number in [0, 1) (pruning and trace cutoffs).",
-    |v| (0.0..1.0).contains(&v),
-    "a number in [0, 1)"
-);
+checked_f64!(Unit, "A number in [0, 1] (ε, γ, λ).", rules::UNIT);
+checked_f64!(Positive, "A finite number > 0 (α, width).", rules::POSITIVE);
+checked_f64!(Finite, "Any finite number.", rules::FINITE);
+checked_f64!(SubUnit, "A number in [0, 1) (pruning and trace cutoffs).", rules::SUB_UNIT);
+
+/// An integer ≥ 1 (caps and counts), checked by `rules::at_least_one`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AtLeastOne(pub u64);
+
+impl<'de> Deserialize<'de> for AtLeastOne {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        rules::at_least_one(u64::deserialize(d)?).map(Self).map_err(de::Error::custom)
+    }
+}
+
+/// A variable's `[lo, hi]` range, checked by `rules::bounds`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds(pub [f64; 2]);
+
+impl<'de> Deserialize<'de> for Bounds {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let [lo, hi] = <[f64; 2]>::deserialize(d)?;
+        rules::bounds(lo, hi).map(Self).map_err(de::Error::custom)
+    }
+}
 
 /// A list of grid values: an integer, a list of integers, or an inclusive range `"A..B"`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -168,15 +175,11 @@ impl<'de> Deserialize<'de> for Seeds {
                 f.write_str("a number of seeds (≥ 1) or a list of seeds")
             }
             fn visit_u64<E: de::Error>(self, n: u64) -> Result<Seeds, E> {
-                match n {
-                    0 => Err(E::custom("seeds: 0 is not allowed; use at least 1")),
-                    n if n > 100_000 => Err(E::custom(format!("seeds: {n} is more than 100000"))),
-                    n => Ok(Seeds((0..n).collect())),
-                }
+                rules::seed_count(n).map(|n| Seeds((0..n).collect())).map_err(E::custom)
             }
             fn visit_i64<E: de::Error>(self, n: i64) -> Result<Seeds, E> {
                 if n < 0 {
-                    return Err(E::custom(format!("seeds: {n} is negative; use a count ≥ 1 or a list")));
+                    return Err(E::custom(format!("{n} is negative; use a count ≥ 1 or a list")));
                 }
                 self.visit_u64(n as u64)
             }
@@ -189,7 +192,7 @@ impl<'de> Deserialize<'de> for Seeds {
                     out.push(v);
                 }
                 if out.is_empty() {
-                    return Err(de::Error::custom("seeds: the list is empty; give at least one seed"));
+                    return Err(de::Error::custom("the list is empty; give at least one seed"));
                 }
                 Ok(Seeds(out))
             }
@@ -201,5 +204,29 @@ impl<'de> Deserialize<'de> for Seeds {
 impl Serialize for Seeds {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         self.0.serialize(s)
+    }
+}
+
+/// A map key checked by a function while it is read, so a bad key's error carries the key's own
+/// path (serde_path_to_error records a key only for errors raised while reading it).
+pub(super) struct CheckedKey<F>(pub F);
+
+impl<'de, T, F: FnOnce(String) -> Result<T, String>> de::DeserializeSeed<'de> for CheckedKey<F> {
+    type Value = T;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
+        (self.0)(String::deserialize(d)?).map_err(de::Error::custom)
+    }
+}
+
+/// A map value of type `T` checked by a function while it is read, so the error carries the path
+/// of the value's key rather than of the whole map.
+pub(super) struct CheckedValue<T, F>(pub F, pub std::marker::PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>, U, F: FnOnce(T) -> Result<U, String>> de::DeserializeSeed<'de>
+    for CheckedValue<T, F>
+{
+    type Value = U;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<U, D::Error> {
+        (self.0)(T::deserialize(d)?).map_err(de::Error::custom)
     }
 }

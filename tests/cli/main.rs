@@ -3,6 +3,7 @@
 mod bad_pipelines;
 mod bench;
 mod cache;
+mod error_locations;
 mod exit_codes;
 mod feasible;
 mod helpers;

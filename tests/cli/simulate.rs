@@ -76,7 +76,7 @@ fn bad_input_is_a_one_line_error_with_exit_code_2() {
         (&["--env", "pendulum", "--state", "0,0", "--actions", "1"], "unknown system"),
         (&["--env", "cart-pole", "--state", "0,0", "--actions", "1"], "needs 4 values"),
         (&["--env", "ball-beam", "--state", "0,abc", "--actions", "1"], "not a number"),
-        (&["--env", "ball-beam", "--state", "0,inf", "--actions", "1"], "not a finite number"),
+        (&["--env", "ball-beam", "--state", "0,inf", "--actions", "1"], "expected a finite number"),
         (
             &["--env", "ball-beam", "--state", "0,0", "--actions", "1", "--param", "mass=2"],
             "unknown parameter",

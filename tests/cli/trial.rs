@@ -73,8 +73,8 @@ fn bad_arguments_exit_2_naming_the_argument() {
         (&["--resolution", "0"], "0 is not allowed"),
         (&["--resolution", "3,3,3"], "--resolution"),
         (&["--resolution", "3", "--actions", "1"], "n ≥ 2"),
-        (&["--resolution", "3", "--lambda", "1.5"], "outside [0, 1]"),
-        (&["--resolution", "3", "--alpha", "0"], "must be > 0"),
+        (&["--resolution", "3", "--lambda", "1.5"], "expected a number in [0, 1]"),
+        (&["--resolution", "3", "--alpha", "0"], "expected a finite number > 0"),
         (&["--resolution", "3", "--param", "nope=1"], "unknown parameter"),
     ];
     for (extra, want) in cases {

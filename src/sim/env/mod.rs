@@ -238,42 +238,67 @@ impl EnvParams {
 
     /// Check physical sanity; `Err` says which parameter and what is allowed.
     pub fn validate(&self) -> Result<(), String> {
-        let positive: Vec<(&str, f64)> = match self {
-            Self::BallBeam(p) => vec![("tau", p.tau), ("beam_length", p.beam_length)],
-            Self::CartPole(p) => vec![
-                ("tau", p.tau),
-                ("mass_cart", p.mass_cart),
-                ("mass_pole", p.mass_pole),
-                ("half_length", p.half_length),
-                ("x_limit", p.x_limit),
-                ("theta_limit_deg", p.theta_limit_deg),
-            ],
-            Self::MountainCar(p) => vec![("v_max", p.v_max), ("action_max", p.action_max)],
+        self.invalid_field().map_or(Ok(()), |(name, e)| Err(format!("{name}: {e}")))
+    }
+
+    /// The first parameter that breaks its rule (see `sim::rules`), with the message, if any.
+    pub fn invalid_field(&self) -> Option<(&'static str, String)> {
+        use super::rules::{FINITE, POSITIVE};
+        type Fields = Vec<(&'static str, f64)>;
+        let (positive, finite): (Fields, Fields) = match self {
+            Self::BallBeam(p) => (
+                vec![("tau", p.tau), ("beam_length", p.beam_length)],
+                vec![
+                    ("gravity", p.gravity),
+                    ("angle_max", p.angle_max),
+                    ("start", p.start[0]),
+                    ("start", p.start[1]),
+                ],
+            ),
+            Self::CartPole(p) => (
+                vec![
+                    ("tau", p.tau),
+                    ("mass_cart", p.mass_cart),
+                    ("mass_pole", p.mass_pole),
+                    ("half_length", p.half_length),
+                    ("x_limit", p.x_limit),
+                    ("theta_limit_deg", p.theta_limit_deg),
+                ],
+                [("gravity", p.gravity), ("force", p.force)]
+                    .into_iter()
+                    .chain(p.start.iter().map(|&v| ("start", v)))
+                    .collect(),
+            ),
+            Self::MountainCar(p) => (
+                vec![("v_max", p.v_max), ("action_max", p.action_max)],
+                [
+                    ("force", p.force),
+                    ("gravity", p.gravity),
+                    ("x_min", p.x_min),
+                    ("x_max", p.x_max),
+                    ("goal", p.goal),
+                ]
+                .into_iter()
+                .chain(p.start.iter().map(|&v| ("start", v)))
+                .collect(),
+            ),
         };
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{name} = {v} must be a finite number > 0"));
+        let rules =
+            positive.into_iter().map(|f| (f, POSITIVE)).chain(finite.into_iter().map(|f| (f, FINITE)));
+        for ((name, v), rule) in rules {
+            if let Err(e) = rule.check(v) {
+                return Some((name, e));
             }
-        }
-        let all_finite = match self {
-            Self::BallBeam(p) => {
-                [p.gravity, p.angle_max, p.start[0], p.start[1]].iter().all(|v| v.is_finite())
-            }
-            Self::CartPole(p) => [p.gravity, p.force].iter().chain(p.start.iter()).all(|v| v.is_finite()),
-            Self::MountainCar(p) => [p.force, p.gravity, p.x_min, p.x_max, p.goal]
-                .iter()
-                .chain(p.start.iter())
-                .all(|v| v.is_finite()),
-        };
-        if !all_finite {
-            return Err("every parameter must be a finite number".into());
         }
         if let Self::MountainCar(p) = self {
             if p.x_min >= p.x_max {
-                return Err(format!("x_min = {} must be < x_max = {}", p.x_min, p.x_max));
+                return Some((
+                    "x_min",
+                    format!("{} is not allowed here; expected x_min < x_max = {}", p.x_min, p.x_max),
+                ));
             }
         }
-        Ok(())
+        None
     }
 }
 
