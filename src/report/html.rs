@@ -2,11 +2,13 @@
 //! name and description, trial counts, Table III, each system's figure (`figures/<system>.svg`,
 //! referenced by relative path) and a cell table per experiment, plus links to the data files.
 
+use super::curves::CURVE_RULE;
 use super::model::{ReportData, BEST_RULE, CENSORING};
 use super::table::{cell_table, render, table3, Html};
 use crate::report::table::html::escape_html as esc;
 
-const STYLE: &str = "\
+/// The pages' stylesheet.
+pub(crate) const STYLE: &str = "\
 body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1100px;color:#1e1e1e;line-height:1.4;padding:0 1em}
 h1{margin-bottom:.2em}h2{margin-top:2em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;margin:1em 0;font-size:.9em}
@@ -19,8 +21,8 @@ figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
 .scroll{overflow-x:auto}
 ";
 
-/// The page.
-pub fn page(data: &ReportData, figures: &[(String, (u32, u32))]) -> String {
+/// The page; `figures` and `curves` give each system's heatmap and learning-curve figure sizes.
+pub fn page(data: &ReportData, figures: &[(String, (u32, u32))], curves: &[(String, (u32, u32))]) -> String {
     let plan = data.plan;
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
@@ -79,6 +81,18 @@ pub fn page(data: &ReportData, figures: &[(String, (u32, u32))]) -> String {
                 s.name(),
                 esc(s.title()),
                 esc(BEST_RULE)
+            ));
+        }
+        if let Some((_, (w, ht))) = curves.iter().find(|(n, _)| n == s.name()) {
+            h.push_str(&format!(
+                "<figure><img src=\"figures/{0}-curves.svg\" width=\"{w}\" height=\"{ht}\" alt=\"{1}: learning \
+                 curves of the best cells\">\n<figcaption>Learning curves of the best cell of each experiment and \
+                 algorithm (the Table III rows): episode length against episode, log scale; dashed red line: the \
+                 learning goal. {2} <a href=\"figures/{0}-curves.png\">PNG</a> · \
+                 <a href=\"figures/{0}-curves.svg\">SVG</a></figcaption></figure>\n",
+                s.name(),
+                esc(s.title()),
+                esc(CURVE_RULE)
             ));
         }
         for e in data.experiments.iter().filter(|e| e.exp.system == s) {

@@ -4,12 +4,14 @@
 //!   experiment and algorithm, with the paper's values when the pipeline gives them);
 //! - `cells.parquet`, `trials.parquet`: the data behind it (schemas in [`parquet`]);
 //! - `figures/<system>.svg` and `.png`: the paper's Figures 5–7 (see [`figures`]);
+//! - `figures/<system>-curves.svg` and `.png`: learning curves of the best cells (see [`curves`]);
 //! - `index.html`: one self-contained page with all of the above.
 //!
 //! Trials missing from the records are left out and counted. Every file is written atomically
 //! (a temporary file in the same directory, then a rename), and the output is a pure function of
 //! the inputs: no timestamps, no hash-map order, a seeded bootstrap.
 
+pub mod curves;
 pub mod figures;
 pub mod glyphs;
 pub mod html;
@@ -69,14 +71,19 @@ pub fn write_report(
     put("cells.parquet", &parquet::cells_parquet(&data)?)?;
     put("trials.parquet", &parquet::trials_parquet(&data)?)?;
     let mut sizes = Vec::new();
+    let mut curve_sizes = Vec::new();
     for system in data.systems() {
         let (svg, png) = figures::render(&data, system)?;
         put(&format!("figures/{}.svg", system.name()), svg.as_bytes())?;
         put(&format!("figures/{}.png", system.name()), &png)?;
         let exps: Vec<_> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
         sizes.push((system.name().to_string(), figures::figure_size(&exps)));
+        let (svg, png) = curves::render(&data, system)?;
+        put(&format!("figures/{}-curves.svg", system.name()), svg.as_bytes())?;
+        put(&format!("figures/{}-curves.png", system.name()), &png)?;
+        curve_sizes.push((system.name().to_string(), curves::figure_size(exps.len())));
     }
-    put("index.html", html::page(&data, &sizes).as_bytes())?;
+    put("index.html", html::page(&data, &sizes, &curve_sizes).as_bytes())?;
 
     let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
     Ok(ReportSummary {
