@@ -19,6 +19,7 @@ pub mod model;
 pub mod parquet;
 pub mod stats;
 pub mod table;
+pub mod variants;
 
 use crate::cache::{Key, TrialRecord};
 use crate::plan::Plan;
