@@ -24,6 +24,8 @@ pub struct Submission {
     pub pipeline: PathBuf,
     /// `--set` overrides, passed on to both jobs.
     pub sets: Vec<String>,
+    /// `--variant` selections, passed on to both jobs.
+    pub variants: Vec<String>,
     /// Pass `--yes` (accept a very large plan).
     pub yes: bool,
     /// The shared cache directory.
@@ -75,6 +77,9 @@ impl Submission {
         let mut tail = String::new();
         for s in &self.sets {
             write!(tail, " --set {}", quote(s))?;
+        }
+        for v in &self.variants {
+            write!(tail, " --variant {}", quote(v))?;
         }
         if self.yes {
             tail.push_str(" --yes");
@@ -249,6 +254,7 @@ mod tests {
             workdir: "/home/ada/study".into(),
             pipeline: "/home/ada/study/pipelines/quick.yaml".into(),
             sets: vec!["seeds=3".into()],
+            variants: vec![],
             yes: false,
             cache: "/home/ada/study/cache".into(),
             report_dir: "/home/ada/study/reports/quick".into(),

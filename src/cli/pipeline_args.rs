@@ -3,7 +3,7 @@
 
 use crate::cache::store::Store;
 use crate::error::user_error;
-use crate::plan::{plan, Plan, DEFAULT_MAX_TRIALS};
+use crate::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
 use crate::spec::{load, Override};
 use clap::Args;
 use std::path::PathBuf;
@@ -17,6 +17,9 @@ pub struct PipelineArgs {
     /// --set systems.cart-pole.crisp.alpha=0.05 (repeatable; list items by index).
     #[arg(long = "set", value_name = "PATH=VALUE")]
     pub set: Vec<String>,
+    /// Only this variant of the pipeline's `variants:` (repeatable) [default: all of them].
+    #[arg(long = "variant", value_name = "ID")]
+    pub variant: Vec<String>,
     /// Cache directory [env: QSWEEP_CACHE; default: cache].
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
@@ -31,7 +34,11 @@ impl PipelineArgs {
         let overrides =
             self.set.iter().map(|s| Override::parse(s).map_err(user_error)).collect::<Result<Vec<_>, _>>()?;
         let loaded = load(&self.pipeline, &overrides)?;
-        plan(&loaded, (!self.yes).then_some(DEFAULT_MAX_TRIALS))
+        let plan = plan_variants(&loaded, (!self.yes).then_some(DEFAULT_MAX_TRIALS), &self.variant)?;
+        for w in &plan.warnings {
+            eprintln!("warning: {w}");
+        }
+        Ok(plan)
     }
 
     /// The cache directory: `--cache`, else `$QSWEEP_CACHE`, else `cache`.

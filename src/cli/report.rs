@@ -33,7 +33,7 @@ pub fn write(plan: &Plan, store: &Store, out: Option<&Path>, quiet: bool) -> any
     let keys: HashSet<_> = plan.trials().map(|(_, _, t)| t.key).collect();
     let records: HashMap<_, _> = store.read(&keys)?.into_iter().map(|r| (r.key, r)).collect();
     let dir = out.map(Path::to_path_buf).unwrap_or_else(|| Path::new("reports").join(&plan.name));
-    let s = crate::report::write_report(plan, &records, &dir)?;
+    let s = crate::report::write_reports(plan, &records, &dir)?;
     if !quiet {
         println!(
             "report: {} ({} of {} planned trials present, {} of {} cells)",

@@ -80,6 +80,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         qsweep,
         pipeline: abs(&a.pipeline.pipeline)?,
         sets: a.pipeline.set.clone(),
+        variants: a.pipeline.variant.clone(),
         yes: a.pipeline.yes,
         cache: abs(&a.pipeline.cache_dir())?,
         report_dir: abs(&a.out.clone().unwrap_or_else(|| Path::new("reports").join(&plan.name)))?,

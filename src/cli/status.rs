@@ -39,8 +39,12 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         let experiments: Vec<Value> = rows
             .iter()
             .map(|(e, n, hit)| {
-                serde_json::json!({"system": e.system.name(), "experiment": e.id, "repr": e.repr.name(),
-                    "cells": e.cells.len(), "trials": n, "cached": hit, "missing": n - hit})
+                let mut v = serde_json::json!({"system": e.system.name(), "experiment": e.id, "repr": e.repr.name(),
+                    "cells": e.cells.len(), "trials": n, "cached": hit, "missing": n - hit});
+                if let Some(id) = &e.variant {
+                    v["variant"] = id.clone().into();
+                }
+                v
             })
             .collect();
         let v = serde_json::json!({"pipeline": plan.name, "trials": unique.len(), "cached": unique_hit,
@@ -48,11 +52,18 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             "damaged_segments": scan.damaged.len()});
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
+        let width = plan.variants.iter().map(|v| v.id.len()).max().map_or(0, |w| w.max(7) + 1);
+        if width > 0 {
+            print!("{:<width$}", "variant");
+        }
         println!(
             "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",
             "system", "exp", "repr", "cells", "trials", "cached", "missing"
         );
         for (e, n, hit) in &rows {
+            if width > 0 {
+                print!("{:<width$}", e.variant.as_deref().unwrap_or_default());
+            }
             println!(
                 "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",
                 e.system.name(),
@@ -106,11 +117,12 @@ fn explain(plan: &crate::plan::Plan, records: &[TrialRecord], cached: &HashSet<c
             let missing: Vec<_> = c.trials.iter().filter(|t| !cached.contains(&t.key)).collect();
             let Some(t) = missing.first() else { continue };
             let label = format!(
-                "{} exp {} {} {}",
+                "{}{} exp {} {} {}",
+                e.variant.as_deref().map(|v| format!("[{v}] ")).unwrap_or_default(),
                 e.system.name(),
                 e.id,
                 c.algorithm.name(),
-                c.coords.iter().map(u32::to_string).collect::<Vec<_>>().join("×")
+                c.coords.iter().map(|&v| crate::spec::format_value(v)).collect::<Vec<_>>().join("×")
             );
             let why = match at.get(&position(&c.config, t.seed)) {
                 None => "never computed (no cached trial at this grid position and seed)".to_string(),

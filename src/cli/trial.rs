@@ -1,12 +1,11 @@
 //! `qsweep trial`: one configuration and one seed, with Table II defaults, printed as text or JSON.
 
 use super::args;
-use super::simulate::env_params;
 use crate::error::user_error;
-use crate::sim::config::{Success, TieBreak, TraceKind, TrialConfig};
-use crate::sim::env::SystemKind;
-use crate::sim::repr::ReprKind;
-use crate::sim::{run_trial, Algorithm};
+use crate::sim::config::TrialConfig;
+use crate::sim::env::{SystemKind, TaskKind};
+use crate::sim::run_trial;
+use crate::spec::{load_str, LoadedSpec, Override};
 use clap::{Args, ValueEnum};
 
 /// Representation names on the command line.
@@ -102,22 +101,23 @@ pub struct TrialArgs {
     /// Override a physical parameter, e.g. --param gravity=9.8 (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = args::param)]
     pub params: Vec<(String, f64)>,
+    /// Set any pipeline setting, as in a pipeline's `--set` (repeatable; applied after the flags):
+    /// a bare setting name means `defaults.NAME` (`--set q_init=-1`), `success.`, `params.` and
+    /// `ranges.` paths are the system's (`--set ranges.x_dot=[-1,1]`), others are full pipeline
+    /// paths (`--set systems.cart-pole.success.steps=200`).
+    #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+    pub set: Vec<String>,
     /// Print the outcome (with every episode length) and the resolved configuration as JSON.
     #[arg(long)]
     pub json: bool,
 }
 
-/// Resolve the arguments into a validated trial configuration.
+/// Resolve the arguments into a validated trial configuration through the pipeline path: the
+/// flags become a one-cell pipeline plus `--set` overrides, which `spec` parses and `plan`
+/// resolves exactly as it does a pipeline file, so `qsweep trial` and a pipeline cell with the
+/// same settings have the same configuration and the same cache key.
 pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
     let system = a.env;
-    let repr = match a.repr {
-        ReprArg::Crisp => ReprKind::Crisp,
-        ReprArg::Fuzzy => ReprKind::Fuzzy,
-    };
-    let algorithm = match a.algorithm {
-        AlgorithmArg::Q0 => Algorithm::Q0,
-        AlgorithmArg::QLambda => Algorithm::QLambda,
-    };
     let dim = system.dim();
     let resolution = match a.resolution.0.as_slice() {
         [one] => vec![*one; dim],
@@ -131,62 +131,92 @@ pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
         }
     };
     let actions = a.actions.unwrap_or(system.default_actions());
-    let mut c = TrialConfig::paper(system, repr, algorithm, resolution, actions);
-    c.env = env_params(system, &a.params)?;
-    let l = &mut c.learner;
-    if let Some(v) = a.epsilon {
-        l.epsilon = v;
-    }
-    if let Some(v) = a.gamma {
-        l.gamma = v;
-    }
-    if let Some(v) = a.alpha {
-        l.alpha = v;
-    }
-    if let Some(v) = a.lambda {
-        l.lambda = v;
-    }
-    if let Some(v) = a.q_init {
-        l.q_init = v;
-    }
-    if let Some(t) = a.tie_break {
-        l.tie_break = match t {
-            TieArg::Random => TieBreak::Random,
-            TieArg::First => TieBreak::First,
-        };
-    }
-    if a.replacing_traces {
-        l.traces = TraceKind::Replacing;
-    }
-    l.watkins_cut = a.watkins_cut;
-    if let Some(v) = a.width {
-        c.repr.width = v;
-    }
-    if let Some(v) = a.prune {
-        c.repr.prune = v;
-    }
-    if let Some(v) = a.trace_cutoff {
-        c.learner.trace_cutoff = v;
-    }
-    if let Some(v) = a.max_episodes {
-        c.limits.max_episodes = v;
-    }
-    if let Some(v) = a.max_total_steps {
-        c.limits.max_total_steps = v;
-    }
-    if let Some(v) = a.balance_steps {
-        match &mut c.limits.success {
-            Success::Balance { steps } => *steps = v,
-            Success::Reach { .. } => {
-                return Err(user_error(format!(
-                    "--balance-steps: {system} is a goal-reaching task, not a survival task"
-                )))
-            }
+    let repr = match a.repr {
+        ReprArg::Crisp => "crisp",
+        ReprArg::Fuzzy => "fuzzy",
+    };
+    let algorithm = match a.algorithm {
+        AlgorithmArg::Q0 => "q0",
+        AlgorithmArg::QLambda => "q-lambda",
+    };
+    let fixed: Vec<String> =
+        system.variables().iter().zip(&resolution).map(|(v, r)| format!("{v}: {r}")).collect();
+    let text = format!(
+        "name: trial\nseeds: [{seed}]\nsystems:\n  {system}:\n    experiments:\n      - id: trial\n        repr: {repr}\n        algorithms: [{algorithm}]\n        vary: {{ actions: {actions} }}\n        fixed: {{ {fixed} }}\n",
+        seed = a.seed,
+        fixed = fixed.join(", "),
+    );
+    let mut sets: Vec<String> = Vec::new();
+    let mut setting = |name: &str, v: Option<String>| {
+        if let Some(v) = v {
+            sets.push(format!("defaults.{name}={v}"));
         }
+    };
+    setting("epsilon", a.epsilon.map(|v| v.to_string()));
+    setting("gamma", a.gamma.map(|v| v.to_string()));
+    setting("alpha", a.alpha.map(|v| v.to_string()));
+    setting("lambda", a.lambda.map(|v| v.to_string()));
+    setting("q_init", a.q_init.map(|v| v.to_string()));
+    setting(
+        "tie_break",
+        a.tie_break.map(|t| match t {
+            TieArg::Random => "random".to_string(),
+            TieArg::First => "first".to_string(),
+        }),
+    );
+    setting("traces", a.replacing_traces.then(|| "replacing".to_string()));
+    setting("watkins_cut", a.watkins_cut.then(|| "true".to_string()));
+    setting("width", a.width.map(|v| v.to_string()));
+    setting("prune", a.prune.map(|v| v.to_string()));
+    setting("trace_cutoff", a.trace_cutoff.map(|v| v.to_string()));
+    setting("max_episodes", a.max_episodes.map(|v| v.to_string()));
+    setting("max_total_steps", a.max_total_steps.map(|v| v.to_string()));
+    if let Some(v) = a.balance_steps {
+        if TaskKind::of(system) != TaskKind::Survival {
+            return Err(user_error(format!(
+                "--balance-steps: {system} is a goal-reaching task, not a survival task; use --set success.within=N"
+            )));
+        }
+        sets.push(format!("systems.{system}.success.steps={v}"));
     }
-    c.normalize();
-    c.validate().map_err(|e| user_error(format!("invalid trial: {e}")))?;
-    Ok(c)
+    let mut env = crate::sim::env::EnvParams::default_for(system);
+    for (name, v) in &a.params {
+        env.set_param(name, *v).map_err(|e| user_error(format!("--param: {e}")))?;
+        sets.push(format!("systems.{system}.params.{name}={v}"));
+    }
+    let mut overrides = Vec::new();
+    for s in &sets {
+        overrides.push(Override::parse(s).map_err(user_error)?);
+    }
+    for s in &a.set {
+        overrides.push(trial_override(system, s)?);
+    }
+    let spec = load_str(&text, "qsweep trial", &overrides)?;
+    let loaded = LoadedSpec { spec, path: "qsweep trial".into(), variants: Vec::new() };
+    let plan = crate::plan::plan(&loaded, None)?;
+    let cell = plan
+        .experiments
+        .into_iter()
+        .flat_map(|e| e.cells)
+        .next()
+        .ok_or_else(|| anyhow::anyhow!("the one-cell pipeline of qsweep trial planned no cell"))?;
+    Ok(cell.config)
+}
+
+/// A `--set` of `qsweep trial`: a bare setting name (`start=gym`) means `defaults.NAME`, a path
+/// starting `success.`, `params.` or `ranges.` is the system's, anything else a full pipeline path.
+fn trial_override(system: SystemKind, arg: &str) -> anyhow::Result<Override> {
+    let o = Override::parse(arg).map_err(user_error)?;
+    let mut path = o.path.clone();
+    match path[0].as_str() {
+        "defaults" | "systems" | "seeds" => {}
+        "success" | "params" | "ranges" => {
+            path.splice(0..0, ["systems".to_string(), system.name().to_string()]);
+        }
+        _ if path.len() == 1 => path.insert(0, "defaults".to_string()),
+        _ => {}
+    }
+    Ok(Override { path, ..o })
 }
 
 /// Run `qsweep trial`.

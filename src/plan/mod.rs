@@ -4,7 +4,7 @@
 
 mod resolve;
 
-pub use resolve::{plan, DEFAULT_MAX_TRIALS};
+pub use resolve::{plan, plan_variants, DEFAULT_MAX_TRIALS};
 
 use crate::cache::Key;
 use crate::sim::env::SystemKind;
@@ -27,13 +27,35 @@ pub struct Plan {
     pub reference_source: Option<String>,
     /// Seeds of every cell.
     pub seeds: Vec<u64>,
-    /// Experiments in report order: systems as in the paper's figures, experiments in file order.
+    /// Experiments in report order: variants in file order, then systems as in the paper's
+    /// figures, then experiments in file order.
     pub experiments: Vec<Experiment>,
+    /// The planned variants, in file order (empty when the pipeline declares none).
+    pub variants: Vec<Variant>,
+    /// Notes for the user found while planning (e.g. a variant that changes no trial).
+    pub warnings: Vec<String>,
+}
+
+/// A variant of a pipeline: the whole pipeline with some fields set differently.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variant {
+    /// Identifier (report folder).
+    pub id: String,
+    /// Title.
+    pub title: Option<String>,
+    /// Description.
+    pub description: Option<String>,
+    /// Its `set` entries as `PATH=VALUE`.
+    pub set: Vec<String>,
+    /// Seeds of its cells (a variant may set `seeds`).
+    pub seeds: Vec<u64>,
 }
 
 /// One experiment of one system, expanded into cells.
 #[derive(Debug, Clone)]
 pub struct Experiment {
+    /// The variant this experiment belongs to (`None` for a pipeline without variants).
+    pub variant: Option<String>,
     /// The system.
     pub system: SystemKind,
     /// Identifier (Table I's "Exp." number).
@@ -60,7 +82,7 @@ pub struct Cell {
     /// The algorithm.
     pub algorithm: Algorithm,
     /// One value per axis of the experiment.
-    pub coords: Vec<u32>,
+    pub coords: Vec<f64>,
     /// The fully resolved configuration.
     pub config: TrialConfig,
     /// One trial per seed.
@@ -96,6 +118,41 @@ impl Plan {
             .filter(|(_, _, t)| seen.insert(t.key))
             .map(|(_, c, t)| (&c.config, t.seed, t.key))
             .collect()
+    }
+}
+
+impl Plan {
+    /// The plan of one variant alone (experiments of other variants dropped).
+    pub fn only_variant(&self, id: &str) -> Plan {
+        Plan {
+            experiments: self
+                .experiments
+                .iter()
+                .filter(|e| e.variant.as_deref() == Some(id))
+                .cloned()
+                .collect(),
+            variants: self.variants.iter().filter(|v| v.id == id).cloned().collect(),
+            warnings: Vec::new(),
+            seeds: self
+                .variants
+                .iter()
+                .find(|v| v.id == id)
+                .map_or_else(|| self.seeds.clone(), |v| v.seeds.clone()),
+            ..self.clone_header()
+        }
+    }
+
+    fn clone_header(&self) -> Plan {
+        Plan {
+            name: self.name.clone(),
+            description: self.description.clone(),
+            source: self.source.clone(),
+            reference_source: self.reference_source.clone(),
+            seeds: self.seeds.clone(),
+            experiments: Vec::new(),
+            variants: Vec::new(),
+            warnings: Vec::new(),
+        }
     }
 }
 

@@ -1,14 +1,14 @@
 //! Expanding a typed pipeline into a [`Plan`]: layering settings, building each cell's
 //! `TrialConfig`, validating it, and keying its trials.
 
-use super::{Cell, Experiment, Plan, PlannedTrial};
+use super::{Cell, Experiment, Plan, PlannedTrial, Variant};
 use crate::cache::Key;
 use crate::error::user_error;
 use crate::sim::config::{default_ranges, default_success, Success, TrialConfig};
 use crate::sim::env::{EnvParams, SystemKind};
 use crate::spec::{
-    BalanceSpec, ExperimentSpec, LoadedSpec, PipelineSpec, ReachSpec, Settings, SystemMarker, SystemSpec,
-    Target,
+    format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings,
+    SystemMarker, SystemSpec, Target,
 };
 use crate::spec::{BallBeamM, CartPoleM, MountainCarM};
 
@@ -54,6 +54,22 @@ fn balance(system: SystemKind, s: Option<&BalanceSpec>) -> Success {
 }
 
 impl Settings {
+    /// Take every value `other` sets (generic over the fields, so new settings need no code here).
+    pub fn merge(&mut self, other: &Settings) {
+        let (Ok(serde_yaml::Value::Mapping(mut mine)), Ok(serde_yaml::Value::Mapping(theirs))) =
+            (serde_yaml::to_value(&*self), serde_yaml::to_value(other))
+        else {
+            unreachable!("settings serialise to a mapping")
+        };
+        mine.retain(|_, v| !v.is_null());
+        for (k, v) in theirs {
+            if !v.is_null() {
+                mine.insert(k, v);
+            }
+        }
+        *self = serde_yaml::from_value(serde_yaml::Value::Mapping(mine)).expect("merged settings stay valid");
+    }
+
     /// Overwrite the configuration's values with the ones this level sets.
     pub fn apply(&self, c: &mut TrialConfig) {
         let l = &mut c.learner;
@@ -99,29 +115,86 @@ impl Settings {
     }
 }
 
-/// Expand a loaded pipeline into a plan. Fails (as a user error naming the file) if a resolved
-/// configuration is invalid or the plan exceeds `max_trials`.
+/// Expand a loaded pipeline into a plan (every variant). Fails (as a user error naming the
+/// file) if a resolved configuration is invalid or the plan exceeds `max_trials`.
 pub fn plan(loaded: &LoadedSpec, max_trials: Option<usize>) -> anyhow::Result<Plan> {
+    plan_variants(loaded, max_trials, &[])
+}
+
+/// Like [`plan`], with only the variants named in `select` (all when empty; `--variant`).
+pub fn plan_variants(
+    loaded: &LoadedSpec,
+    max_trials: Option<usize>,
+    select: &[String],
+) -> anyhow::Result<Plan> {
     let spec = &loaded.spec;
     let origin = loaded.path.display().to_string();
+    if loaded.variants.is_empty() && !select.is_empty() {
+        return Err(user_error(format!(
+            "--variant {}: {origin} declares no variants; remove --variant",
+            select[0]
+        )));
+    }
+    for id in select {
+        if !loaded.variants.iter().any(|v| &v.id == id) {
+            let ids: Vec<&str> = loaded.variants.iter().map(|v| v.id.as_str()).collect();
+            let hint = crate::spec::suggest(id, ids.iter().copied())
+                .map(|s| format!("; did you mean `{s}`?"))
+                .unwrap_or_default();
+            return Err(user_error(format!(
+                "--variant {id}: {origin} has no such variant; its variants are {}{hint}",
+                ids.join(", ")
+            )));
+        }
+    }
+    let chosen: Vec<&LoadedVariant> =
+        loaded.variants.iter().filter(|v| select.is_empty() || select.contains(&v.id)).collect();
     if let Some(limit) = max_trials {
         // Counted from the spec, before any configuration is built or hashed, so an accidental
         // huge grid is refused at once.
-        let n = planned_trials(spec);
+        let n: u128 = if chosen.is_empty() {
+            planned_trials(spec)
+        } else {
+            chosen.iter().map(|v| planned_trials(&v.spec)).sum()
+        };
         if n > limit as u128 {
             return Err(too_many(&origin, n, limit));
         }
     }
     let mut experiments = Vec::new();
-    let s = &spec.systems;
-    if let Some(sys) = &s.ball_beam {
-        expand(spec, sys, &origin, &mut experiments)?;
-    }
-    if let Some(sys) = &s.cart_pole {
-        expand(spec, sys, &origin, &mut experiments)?;
-    }
-    if let Some(sys) = &s.mountain_car {
-        expand(spec, sys, &origin, &mut experiments)?;
+    let mut variants = Vec::new();
+    let mut warnings = Vec::new();
+    if chosen.is_empty() {
+        expand_all(spec, &origin, None, &mut experiments)?;
+    } else {
+        let mut as_written = Vec::new();
+        expand_all(spec, &origin, None, &mut as_written)?;
+        let written: std::collections::HashSet<Key> = as_written
+            .iter()
+            .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key)))
+            .collect();
+        for v in chosen {
+            let origin = format!("{origin} (variant {})", v.id);
+            let first = experiments.len();
+            expand_all(&v.spec, &origin, Some(&v.id), &mut experiments)?;
+            let changed = experiments[first..]
+                .iter()
+                .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter()))
+                .any(|t| !written.contains(&t.key));
+            if !v.set.is_empty() && !changed {
+                warnings.push(format!(
+                    "variant `{}` changes no trial (its set gives the same configurations as the pipeline as written)",
+                    v.id
+                ));
+            }
+            variants.push(Variant {
+                id: v.id.clone(),
+                title: v.title.clone(),
+                description: v.description.clone(),
+                set: v.set.clone(),
+                seeds: v.spec.seeds.0.clone(),
+            });
+        }
     }
     let plan = Plan {
         name: spec.name.clone(),
@@ -130,8 +203,34 @@ pub fn plan(loaded: &LoadedSpec, max_trials: Option<usize>) -> anyhow::Result<Pl
         reference_source: spec.reference_source.clone(),
         seeds: spec.seeds.0.clone(),
         experiments,
+        variants,
+        warnings,
     };
     Ok(plan)
+}
+
+/// Expand every system of `spec`, tagging the experiments with `variant`.
+fn expand_all(
+    spec: &PipelineSpec,
+    origin: &str,
+    variant: Option<&str>,
+    out: &mut Vec<Experiment>,
+) -> anyhow::Result<()> {
+    let first = out.len();
+    let s = &spec.systems;
+    if let Some(sys) = &s.ball_beam {
+        expand(spec, sys, origin, out)?;
+    }
+    if let Some(sys) = &s.cart_pole {
+        expand(spec, sys, origin, out)?;
+    }
+    if let Some(sys) = &s.mountain_car {
+        expand(spec, sys, origin, out)?;
+    }
+    for e in &mut out[first..] {
+        e.variant = variant.map(str::to_string);
+    }
+    Ok(())
 }
 
 fn too_many(origin: &str, n: u128, limit: usize) -> anyhow::Error {
@@ -205,41 +304,59 @@ fn expand_experiment<M: Resolve>(
     let mut cells = Vec::with_capacity(grid.len() * e.algorithms.len());
     for &algorithm in &e.algorithms {
         for point in &grid {
-            let coords: Vec<u32> = e.axes.iter().zip(point).map(|(a, &i)| a.values[i]).collect();
-            let mut resolution = vec![0u32; system.dim()];
-            let mut actions = 0;
-            let assignments = fixed
-                .iter()
-                .copied()
-                .chain(e.axes.iter().zip(&coords).flat_map(|(a, &v)| a.targets.iter().map(move |&t| (t, v))));
-            for (t, v) in assignments {
-                match t {
-                    Target::Var(j) => resolution[j] = v,
-                    Target::Actions => actions = v,
-                }
-            }
-            let mut c = TrialConfig::paper(system, e.repr, algorithm, resolution, actions);
-            c.env = env.clone();
-            c.repr.ranges = ranges.to_vec();
-            c.limits.success = success.clone();
-            for level in [&spec.defaults, &sys.settings, repr_settings, &e.settings] {
-                level.apply(&mut c);
-            }
-            c.normalize();
-            c.validate().map_err(|msg| {
+            let coords: Vec<f64> = e.axes.iter().zip(point).map(|(a, &i)| a.values[i]).collect();
+            let at = || coords.iter().map(|&v| format_value(v)).collect::<Vec<_>>().join("×");
+            let fail = |msg: String| {
                 user_error(format!(
                     "{origin}: systems.{system}.experiments[{idx}] (id {}), {} at {}: {msg}",
                     e.id,
                     algorithm.name(),
-                    coords.iter().map(u32::to_string).collect::<Vec<_>>().join("×")
+                    at()
                 ))
-            })?;
+            };
+            let mut resolution = vec![0u32; system.dim()];
+            let mut actions = 0;
+            let assignments = fixed
+                .iter()
+                .map(|&(t, v)| (t, f64::from(v)))
+                .chain(e.axes.iter().zip(&coords).flat_map(|(a, &v)| a.targets.iter().map(move |&t| (t, v))));
+            let mut axis_level = Settings::default();
+            let mut axis_params = Vec::new();
+            for (t, v) in assignments {
+                // Count targets were checked to be whole numbers while parsing.
+                match t {
+                    Target::Var(j) => resolution[j] = v as u32,
+                    Target::Actions => actions = v as u32,
+                    Target::Setting(name) => {
+                        let one = crate::spec::setting_level(name, v)
+                            .map_err(|m| fail(format!("vary.{name}: {m}")))?;
+                        axis_level.merge(&one);
+                    }
+                    Target::Param(name) => axis_params.push((name, v)),
+                }
+            }
+            let mut c = TrialConfig::paper(system, e.repr, algorithm, resolution, actions);
+            c.env = env.clone();
+            for (name, v) in axis_params {
+                c.env.set_param(name, v).map_err(|m| fail(format!("params.{name}: {m}")))?;
+            }
+            c.env.validate().map_err(|m| fail(format!("params: {m}")))?;
+            c.repr.ranges = ranges.to_vec();
+            c.limits.success = success.clone();
+            // An axis over settings is the innermost level: it overrides every `settings:` section.
+            // Its values pass through the same typed, range-checked parse as a settings section.
+            for level in [&spec.defaults, &sys.settings, repr_settings, &e.settings, &axis_level] {
+                level.apply(&mut c);
+            }
+            c.normalize();
+            c.validate().map_err(fail)?;
             let trials =
                 spec.seeds.0.iter().map(|&seed| PlannedTrial { seed, key: Key::of(&c, seed) }).collect();
             cells.push(Cell { algorithm, coords, config: c, trials });
         }
     }
     Ok(Experiment {
+        variant: None,
         system,
         id: e.id.clone(),
         title: e.title.clone(),
@@ -268,7 +385,7 @@ mod tests {
 
     fn plan_of(text: &str) -> Plan {
         let spec = load_str(text, "test.yaml", &[]).unwrap();
-        plan(&LoadedSpec { spec, path: "test.yaml".into() }, None).unwrap()
+        plan(&LoadedSpec { spec, path: "test.yaml".into(), variants: Vec::new() }, None).unwrap()
     }
 
     #[test]
@@ -294,5 +411,47 @@ mod tests {
         assert_eq!(cb.limits.success, Success::Balance { steps: 9 });
         assert_eq!(a.cells[0].trials.iter().map(|t| t.seed).collect::<Vec<_>>(), vec![3, 9]);
         assert_eq!(p.unique_trials().len(), p.trial_count());
+    }
+
+    #[test]
+    fn setting_and_parameter_axes_set_their_field_over_every_settings_level() {
+        let p = plan_of(
+            "name: t\nseeds: 1\nsystems:\n  cart-pole:\n    crisp: { alpha: 0.3, q_init: 5 }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q-lambda], vary: { alpha: [0.05, 0.2], q_init: [-1, 0] }, fixed: { x == x_dot == theta == theta_dot: 3 }, settings: { alpha: 0.4 } }\n      - { id: b, repr: fuzzy, algorithms: [q0], vary: { x == theta: [2, 3], gravity: [9.8, 9.81] }, fixed: { x_dot: 2, theta_dot: 2, actions: 3 } }\n      - { id: c, repr: crisp, algorithms: [q0], vary: { max_episodes: 10..11 }, fixed: { x: 2, x_dot: 2, theta: 2, theta_dot: 2 } }\n",
+        );
+        let a = &p.experiments[0];
+        let got: Vec<(Vec<f64>, f64, f64)> = a
+            .cells
+            .iter()
+            .map(|c| (c.coords.clone(), c.config.learner.alpha, c.config.learner.q_init))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (vec![0.05, -1.0], 0.05, -1.0),
+                (vec![0.05, 0.0], 0.05, 0.0),
+                (vec![0.2, -1.0], 0.2, -1.0),
+                (vec![0.2, 0.0], 0.2, 0.0)
+            ]
+        );
+        assert!(a.cells.iter().all(|c| c.config.repr.resolution == vec![3; 4] && c.config.actions == 2));
+        assert_eq!(a.axes[0].label, "alpha");
+        let b = &p.experiments[1];
+        let g: Vec<f64> = b
+            .cells
+            .iter()
+            .map(|c| match &c.config.env {
+                crate::sim::env::EnvParams::CartPole(p) => p.gravity,
+                _ => unreachable!(),
+            })
+            .collect();
+        assert_eq!(g, vec![9.8, 9.81, 9.8, 9.81]);
+        assert_eq!(b.cells[2].config.repr.resolution, vec![3, 2, 3, 2]);
+        let c = &p.experiments[2];
+        assert_eq!(c.cells.iter().map(|c| c.config.limits.max_episodes).collect::<Vec<_>>(), vec![10, 11]);
+        // The same configuration reached through an axis or through a settings section has one key.
+        let q = plan_of(
+            "name: t\nseeds: 1\nsystems:\n  cart-pole:\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q-lambda], vary: { actions: 2 }, fixed: { x == x_dot == theta == theta_dot: 3 }, settings: { alpha: 0.2, q_init: 0 } }\n",
+        );
+        assert_eq!(q.experiments[0].cells[0].trials[0].key, a.cells[3].trials[0].key);
     }
 }

@@ -182,7 +182,9 @@ impl<DB: DrawingBackend> Canvas<DB> {
 fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str) -> Res {
     cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
     let (w, h) = cv.root.dim_in_pixel();
-    cv.text(title, (w as i32 / 2, HEADER_H as i32 / 2), 20.0, INK, HPos::Center, VPos::Center);
+    // Shrink a title that would not fit a one-column figure (about 0.52 em per character).
+    let size = (w as f64 / (0.52 * title.chars().count() as f64)).min(20.0);
+    cv.text(title, (w as i32 / 2, HEADER_H as i32 / 2), size, INK, HPos::Center, VPos::Center);
     let cols = columns(exps);
     for (r, e) in exps.iter().enumerate() {
         for (c, &alg) in cols.iter().enumerate() {
@@ -281,7 +283,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     let (rows, cols) = if two {
         (&exp.axes[0].values[..], &exp.axes[1].values[..])
     } else {
-        (&[0u32][..], &exp.axes[0].values[..])
+        (&[0.0][..], &exp.axes[0].values[..])
     };
     let (left, right, top) = (ox + 78, ox + PANEL_W as i32 - 88, oy + 52);
     let full = (oy + PANEL_H as i32 - 58 - top) as f64;
@@ -304,7 +306,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     for (ri, &rv) in rows.iter().enumerate() {
         for (ci, &cv_) in cols.iter().enumerate() {
             let (a, b) = (at(ri, ci), at(ri + 1, ci + 1));
-            let coords: Vec<u32> = if two { vec![rv, cv_] } else { vec![cv_] };
+            let coords: Vec<f64> = if two { vec![rv, cv_] } else { vec![cv_] };
             let idx = e.find(alg, &coords);
             let cell = idx.map(|i| &e.cells[i]);
             let fill = cell.and_then(|c| c.summary.mean).map_or(MISSING, |m| viridis(scale(m)));
@@ -334,14 +336,14 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     // Ticks and axis labels.
     for (ci, v) in cols.iter().enumerate() {
         let x = left + ((ci as f64 + 0.5) * cw).round() as i32;
-        cv.text(&v.to_string(), (x, bottom + 5), 12.0, INK, HPos::Center, VPos::Top);
+        cv.text(&crate::spec::format_value(*v), (x, bottom + 5), 12.0, INK, HPos::Center, VPos::Top);
     }
     let col_axis = &exp.axes[usize::from(two)].label;
     cv.text(col_axis, ((left + right) / 2, bottom + 25), 13.0, INK, HPos::Center, VPos::Top);
     if two {
         for (ri, v) in rows.iter().enumerate() {
             let y = top + ((ri as f64 + 0.5) * ch).round() as i32;
-            cv.text(&v.to_string(), (left - 6, y), 12.0, INK, HPos::Right, VPos::Center);
+            cv.text(&crate::spec::format_value(*v), (left - 6, y), 12.0, INK, HPos::Right, VPos::Center);
         }
         cv.text_up(&exp.axes[0].label, (ox + 30, (top + bottom) / 2), 13.0, INK);
     }

@@ -49,6 +49,54 @@ pub struct ReportSummary {
     pub files: Vec<PathBuf>,
 }
 
+/// Write the report of `plan` into `dir`: for a pipeline without variants, [`write_report`]; with
+/// variants, each variant's full report into `dir/<variant-id>/`, and into `dir` itself the
+/// comparison of the variants and `cells.parquet` / `trials.parquet` of all of them (with a
+/// `variant` column). Returns the summary of the whole plan.
+pub fn write_reports(
+    plan: &Plan,
+    records: &HashMap<Key, TrialRecord>,
+    dir: &Path,
+) -> anyhow::Result<ReportSummary> {
+    if plan.variants.is_empty() {
+        return write_report(plan, records, dir);
+    }
+    std::fs::create_dir_all(dir.join("figures"))
+        .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
+    let subs: Vec<Plan> = plan.variants.iter().map(|v| plan.only_variant(&v.id)).collect();
+    let mut files = Vec::new();
+    for (v, sub) in plan.variants.iter().zip(&subs) {
+        let s = write_report(sub, records, &dir.join(&v.id))?;
+        files.extend(s.files.into_iter().map(|f| Path::new(&v.id).join(f)));
+    }
+    let data = ReportData::build(plan, records);
+    write_atomic(&dir.join("cells.parquet"), &parquet::cells_parquet(&data)?)?;
+    write_atomic(&dir.join("trials.parquet"), &parquet::trials_parquet(&data)?)?;
+    files.extend(["cells.parquet", "trials.parquet"].map(PathBuf::from));
+    let per_variant: Vec<(variants::VariantInfo, ReportData)> = plan
+        .variants
+        .iter()
+        .zip(&subs)
+        .map(|(v, sub)| {
+            (
+                variants::VariantInfo { id: v.id.clone(), title: v.title.clone() },
+                ReportData::build(sub, records),
+            )
+        })
+        .collect();
+    files.extend(variants::write_comparison(dir, &per_variant)?);
+    let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
+    Ok(ReportSummary {
+        experiments: data.experiments.len(),
+        cells: cells.len(),
+        cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
+        trials_planned: data.trials_planned,
+        trials_present: data.trials_present,
+        trials_missing: data.trials_planned - data.trials_present,
+        files,
+    })
+}
+
 /// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it.
 pub fn write_report(
     plan: &Plan,

@@ -108,7 +108,7 @@ impl ExpData<'_> {
     }
 
     /// The index of the cell with this algorithm and coordinates.
-    pub fn find(&self, algorithm: Algorithm, coords: &[u32]) -> Option<usize> {
+    pub fn find(&self, algorithm: Algorithm, coords: &[f64]) -> Option<usize> {
         self.cells.iter().position(|c| c.cell.algorithm == algorithm && c.cell.coords == coords)
     }
 }

@@ -5,6 +5,7 @@
 //!
 //! | column | type | meaning |
 //! | --- | --- | --- |
+//! | `variant` | utf8 | the variant's id; only in pipelines that declare `variants:` |
 //! | `system` | utf8 | `ball-beam`, `cart-pole`, `mountain-car` |
 //! | `system_title` | utf8 | as the paper writes it, e.g. `Ball-Beam` |
 //! | `experiment` | utf8 | experiment id (Table I's "Exp.") |
@@ -12,8 +13,8 @@
 //! | `repr` | utf8 | `crisp` or `fuzzy` |
 //! | `algorithm` | utf8 | `q0` or `q-lambda` |
 //! | `label` | utf8 | e.g. `Fuzzy Q(λ)-learning` |
-//! | `axis1_label`, `axis1_value` | utf8, uint32 | first varied axis (heatmap rows), e.g. `x == theta`, 3 |
-//! | `axis2_label`, `axis2_value` | utf8 null, uint32 null | second varied axis (columns); null for 1-axis experiments |
+//! | `axis1_label`, `axis1_value` | utf8, float64 | first varied axis (heatmap rows), e.g. `x == theta`, 3 (or a setting, e.g. `alpha`, 0.05) |
+//! | `axis2_label`, `axis2_value` | utf8 null, float64 null | second varied axis (columns); null for 1-axis experiments |
 //! | `x`, `x_dot`, `theta`, `theta_dot` | uint32, null | bins or fuzzy sets per state variable; null where the system has no such variable |
 //! | `actions` | uint32 | number of actions n of A_n |
 //! | `max_episodes` | uint32 | the episode cap, at which non-converged trials are counted |
@@ -111,6 +112,10 @@ impl Cols {
         fn res(r: &Id) -> [Option<u32>; 4] {
             resolution_columns(exp(r).system, &cell(r).config.repr.resolution)
         }
+        // Only pipelines with variants have the column, so other pipelines' files keep their bytes.
+        if ids.iter().any(|r| exp(r).variant.is_some()) {
+            self.str("variant", ids, |r| exp(r).variant.clone().unwrap_or_default());
+        }
         self.str("system", ids, |r| exp(r).system.name().into());
         self.str("system_title", ids, |r| exp(r).system.title().into());
         self.str("experiment", ids, |r| exp(r).id.clone());
@@ -119,9 +124,9 @@ impl Cols {
         self.str("algorithm", ids, |r| cell(r).algorithm.name().into());
         self.str("label", ids, |r| cell(r).algorithm.label(exp(r).repr).into());
         self.str("axis1_label", ids, |r| exp(r).axes[0].label.clone());
-        self.u32("axis1_value", ids, |r| cell(r).coords[0]);
+        self.f64("axis1_value", ids, |r| cell(r).coords[0]);
         self.str_opt("axis2_label", ids, |r| exp(r).axes.get(1).map(|a| a.label.clone()));
-        self.u32_opt("axis2_value", ids, |r| cell(r).coords.get(1).copied());
+        self.f64_opt("axis2_value", ids, |r| cell(r).coords.get(1).copied());
         self.u32_opt("x", ids, |r| res(r)[0]);
         self.u32_opt("x_dot", ids, |r| res(r)[1]);
         self.u32_opt("theta", ids, |r| res(r)[2]);

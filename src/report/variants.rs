@@ -296,14 +296,10 @@ impl Picture for Diffs<'_, '_> {
     fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>) -> Res {
         cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (w, h) = cv.root.dim_in_pixel();
-        cv.text(
-            self.title,
-            (w as i32 / 2, figures::HEADER_H as i32 / 2),
-            20.0,
-            INK,
-            HPos::Center,
-            VPos::Center,
-        );
+        // Shrink a title that would not fit a one-column figure (as the system's figure does).
+        let size = (w as f64 / (0.52 * self.title.chars().count() as f64)).min(20.0);
+        let at = (w as i32 / 2, figures::HEADER_H as i32 / 2);
+        cv.text(self.title, at, size, INK, HPos::Center, VPos::Center);
         let cols = columns(self.exps);
         for (r, e) in self.exps.iter().enumerate() {
             for (c, &alg) in cols.iter().enumerate() {
@@ -383,7 +379,7 @@ fn diff_panel<DB: DrawingBackend>(
     let (rows, cols) = if two {
         (&exp.axes[0].values[..], &exp.axes[1].values[..])
     } else {
-        (&[0u32][..], &exp.axes[0].values[..])
+        (&[0.0][..], &exp.axes[0].values[..])
     };
     let (left, right, top) = (ox + 78, ox + pw - 88, oy + 52);
     let full = (oy + ph - 58 - top) as f64;
@@ -401,7 +397,7 @@ fn diff_panel<DB: DrawingBackend>(
     for (ri, &rv) in rows.iter().enumerate() {
         for (ci, &cv_) in cols.iter().enumerate() {
             let (a, b) = (at(ri, ci), at(ri + 1, ci + 1));
-            let coords: Vec<u32> = if two { vec![rv, cv_] } else { vec![cv_] };
+            let coords: Vec<f64> = if two { vec![rv, cv_] } else { vec![cv_] };
             let d =
                 e.find(alg, &coords).and_then(|i| diffs.iter().find(|(j, _)| *j == i)).and_then(|(_, d)| *d);
             let fill = d.map_or(MISSING, |d| diverging(scale(d.diff)));
@@ -423,14 +419,14 @@ fn diff_panel<DB: DrawingBackend>(
 
     for (ci, v) in cols.iter().enumerate() {
         let x = left + ((ci as f64 + 0.5) * cw).round() as i32;
-        cv.text(&v.to_string(), (x, bottom + 5), 12.0, INK, HPos::Center, VPos::Top);
+        cv.text(&crate::spec::format_value(*v), (x, bottom + 5), 12.0, INK, HPos::Center, VPos::Top);
     }
     let col_axis = &exp.axes[usize::from(two)].label;
     cv.text(col_axis, ((left + right) / 2, bottom + 25), 13.0, INK, HPos::Center, VPos::Top);
     if two {
         for (ri, v) in rows.iter().enumerate() {
             let y = top + ((ri as f64 + 0.5) * ch).round() as i32;
-            cv.text(&v.to_string(), (left - 6, y), 12.0, INK, HPos::Right, VPos::Center);
+            cv.text(&crate::spec::format_value(*v), (left - 6, y), 12.0, INK, HPos::Right, VPos::Center);
         }
         cv.text_up(&exp.axes[0].label, (ox + 30, (top + bottom) / 2), 13.0, INK);
     }
@@ -612,7 +608,7 @@ systems:
     fn plan_with(sets: &[&str]) -> Plan {
         let overrides: Vec<Override> = sets.iter().map(|s| Override::parse(s).unwrap()).collect();
         let spec = load_str(PIPELINE, "vt.yaml", &overrides).unwrap();
-        plan(&LoadedSpec { spec, path: "vt.yaml".into() }, None).unwrap()
+        plan(&LoadedSpec { spec, path: "vt.yaml".into(), variants: Vec::new() }, None).unwrap()
     }
 
     fn run_all(plan: &Plan) -> HashMap<Key, TrialRecord> {

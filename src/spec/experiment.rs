@@ -2,7 +2,8 @@
 //! resolution grid in Table I's notation — `vary` holds the varied axes `v(·)`, each a group of
 //! variables sharing one value (`x == theta`), `fixed` the constants `c(·)`.
 
-use super::{variable_index, Ranges, Settings, SystemMarker, Values};
+use super::{suggest, variable_index, AxisValues, Ranges, Settings, SystemMarker};
+use crate::sim::env::{EnvParams, SystemKind};
 use crate::sim::repr::ReprKind;
 use crate::sim::Algorithm;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
@@ -18,17 +19,59 @@ pub enum Target {
     Var(usize),
     /// The number of actions n of A_n.
     Actions,
+    /// A numeric setting ([`AXIS_SETTINGS`]), e.g. `alpha` (axes only).
+    Setting(&'static str),
+    /// A physical parameter of the system, e.g. `gravity` (axes only).
+    Param(&'static str),
 }
+
+impl Target {
+    /// Whether the target takes a count (bins, sets, actions) rather than any number.
+    pub fn is_count(self) -> bool {
+        matches!(self, Target::Var(_) | Target::Actions)
+    }
+}
+
+/// Numeric settings that a `vary` axis may sweep (the keys of a `settings:` section).
+pub const AXIS_SETTINGS: &[&str] = &[
+    "epsilon",
+    "gamma",
+    "alpha",
+    "lambda",
+    "q_init",
+    "trace_cutoff",
+    "width",
+    "prune",
+    "max_episodes",
+    "max_total_steps",
+];
 
 /// A varied axis: a group of targets that share each value.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
-    /// Table I-style label, e.g. `x == theta`.
+    /// Table I-style label, e.g. `x == theta` or `alpha`.
     pub label: String,
     /// The grouped targets.
     pub targets: Vec<Target>,
-    /// Values, in file order.
-    pub values: Vec<u32>,
+    /// Values, in file order (whole numbers for bins, sets and actions).
+    pub values: Vec<f64>,
+}
+
+impl Axis {
+    /// Whether the axis sweeps counts (bins, sets, actions) rather than a setting or parameter.
+    pub fn is_count(&self) -> bool {
+        self.targets.iter().all(|t| t.is_count())
+    }
+}
+
+/// A grid value as written in labels: whole numbers without a decimal point, others in their
+/// shortest round-trip form.
+pub fn format_value(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v}")
+    }
 }
 
 /// A published result to compare with (e.g. the paper's Table III row).
@@ -126,10 +169,23 @@ fn id_string<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
     d.deserialize_any(V)
 }
 
-fn parse_targets(system: crate::sim::env::SystemKind, key: &str) -> Result<Vec<Target>, String> {
+/// The targets named by a `vary`/`fixed` key such as `x == theta`; `axis` also allows numeric
+/// settings and physical parameters.
+fn parse_targets(system: SystemKind, key: &str, axis: bool) -> Result<Vec<Target>, String> {
+    let params = EnvParams::default_for(system).param_names();
     let mut out = Vec::new();
     for name in key.split("==").map(str::trim) {
-        let t = if name == "actions" { Target::Actions } else { Target::Var(variable_index(system, name)?) };
+        let t = if name == "actions" {
+            Target::Actions
+        } else if let Ok(j) = variable_index(system, name) {
+            Target::Var(j)
+        } else if let (true, Some(s)) = (axis, AXIS_SETTINGS.iter().find(|s| **s == name)) {
+            Target::Setting(s)
+        } else if let (true, Some(p)) = (axis, params.iter().find(|p| **p == name)) {
+            Target::Param(p)
+        } else {
+            return Err(unknown_target(system, name, axis));
+        };
         if out.contains(&t) {
             return Err(format!("`{key}` names `{name}` twice"));
         }
@@ -138,16 +194,51 @@ fn parse_targets(system: crate::sim::env::SystemKind, key: &str) -> Result<Vec<T
     if out.contains(&Target::Actions) && out.len() > 1 {
         return Err(format!("`{key}`: actions cannot share a value with state variables"));
     }
+    if out.iter().any(|t| t.is_count()) && out.iter().any(|t| !t.is_count()) {
+        return Err(format!(
+            "`{key}`: bins and actions cannot share a value with settings or parameters; give them separate axes"
+        ));
+    }
     Ok(out)
 }
 
-fn check_value(t: Target, v: u32, what: &str) -> Result<(), String> {
+fn unknown_target(system: SystemKind, name: &str, axis: bool) -> String {
+    let vars = system.variables();
+    let params = EnvParams::default_for(system).param_names();
+    let mut all: Vec<&str> = vars.iter().copied().chain(["actions"]).collect();
+    if axis {
+        all.extend(AXIS_SETTINGS.iter().copied().chain(params.iter().copied()));
+    }
+    let hint =
+        suggest(name, all.iter().copied()).map(|s| format!("; did you mean `{s}`?")).unwrap_or_default();
+    if axis {
+        format!(
+            "unknown axis `{name}` for {system}: an axis is a state variable ({}), `actions`, a numeric setting ({}) or a physical parameter ({}){hint}",
+            vars.join(", "),
+            AXIS_SETTINGS.join(", "),
+            params.join(", ")
+        )
+    } else {
+        format!(
+            "unknown variable `{name}` for {system}; its variables are {}, or `actions`{hint}",
+            vars.join(", ")
+        )
+    }
+}
+
+fn check_value(t: Target, v: f64, what: &str) -> Result<(), String> {
+    if t.is_count() && !(v.fract() == 0.0 && v >= 0.0 && v <= f64::from(u32::MAX)) {
+        return Err(format!("{what}: {v} is not allowed; bins, fuzzy sets and actions are whole numbers"));
+    }
     match t {
-        Target::Actions if v < 2 => Err(format!("{what}: {v} actions is not allowed; A_n needs n ≥ 2")),
-        Target::Var(_) if v < 1 => {
+        Target::Actions if v < 2.0 => Err(format!("{what}: {v} actions is not allowed; A_n needs n ≥ 2")),
+        Target::Var(_) if v < 1.0 => {
             Err(format!("{what}: {v} is not allowed; every variable needs at least 1 bin or fuzzy set"))
         }
-        Target::Var(_) if v > 1 << 20 => Err(format!("{what}: {v} is too many bins")),
+        Target::Var(_) if v > f64::from(1u32 << 20) => Err(format!("{what}: {v} is too many bins")),
+        Target::Setting(name) => {
+            super::setting_level(name, v).map(|_| ()).map_err(|m| format!("{what}: {m}"))
+        }
         _ => Ok(()),
     }
 }
@@ -169,9 +260,9 @@ impl<'de, M: SystemMarker> Deserialize<'de> for AxesRaw<M> {
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<AxesRaw<M>, A::Error> {
                 let mut axes: Vec<Axis> = Vec::new();
                 while let Some(key) = map.next_key::<String>()? {
-                    let targets = parse_targets(M::SYSTEM, &key).map_err(de::Error::custom)?;
+                    let targets = parse_targets(M::SYSTEM, &key, true).map_err(de::Error::custom)?;
                     let label = targets_label(M::SYSTEM, &targets);
-                    let values: Values = map.next_value()?;
+                    let values: AxisValues = map.next_value()?;
                     for &t in &targets {
                         for &v in &values.0 {
                             check_value(t, v, &format!("vary.{label}")).map_err(de::Error::custom)?;
@@ -222,10 +313,10 @@ impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
             fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<FixedRaw<M>, A::Error> {
                 let mut out: Vec<(Target, u32)> = Vec::new();
                 while let Some(key) = map.next_key::<String>()? {
-                    let targets = parse_targets(M::SYSTEM, &key).map_err(de::Error::custom)?;
+                    let targets = parse_targets(M::SYSTEM, &key, false).map_err(de::Error::custom)?;
                     let v: u32 = map.next_value()?;
                     for t in targets {
-                        check_value(t, v, &format!("fixed.{key}")).map_err(de::Error::custom)?;
+                        check_value(t, f64::from(v), &format!("fixed.{key}")).map_err(de::Error::custom)?;
                         if out.iter().any(|(o, _)| *o == t) {
                             return Err(de::Error::custom(format!(
                                 "fixed: `{}` is set twice",
@@ -243,14 +334,15 @@ impl<'de, M: SystemMarker> Deserialize<'de> for FixedRaw<M> {
 }
 
 /// Name of a target for messages and labels.
-pub fn target_name(system: crate::sim::env::SystemKind, t: Target) -> &'static str {
+pub fn target_name(system: SystemKind, t: Target) -> &'static str {
     match t {
         Target::Var(j) => system.variables()[j],
         Target::Actions => "actions",
+        Target::Setting(s) | Target::Param(s) => s,
     }
 }
 
-fn targets_label(system: crate::sim::env::SystemKind, targets: &[Target]) -> String {
+fn targets_label(system: SystemKind, targets: &[Target]) -> String {
     targets.iter().map(|&t| target_name(system, t)).collect::<Vec<_>>().join(" == ")
 }
 

@@ -1,7 +1,7 @@
 //! Reading a pipeline file: every failure becomes one message naming the file, line and column,
 //! the field, and what is allowed.
 
-use super::{suggest, Override, PipelineSpec};
+use super::{suggest, LoadedVariant, Override, PipelineSpec};
 use crate::error::user_error;
 use std::path::{Path, PathBuf};
 
@@ -15,6 +15,8 @@ pub struct LoadedSpec {
     pub spec: PipelineSpec,
     /// The file it was read from.
     pub path: PathBuf,
+    /// Its variants, resolved (empty when the pipeline declares none).
+    pub variants: Vec<LoadedVariant>,
 }
 
 /// Read, parse and type a pipeline file, then apply `--set` overrides.
@@ -41,7 +43,8 @@ pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
         user_error(format!("{shown}:{line}: the file is not valid UTF-8 (byte {at}); save it as UTF-8"))
     })?;
     let spec = load_str(&text, &shown.to_string(), overrides)?;
-    Ok(LoadedSpec { spec, path: path.to_path_buf() })
+    let variants = super::variants::resolve(&spec, &text, &shown.to_string(), overrides)?;
+    Ok(LoadedSpec { spec, path: path.to_path_buf(), variants })
 }
 
 /// Parse pipeline text; `origin` names it in messages.
@@ -87,6 +90,11 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         let (msg, _) = split_location(&e);
         user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), improve(&msg)))
     })
+}
+
+/// A typing error's message without its position, with "did you mean" where it helps.
+pub(super) fn message(e: &serde_yaml::Error) -> String {
+    improve(&split_location(e).0)
 }
 
 /// serde_yaml's message without its " at line L column C" suffix, and the location.

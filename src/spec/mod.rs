@@ -23,13 +23,17 @@
 
 mod experiment;
 mod load;
+mod locate;
 mod overrides;
 mod values;
+mod variants;
 
-pub use experiment::{target_name, Axis, ExperimentSpec, Reference, Target};
+pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference, Target, AXIS_SETTINGS};
 pub use load::{load, load_str, LoadedSpec};
+pub use locate::locate;
 pub use overrides::Override;
-pub use values::{Finite, Positive, Seeds, SubUnit, Unit, Values};
+pub use values::{AxisValues, Finite, Positive, Seeds, SubUnit, Unit, Values};
+pub use variants::{LoadedVariant, VariantSpec};
 
 use crate::sim::config::{TieBreak, TraceKind};
 use crate::sim::env::{BallBeamParams, CartPoleParams, EnvParams, MountainCarParams, SystemKind};
@@ -58,6 +62,13 @@ pub struct PipelineSpec {
     pub defaults: Settings,
     /// The systems and their experiments.
     pub systems: Systems,
+    /// Alternative readings or settings of the whole pipeline (see [`variants`]).
+    #[serde(default, deserialize_with = "opt_variants")]
+    pub variants: Option<Vec<VariantSpec>>,
+}
+
+fn opt_variants<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<VariantSpec>>, D::Error> {
+    variants::variants(d).map(Some)
 }
 
 /// The systems a pipeline covers; at least one.
@@ -227,6 +238,23 @@ pub struct Settings {
     pub max_total_steps: Option<u64>,
 }
 
+/// A settings level that sets only `name` to `v`, through the same typed, range-checked parse as
+/// a `settings:` section (so an axis value obeys the same rules as a written one).
+pub fn setting_level(name: &str, v: f64) -> Result<Settings, String> {
+    let mut m = serde_yaml::Mapping::new();
+    m.insert(name.into(), yaml_number(v));
+    serde_yaml::from_value(serde_yaml::Value::Mapping(m)).map_err(|e| e.to_string())
+}
+
+/// A YAML number for `v`: an integer when `v` is whole, so integer settings (`max_episodes`) accept it.
+fn yaml_number(v: f64) -> serde_yaml::Value {
+    if v.fract() == 0.0 && v.abs() < 9e15 {
+        serde_yaml::Value::Number((v as i64).into())
+    } else {
+        serde_yaml::Value::Number(v.into())
+    }
+}
+
 /// Per-variable ranges of one system, checked against its variable names.
 #[derive(Debug, Clone)]
 pub struct Ranges<M> {
@@ -305,19 +333,25 @@ fn edit_distance(a: &str, b: &str) -> usize {
     prev[b.len()]
 }
 
-fn safe_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
-    let s = String::deserialize(d)?;
+/// Whether `s` is safe as one folder name on every platform: 1-100 letters, digits, '-', '_' or
+/// '.', not starting with '.'.
+pub fn safe_folder_name(s: &str) -> Result<(), String> {
     let ok = !s.is_empty()
         && s.len() <= 100
         && s.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
         && !s.starts_with('.');
     if ok {
-        Ok(s)
+        Ok(())
     } else {
-        Err(de::Error::custom(format!(
-            "name `{s}` is not allowed; use 1-100 letters, digits, '-', '_' or '.', not starting with '.' (it names the report folder)"
-        )))
+        Err("use 1-100 letters, digits, '-', '_' or '.', not starting with '.' (it names the report folder)"
+            .into())
     }
+}
+
+fn safe_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    let s = String::deserialize(d)?;
+    safe_folder_name(&s).map_err(|why| de::Error::custom(format!("name `{s}` is not allowed; {why}")))?;
+    Ok(s)
 }
 
 fn experiments<'de, M: SystemMarker, D: Deserializer<'de>>(d: D) -> Result<Vec<ExperimentSpec<M>>, D::Error> {

@@ -102,6 +102,59 @@ impl<'de> Deserialize<'de> for Values {
     }
 }
 
+/// Values of a `vary` axis: a number, a list of numbers, or an inclusive integer range `"A..B"`.
+/// Bins, sets and actions are checked to be whole numbers where the axis is known.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisValues(pub Vec<f64>);
+
+impl<'de> Deserialize<'de> for AxisValues {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = AxisValues;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number, a list of numbers, or a range like \"2..10\"")
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<AxisValues, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<AxisValues, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<AxisValues, E> {
+                if v.is_finite() {
+                    Ok(AxisValues(vec![v]))
+                } else {
+                    Err(E::custom(format!("{v} is not allowed; expected a finite number")))
+                }
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<AxisValues, E> {
+                Values::deserialize(de::value::StrDeserializer::<E>::new(s))
+                    .map(|v| AxisValues(v.0.into_iter().map(f64::from).collect()))
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<AxisValues, A::Error> {
+                let mut out: Vec<f64> = Vec::new();
+                while let Some(v) = seq.next_element::<f64>()? {
+                    if !v.is_finite() {
+                        return Err(de::Error::custom(format!(
+                            "{v} is not allowed; expected a finite number"
+                        )));
+                    }
+                    if out.contains(&v) {
+                        return Err(de::Error::custom(format!("value {v} is listed twice")));
+                    }
+                    out.push(v);
+                }
+                if out.is_empty() {
+                    return Err(de::Error::custom("the list of values is empty; give at least one"));
+                }
+                Ok(AxisValues(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
 /// The seeds of every cell: a count `n` (seeds 0..n−1) or an explicit list.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Seeds(pub Vec<u64>);

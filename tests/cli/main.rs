@@ -10,3 +10,4 @@ mod report_files;
 mod simulate;
 mod slurm;
 mod trial;
+mod variants;

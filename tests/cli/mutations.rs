@@ -71,7 +71,7 @@ proptest! {
         }
         match qsweep::spec::load_str(&text, "mutant.yaml", &[]) {
             Ok(spec) => {
-                let loaded = qsweep::spec::LoadedSpec { spec, path: "mutant.yaml".into() };
+                let loaded = qsweep::spec::LoadedSpec { spec, path: "mutant.yaml".into(), variants: Vec::new() };
                 if let Err(err) = qsweep::plan::plan(&loaded, Some(200_000)) {
                     prop_assert!(err.downcast_ref::<UserError>().is_some(), "{err:#}");
                     prop_assert!(err.to_string().contains("mutant.yaml"), "{err:#}");

@@ -146,7 +146,13 @@ pub fn cell_table(e: &ExpData) -> Table {
         .map(|(i, c)| {
             let s = &c.summary;
             let mut values = vec![Value::Text(c.cell.algorithm.label(exp.repr).into())];
-            values.extend(c.cell.coords.iter().map(|&v| Value::Int(u64::from(v))));
+            values.extend(c.cell.coords.iter().map(|&v| {
+                if v.fract() == 0.0 && (0.0..9e15).contains(&v) {
+                    Value::Int(v as u64)
+                } else {
+                    Value::Text(crate::spec::format_value(v))
+                }
+            }));
             values.push(Value::Int(c.trials.len() as u64));
             values.push(Value::Int(c.successes as u64));
             values.push(s.mean.map_or(Value::Missing, |mean| Value::MeanStd {
