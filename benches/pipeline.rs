@@ -42,7 +42,7 @@ fn main() {
     let store = Store::open(dir.path()).unwrap();
     let records: Vec<TrialRecord> = unique
         .iter()
-        .map(|&(config, seed, _)| {
+        .map(|t| {
             let outcome = Outcome {
                 converged: true,
                 episodes_to_goal: Some(20),
@@ -52,7 +52,7 @@ fn main() {
                 failure: None,
                 episode_lengths: vec![500; 20],
             };
-            TrialRecord::new(config.clone(), seed, outcome, 0.1)
+            TrialRecord::new(t.config.clone(), t.seed, outcome, 0.1)
         })
         .collect();
     let start = Instant::now();

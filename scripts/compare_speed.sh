@@ -26,7 +26,7 @@ for py in baseline:
         ["target/release/qsweep", "bench", "--json", "--steps", steps, "--filter", py["config"]],
         check=True, capture_output=True, text=True,
     ).stdout
-    rs = [r for r in json.loads(out) if r["config"] == py["config"]][0]
+    rs = [r for r in json.loads(out)["results"] if r["config"] == py["config"]][0]
     ratio = rs["steps_per_s"] / py["steps_per_s"]
     print(f"{py['config']:<40} {py['steps_per_s']:>15,.0f} {rs['steps_per_s']:>15,.0f} {ratio:>7.0f}×", flush=True)
 PY

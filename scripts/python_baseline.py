@@ -145,7 +145,7 @@ def run_fuzzy(sets, n_actions, steps):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--json", action="store_true", help="print a JSON list like `qsweep bench --json`")
+    p.add_argument("--json", action="store_true", help="print a JSON list like the `results` of `qsweep bench --json`")
     p.add_argument("--filter", default="", help="only configurations whose name contains this")
     p.add_argument("--scale", type=float, default=1.0, help="multiply every step budget by this")
     args = p.parse_args()

@@ -9,7 +9,7 @@ use crate::sim::config::{Success, TrialConfig};
 use crate::sim::env::SystemKind;
 use crate::sim::repr::ReprKind;
 use crate::sim::{run_trial, Algorithm};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Default step budget per run.
@@ -29,7 +29,7 @@ pub struct BenchCase {
 }
 
 /// The measured speed of one configuration.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BenchResult {
     /// The case name.
     pub config: String,

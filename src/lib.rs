@@ -2,8 +2,10 @@
 //! "Performance analysis of tabular and Fuzzy Q-learning under varying state and action space
 //! resolution".
 
+pub mod atomic;
 pub mod bench;
 pub mod cache;
+pub mod parquet_io;
 pub mod plan;
 pub mod report;
 pub mod sim;

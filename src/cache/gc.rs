@@ -67,7 +67,7 @@ impl Store {
         for entry in std::fs::read_dir(self.dir())? {
             let entry = entry?;
             let stale = entry.metadata()?.modified()?.elapsed().is_ok_and(|age| age > STALE_TEMP);
-            if entry.file_name().to_string_lossy().starts_with(".tmp-") && stale {
+            if entry.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX) && stale {
                 report.stale_temps += 1;
                 if !dry_run {
                     std::fs::remove_file(entry.path())?;

@@ -15,21 +15,17 @@
 
 use super::record::TrialRecord;
 use super::Key;
-use crate::sim::config::TrialConfig;
+use crate::atomic::write_atomic;
+use crate::parquet_io::{column, to_parquet, Cols};
+use crate::sim::config::{TieBreak, TrialConfig};
 use crate::sim::{Outcome, StopReason};
-use arrow::array::{
-    Array, ArrayRef, BooleanArray, BooleanBuilder, Float64Array, Float64Builder, ListArray, ListBuilder,
-    StringArray, StringBuilder, UInt32Array, UInt32Builder, UInt64Array, UInt64Builder,
-};
-use arrow::datatypes::{DataType, Field, Schema, SchemaRef};
+use arrow::array::{Array, BooleanArray, Float64Array, ListArray, StringArray, UInt32Array, UInt64Array};
+use arrow::datatypes::SchemaRef;
 use arrow::record_batch::RecordBatch;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
-use parquet::arrow::{ArrowWriter, ProjectionMask};
-use parquet::basic::{Compression, ZstdLevel};
-use parquet::file::properties::WriterProperties;
+use parquet::arrow::ProjectionMask;
 use std::collections::HashSet;
 use std::fs::File;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
@@ -61,37 +57,41 @@ pub const SEGMENT_PREFIX: &str = "seg-";
 /// | `seconds` | float64 | wall-clock time of the trial (informational only) |
 pub fn schema() -> SchemaRef {
     static SCHEMA: OnceLock<SchemaRef> = OnceLock::new();
-    SCHEMA
-        .get_or_init(|| {
-            let list = || DataType::List(Arc::new(Field::new("item", DataType::UInt32, true)));
-            let f = |name: &str, t: DataType, null: bool| Field::new(name, t, null);
-            Arc::new(Schema::new(vec![
-                f("key", DataType::Utf8, false),
-                f("engine_version", DataType::UInt32, false),
-                f("system", DataType::Utf8, false),
-                f("repr", DataType::Utf8, false),
-                f("algorithm", DataType::Utf8, false),
-                f("resolution", list(), false),
-                f("actions", DataType::UInt32, false),
-                f("epsilon", DataType::Float64, false),
-                f("gamma", DataType::Float64, false),
-                f("alpha", DataType::Float64, false),
-                f("lambda", DataType::Float64, false),
-                f("q_init", DataType::Float64, false),
-                f("tie_break", DataType::Utf8, false),
-                f("seed", DataType::UInt64, false),
-                f("config_json", DataType::Utf8, false),
-                f("converged", DataType::Boolean, false),
-                f("episodes_to_goal", DataType::UInt32, true),
-                f("episodes", DataType::UInt32, false),
-                f("total_steps", DataType::UInt64, false),
-                f("stop", DataType::Utf8, false),
-                f("failure", DataType::Utf8, true),
-                f("episode_lengths", list(), false),
-                f("seconds", DataType::Float64, false),
-            ]))
-        })
-        .clone()
+    SCHEMA.get_or_init(|| Arc::new(columns(&[]).schema())).clone()
+}
+
+/// The segment columns of `records`: the one definition of the cache schema (see [`schema`]).
+/// Changing a name, type, nullability or the order here makes existing segments unreadable.
+fn columns(records: &[TrialRecord]) -> Cols {
+    let r = records;
+    let mut c = Cols::default();
+    c.str("key", r, |r| r.key.hex());
+    c.u32("engine_version", r, |r| r.engine_version);
+    c.str("system", r, |r| r.config.system().name());
+    c.str("repr", r, |r| r.config.repr.kind.name());
+    c.str("algorithm", r, |r| r.config.learner.algorithm.name());
+    c.list_u32("resolution", r, |r| &r.config.repr.resolution);
+    c.u32("actions", r, |r| r.config.actions);
+    c.f64("epsilon", r, |r| r.config.learner.epsilon);
+    c.f64("gamma", r, |r| r.config.learner.gamma);
+    c.f64("alpha", r, |r| r.config.learner.alpha);
+    c.f64("lambda", r, |r| r.config.learner.lambda);
+    c.f64("q_init", r, |r| r.config.learner.q_init);
+    c.str("tie_break", r, |r| match r.config.learner.tie_break {
+        TieBreak::Random => "random",
+        TieBreak::First => "first",
+    });
+    c.u64("seed", r, |r| r.seed);
+    c.str("config_json", r, TrialRecord::config_json);
+    c.bool("converged", r, |r| r.outcome.converged);
+    c.u32_opt("episodes_to_goal", r, |r| r.outcome.episodes_to_goal);
+    c.u32("episodes", r, |r| r.outcome.episodes);
+    c.u64("total_steps", r, |r| r.outcome.total_steps);
+    c.str("stop", r, |r| r.outcome.stop.name());
+    c.str_opt("failure", r, |r| r.outcome.failure.as_deref());
+    c.list_u32("episode_lengths", r, |r| &r.outcome.episode_lengths);
+    c.f64("seconds", r, |r| r.seconds);
+    c
 }
 
 /// A segment that could not be read, and why.
@@ -160,32 +160,10 @@ impl Store {
     /// Append `records` as one new segment (temp file + fsync + rename); returns its path.
     pub fn write_segment(&self, records: &[TrialRecord]) -> anyhow::Result<PathBuf> {
         anyhow::ensure!(!records.is_empty(), "refusing to write an empty segment");
-        let batch = to_batch(records)?;
-        let name = segment_name(records);
-        let path = self.dir.join(&name);
-        let tmp = self.dir.join(format!(".tmp-{name}"));
-        let result = (|| -> anyhow::Result<()> {
-            let file = File::create(&tmp)?;
-            let props = WriterProperties::builder()
-                .set_compression(Compression::ZSTD(ZstdLevel::try_new(3)?))
-                .set_created_by(format!("qsweep {}", env!("CARGO_PKG_VERSION")))
-                .build();
-            let mut w = ArrowWriter::try_new(file, batch.schema(), Some(props))?;
-            w.write(&batch)?;
-            let mut file = w.into_inner()?;
-            file.flush()?;
-            file.sync_all()?;
-            std::fs::rename(&tmp, &path)?;
-            Ok(())
-        })();
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e.context(format!("cannot write cache segment in {}", self.dir.display())));
-        }
-        // Make the rename durable too; best effort (not every filesystem allows opening a dir).
-        if let Ok(d) = File::open(&self.dir) {
-            let _ = d.sync_all();
-        }
+        let path = self.dir.join(segment_name(records));
+        to_parquet(&to_batch(records)?)
+            .and_then(|bytes| write_atomic(&path, &bytes))
+            .map_err(|e| e.context(format!("cannot write cache segment in {}", self.dir.display())))?;
         Ok(path)
     }
 
@@ -242,98 +220,7 @@ fn segment_name(records: &[TrialRecord]) -> String {
 
 /// Encode records as one Arrow batch with [`schema`].
 pub fn to_batch(records: &[TrialRecord]) -> anyhow::Result<RecordBatch> {
-    let n = records.len();
-    let mut key = StringBuilder::new();
-    let mut version = UInt32Builder::with_capacity(n);
-    let (mut system, mut repr, mut algorithm) =
-        (StringBuilder::new(), StringBuilder::new(), StringBuilder::new());
-    let mut resolution = ListBuilder::new(UInt32Builder::new());
-    let mut actions = UInt32Builder::with_capacity(n);
-    let mut hyper: [Float64Builder; 5] = std::array::from_fn(|_| Float64Builder::with_capacity(n));
-    let mut tie = StringBuilder::new();
-    let mut seed = UInt64Builder::with_capacity(n);
-    let mut config_json = StringBuilder::new();
-    let mut converged = BooleanBuilder::with_capacity(n);
-    let mut to_goal = UInt32Builder::with_capacity(n);
-    let mut episodes = UInt32Builder::with_capacity(n);
-    let mut total_steps = UInt64Builder::with_capacity(n);
-    let mut stop = StringBuilder::new();
-    let mut failure = StringBuilder::new();
-    let mut lengths = ListBuilder::new(UInt32Builder::new());
-    let mut seconds = Float64Builder::with_capacity(n);
-    for r in records {
-        let c = &r.config;
-        key.append_value(r.key.hex());
-        version.append_value(r.engine_version);
-        system.append_value(c.system().name());
-        repr.append_value(c.repr.kind.name());
-        algorithm.append_value(c.learner.algorithm.name());
-        resolution.values().append_slice(&c.repr.resolution);
-        resolution.append(true);
-        actions.append_value(c.actions);
-        let l = &c.learner;
-        for (b, v) in hyper.iter_mut().zip([l.epsilon, l.gamma, l.alpha, l.lambda, l.q_init]) {
-            b.append_value(v);
-        }
-        tie.append_value(match l.tie_break {
-            crate::sim::config::TieBreak::Random => "random",
-            crate::sim::config::TieBreak::First => "first",
-        });
-        seed.append_value(r.seed);
-        config_json.append_value(r.config_json());
-        let o = &r.outcome;
-        converged.append_value(o.converged);
-        to_goal.append_option(o.episodes_to_goal);
-        episodes.append_value(o.episodes);
-        total_steps.append_value(o.total_steps);
-        stop.append_value(o.stop.name());
-        failure.append_option(o.failure.as_deref());
-        lengths.values().append_slice(&o.episode_lengths);
-        lengths.append(true);
-        seconds.append_value(r.seconds);
-    }
-    let [eps, gamma, alpha, lambda, q_init] = hyper.map(|mut b| Arc::new(b.finish()) as ArrayRef);
-    let columns: Vec<ArrayRef> = vec![
-        Arc::new(key.finish()),
-        Arc::new(version.finish()),
-        Arc::new(system.finish()),
-        Arc::new(repr.finish()),
-        Arc::new(algorithm.finish()),
-        Arc::new(resolution.finish()),
-        Arc::new(actions.finish()),
-        eps,
-        gamma,
-        alpha,
-        lambda,
-        q_init,
-        Arc::new(tie.finish()),
-        Arc::new(seed.finish()),
-        Arc::new(config_json.finish()),
-        Arc::new(converged.finish()),
-        Arc::new(to_goal.finish()),
-        Arc::new(episodes.finish()),
-        Arc::new(total_steps.finish()),
-        Arc::new(stop.finish()),
-        Arc::new(failure.finish()),
-        Arc::new(lengths.finish()),
-        Arc::new(seconds.finish()),
-    ];
-    // Builders make nullable list items; cast the batch to the declared schema's exact fields.
-    let schema = schema();
-    let columns = columns
-        .into_iter()
-        .zip(schema.fields())
-        .map(
-            |(c, f)| {
-                if c.data_type() == f.data_type() {
-                    Ok(c)
-                } else {
-                    arrow::compute::cast(&c, f.data_type())
-                }
-            },
-        )
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok(RecordBatch::try_new(schema, columns)?)
+    columns(records).into_batch()
 }
 
 fn open_reader(path: &Path) -> anyhow::Result<ParquetRecordBatchReaderBuilder<File>> {
@@ -360,7 +247,7 @@ fn read_keys(path: &Path) -> anyhow::Result<Vec<Key>> {
     let mut out = Vec::new();
     for batch in builder.with_projection(mask).build()? {
         let batch = batch?;
-        let col = downcast::<StringArray>(&batch, "key")?;
+        let col = column::<StringArray>(&batch, "key")?;
         for s in col.iter() {
             let s = s.ok_or_else(|| anyhow::anyhow!("null key"))?;
             out.push(Key::parse_hex(s).ok_or_else(|| anyhow::anyhow!("malformed key `{s}`"))?);
@@ -369,33 +256,24 @@ fn read_keys(path: &Path) -> anyhow::Result<Vec<Key>> {
     Ok(out)
 }
 
-fn downcast<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> anyhow::Result<&'a T> {
-    batch
-        .column_by_name(name)
-        .ok_or_else(|| anyhow::anyhow!("column `{name}` is missing"))?
-        .as_any()
-        .downcast_ref::<T>()
-        .ok_or_else(|| anyhow::anyhow!("column `{name}` has an unexpected type"))
-}
-
 /// Decode the rows of one segment whose key passes `keep`.
 pub fn read_segment(path: &Path, keep: &dyn Fn(&Key) -> bool) -> anyhow::Result<Vec<TrialRecord>> {
     let reader = open_reader(path)?.build()?;
     let mut out = Vec::new();
     for batch in reader {
         let b = batch?;
-        let key = downcast::<StringArray>(&b, "key")?;
-        let version = downcast::<UInt32Array>(&b, "engine_version")?;
-        let seed = downcast::<UInt64Array>(&b, "seed")?;
-        let config = downcast::<StringArray>(&b, "config_json")?;
-        let converged = downcast::<BooleanArray>(&b, "converged")?;
-        let to_goal = downcast::<UInt32Array>(&b, "episodes_to_goal")?;
-        let episodes = downcast::<UInt32Array>(&b, "episodes")?;
-        let total = downcast::<UInt64Array>(&b, "total_steps")?;
-        let stop = downcast::<StringArray>(&b, "stop")?;
-        let failure = downcast::<StringArray>(&b, "failure")?;
-        let lengths = downcast::<ListArray>(&b, "episode_lengths")?;
-        let seconds = downcast::<Float64Array>(&b, "seconds")?;
+        let key = column::<StringArray>(&b, "key")?;
+        let version = column::<UInt32Array>(&b, "engine_version")?;
+        let seed = column::<UInt64Array>(&b, "seed")?;
+        let config = column::<StringArray>(&b, "config_json")?;
+        let converged = column::<BooleanArray>(&b, "converged")?;
+        let to_goal = column::<UInt32Array>(&b, "episodes_to_goal")?;
+        let episodes = column::<UInt32Array>(&b, "episodes")?;
+        let total = column::<UInt64Array>(&b, "total_steps")?;
+        let stop = column::<StringArray>(&b, "stop")?;
+        let failure = column::<StringArray>(&b, "failure")?;
+        let lengths = column::<ListArray>(&b, "episode_lengths")?;
+        let seconds = column::<Float64Array>(&b, "seconds")?;
         for i in 0..b.num_rows() {
             let k = Key::parse_hex(key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))?;
             if !keep(&k) {
@@ -442,6 +320,8 @@ mod tests {
     use crate::sim::env::SystemKind;
     use crate::sim::repr::ReprKind;
     use crate::sim::{run_trial, Algorithm};
+    use arrow::datatypes::{DataType, Field, Schema};
+    use parquet::arrow::ArrowWriter;
 
     fn records() -> Vec<TrialRecord> {
         let mut out = Vec::new();
@@ -481,6 +361,57 @@ mod tests {
         // No temp files are left behind.
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert!(names.iter().all(|n| n.to_string_lossy().starts_with(SEGMENT_PREFIX)), "{names:?}");
+    }
+
+    #[test]
+    fn a_segment_holds_every_column_exactly_as_encoded() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let mut recs = records();
+        recs[1].outcome.failure = Some("diverged: x is NaN".into());
+        let path = store.write_segment(&recs).unwrap();
+        let reader = ParquetRecordBatchReaderBuilder::try_new(File::open(&path).unwrap()).unwrap();
+        assert_eq!(reader.schema(), &schema());
+        let back: Vec<RecordBatch> = reader.build().unwrap().map(Result::unwrap).collect();
+        let want = to_batch(&recs).unwrap();
+        assert_eq!(back, std::slice::from_ref(&want));
+        assert_eq!(want.num_columns(), 23);
+        // Spot checks of columns derived from the configuration rather than decoded back.
+        let res = column::<ListArray>(&want, "resolution").unwrap().value(0);
+        assert_eq!(res.as_any().downcast_ref::<UInt32Array>().unwrap().values(), &[3, 2]);
+        assert_eq!(column::<StringArray>(&want, "tie_break").unwrap().value(0), "random");
+        assert_eq!(column::<StringArray>(&want, "system").unwrap().value(3), "ball-beam");
+        assert_eq!(column::<StringArray>(&want, "failure").unwrap().value(1), "diverged: x is NaN");
+        assert!(column::<StringArray>(&want, "failure").unwrap().is_null(0));
+        assert_eq!(read_segment(&path, &|_| true).unwrap(), recs);
+    }
+
+    /// `tests/fixtures/cache/seg-previous-layout.parquet` was written by qsweep before the cache
+    /// schema was derived from the shared column builder (main at 458cd01: tiny.yaml with one seed,
+    /// plus absurd.yaml's diverged trials, compacted by `gc`). The cache on users' disks must stay
+    /// readable: same schema, every row decodes and re-hashes to its key.
+    #[test]
+    fn a_segment_in_the_previous_layout_still_reads() {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/cache/seg-previous-layout.parquet");
+        let reader = ParquetRecordBatchReaderBuilder::try_new(File::open(&path).unwrap()).unwrap();
+        assert_eq!(reader.schema(), &schema(), "names, types, nullability and order unchanged");
+        let recs = read_segment(&path, &|_| true).unwrap();
+        assert_eq!(recs.len(), 30);
+        for r in &recs {
+            assert_eq!(Key::from_canonical(&r.config_json(), r.seed, r.engine_version), r.key);
+        }
+        assert_eq!(recs.iter().filter(|r| r.outcome.failure.is_some()).count(), 2);
+        assert!(recs.iter().any(|r| r.outcome.episodes_to_goal.is_some()));
+        // Re-encoding what was read gives the stored columns back, bit for bit.
+        let stored: Vec<RecordBatch> = ParquetRecordBatchReaderBuilder::try_new(File::open(&path).unwrap())
+            .unwrap()
+            .build()
+            .unwrap()
+            .map(Result::unwrap)
+            .collect();
+        let stored = arrow::compute::concat_batches(&schema(), &stored).unwrap();
+        assert_eq!(to_batch(&recs).unwrap(), stored);
     }
 
     #[test]

@@ -16,7 +16,7 @@ pub struct BenchArgs {
     /// Only configurations whose name contains this, e.g. `cart-pole/fuzzy`.
     #[arg(long, default_value = "")]
     pub filter: String,
-    /// Print a JSON list of `{config, steps, seconds, steps_per_s}` instead of a table.
+    /// Print JSON (`{format_version, results: [{config, steps, seconds, steps_per_s}]}`) instead of a table.
     #[arg(long)]
     pub json: bool,
 }
@@ -48,7 +48,9 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
     }
     let results = bench::run_cases(&cases, &a.filter, a.steps, a.repeat, print_row);
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&results)?);
+        let v =
+            super::json::BenchReport { format_version: super::json::BenchReport::FORMAT_VERSION, results };
+        println!("{}", serde_json::to_string_pretty(&v)?);
     }
     Ok(0)
 }

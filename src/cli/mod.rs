@@ -3,6 +3,7 @@
 mod args;
 mod bench;
 mod gc;
+pub mod json;
 mod pipeline_args;
 mod report;
 mod run;

@@ -61,15 +61,11 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let unique = match a.shard {
         Some(shard) => {
             let mine = crate::exec::shard::shard_keys(&unique, shard);
-            unique.into_iter().filter(|t| mine.contains(&t.2)).collect()
+            unique.into_iter().filter(|t| mine.contains(&t.key)).collect()
         }
         None => unique,
     };
-    let jobs: Vec<Job> = unique
-        .iter()
-        .filter(|(_, _, key)| !cached.contains(key))
-        .map(|&(config, seed, key)| Job { config, seed, key })
-        .collect();
+    let jobs: Vec<Job> = unique.iter().filter(|t| !cached.contains(&t.key)).copied().collect();
     let n_cached = unique.len() - jobs.len();
     let opts = ExecOptions {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
@@ -83,15 +79,16 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     })?;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        let v = serde_json::json!({
-            "pipeline": plan.name,
-            "executed": report.executed,
-            "cached": n_cached,
-            "failed": report.failed,
-            "interrupted": report.interrupted,
-            "seconds": seconds,
-        });
-        println!("{v}");
+        let v = super::json::RunSummary {
+            format_version: super::json::RunSummary::FORMAT_VERSION,
+            pipeline: plan.name.clone(),
+            executed: report.executed,
+            cached: n_cached,
+            failed: report.failed,
+            interrupted: report.interrupted,
+            seconds,
+        };
+        println!("{}", serde_json::to_string(&v)?);
     } else if !a.quiet {
         println!(
             "executed {}, cached {}, failed {} in {:.1} s",

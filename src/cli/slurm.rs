@@ -108,7 +108,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     for (t, s) in unique.iter().zip(owner) {
         let entry = &mut per_shard[s as usize - 1];
         entry.0 += 1;
-        entry.1 += usize::from(!cached.contains(&t.2));
+        entry.1 += usize::from(!cached.contains(&t.key));
     }
     let sizes = |f: fn(&(usize, usize)) -> usize| {
         let v: Vec<usize> = per_shard.iter().map(f).collect();

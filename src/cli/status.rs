@@ -1,6 +1,7 @@
 //! `qsweep status`: what is cached and what is missing, per system and experiment, without running
 //! anything; `--explain` says why missing cells are missing.
 
+use super::json::{StatusExperiment, StatusReport};
 use super::pipeline_args::PipelineArgs;
 use crate::cache::TrialRecord;
 use clap::Args;
@@ -36,20 +37,28 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let unique: HashSet<_> = plan.trials().map(|(_, _, t)| t.key).collect();
     let unique_hit = unique.iter().filter(|k| cached.contains(k)).count();
     if a.json {
-        let experiments: Vec<Value> = rows
+        let experiments = rows
             .iter()
-            .map(|(e, n, hit)| {
-                let mut v = serde_json::json!({"system": e.system.name(), "experiment": e.id, "repr": e.repr.name(),
-                    "cells": e.cells.len(), "trials": n, "cached": hit, "missing": n - hit});
-                if let Some(id) = &e.variant {
-                    v["variant"] = id.clone().into();
-                }
-                v
+            .map(|&(e, n, hit)| StatusExperiment {
+                variant: e.variant.clone(),
+                system: e.system.name().into(),
+                experiment: e.id.clone(),
+                repr: e.repr.name().into(),
+                cells: e.cells.len(),
+                trials: n,
+                cached: hit,
+                missing: n - hit,
             })
             .collect();
-        let v = serde_json::json!({"pipeline": plan.name, "trials": unique.len(), "cached": unique_hit,
-            "missing": unique.len() - unique_hit, "experiments": experiments,
-            "damaged_segments": scan.damaged.len()});
+        let v = StatusReport {
+            format_version: StatusReport::FORMAT_VERSION,
+            pipeline: plan.name.clone(),
+            trials: unique.len(),
+            cached: unique_hit,
+            missing: unique.len() - unique_hit,
+            experiments,
+            damaged_segments: scan.damaged.len(),
+        };
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let width = plan.variants.iter().map(|v| v.id.len()).max().map_or(0, |w| w.max(7) + 1);

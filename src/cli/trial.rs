@@ -226,7 +226,13 @@ pub fn run(a: TrialArgs) -> anyhow::Result<u8> {
     let out = run_trial(&cfg, a.seed);
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        let v = serde_json::json!({ "config": cfg, "seed": a.seed, "outcome": out, "seconds": seconds });
+        let v = super::json::TrialReport {
+            format_version: super::json::TrialReport::FORMAT_VERSION,
+            config: cfg.clone(),
+            seed: a.seed,
+            outcome: out.clone(),
+            seconds,
+        };
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let label = cfg.learner.algorithm.label(cfg.repr.kind);

@@ -55,7 +55,7 @@ pub struct ExecReport {
     pub interrupted: bool,
 }
 
-/// A trial to run.
+/// A trial to run: configuration, seed and key (as [`crate::plan::Plan::unique_trials`] lists them).
 #[derive(Debug, Clone, Copy)]
 pub struct Job<'a> {
     /// Its configuration.

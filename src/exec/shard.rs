@@ -5,9 +5,8 @@
 //! times, or a requeued array task, agree on who runs what. Trials are taken longest-first (ties by
 //! key) and each goes to the shard with the least cost so far (LPT scheduling), deterministically.
 
-use super::estimated_cost;
+use super::{estimated_cost, Job};
 use crate::cache::Key;
-use crate::sim::TrialConfig;
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
 
@@ -35,15 +34,15 @@ impl std::str::FromStr for Shard {
 }
 
 /// The keys of the trials that belong to `shard`, out of every distinct trial of a plan.
-pub fn shard_keys(trials: &[(&TrialConfig, u64, Key)], shard: Shard) -> HashSet<Key> {
+pub fn shard_keys(trials: &[Job], shard: Shard) -> HashSet<Key> {
     let owner = assign(trials, shard.count);
-    trials.iter().zip(owner).filter(|&(_, s)| s == shard.index).map(|(t, _)| t.2).collect()
+    trials.iter().zip(owner).filter(|&(_, s)| s == shard.index).map(|(t, _)| t.key).collect()
 }
 
 /// The shard (1..=count) of each trial, in the order given.
-pub fn assign(trials: &[(&TrialConfig, u64, Key)], count: u32) -> Vec<u32> {
+pub fn assign(trials: &[Job], count: u32) -> Vec<u32> {
     let mut order: Vec<(f64, Key, usize)> =
-        trials.iter().enumerate().map(|(i, &(c, _, k))| (estimated_cost(c), k, i)).collect();
+        trials.iter().enumerate().map(|(i, t)| (estimated_cost(t.config), t.key, i)).collect();
     order.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     // A min-heap of (load, shard): the least-loaded shard, ties to the lowest index. Loads are
     // non-negative finite costs, so their bit patterns order like the values.
@@ -62,7 +61,7 @@ mod tests {
     use super::*;
     use crate::sim::env::SystemKind;
     use crate::sim::repr::ReprKind;
-    use crate::sim::Algorithm;
+    use crate::sim::{Algorithm, TrialConfig};
 
     #[test]
     fn shards_are_disjoint_cover_everything_and_balance_cost() {
@@ -78,8 +77,10 @@ mod tests {
                 ));
             }
         }
-        let trials: Vec<_> =
-            configs.iter().flat_map(|c| (0..5).map(move |s| (c, s, Key::of(c, s)))).collect();
+        let trials: Vec<_> = configs
+            .iter()
+            .flat_map(|c| (0..5).map(move |seed| Job { config: c, seed, key: Key::of(c, seed) }))
+            .collect();
         let n = 4;
         let parts: Vec<_> = (1..=n).map(|i| shard_keys(&trials, Shard { index: i, count: n })).collect();
         let total: usize = parts.iter().map(HashSet::len).sum();
@@ -87,7 +88,7 @@ mod tests {
         let union: HashSet<_> = parts.iter().flatten().copied().collect();
         assert_eq!(union.len(), trials.len());
         let cost = |p: &HashSet<Key>| {
-            trials.iter().filter(|t| p.contains(&t.2)).map(|t| estimated_cost(t.0)).sum::<f64>()
+            trials.iter().filter(|t| p.contains(&t.key)).map(|t| estimated_cost(t.config)).sum::<f64>()
         };
         let costs: Vec<f64> = parts.iter().map(cost).collect();
         let (lo, hi) = costs.iter().fold((f64::MAX, 0.0f64), |(l, h), &c| (l.min(c), h.max(c)));
@@ -105,12 +106,14 @@ mod tests {
                 })
             })
             .collect();
-        let trials: Vec<_> =
-            configs.iter().flat_map(|c| (0..3).map(move |s| (c, s, Key::of(c, s)))).collect();
+        let trials: Vec<_> = configs
+            .iter()
+            .flat_map(|c| (0..3).map(move |seed| Job { config: c, seed, key: Key::of(c, seed) }))
+            .collect();
         for n in 1..=7u32 {
             let mut order: Vec<usize> = (0..trials.len()).collect();
-            let cost = |i: usize| estimated_cost(trials[i].0);
-            order.sort_by(|&a, &b| cost(b).total_cmp(&cost(a)).then(trials[a].2.cmp(&trials[b].2)));
+            let cost = |i: usize| estimated_cost(trials[i].config);
+            order.sort_by(|&a, &b| cost(b).total_cmp(&cost(a)).then(trials[a].key.cmp(&trials[b].key)));
             let mut load = vec![0.0f64; n as usize];
             let mut expected = vec![0; trials.len()];
             for i in order {

@@ -7,6 +7,7 @@ mod resolve;
 pub use resolve::{plan, plan_variants, DEFAULT_MAX_TRIALS};
 
 use crate::cache::Key;
+use crate::exec::Job;
 use crate::sim::env::SystemKind;
 use crate::sim::repr::ReprKind;
 use crate::sim::{Algorithm, TrialConfig};
@@ -112,11 +113,11 @@ impl Plan {
     }
 
     /// Distinct trials by key, first occurrence wins, in plan order.
-    pub fn unique_trials(&self) -> Vec<(&TrialConfig, u64, Key)> {
+    pub fn unique_trials(&self) -> Vec<Job<'_>> {
         let mut seen = std::collections::HashSet::new();
         self.trials()
             .filter(|(_, _, t)| seen.insert(t.key))
-            .map(|(_, c, t)| (&c.config, t.seed, t.key))
+            .map(|(_, c, t)| Job { config: &c.config, seed: t.seed, key: t.key })
             .collect()
     }
 }

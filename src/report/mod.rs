@@ -25,9 +25,9 @@ use crate::cache::{Key, TrialRecord};
 use crate::plan::Plan;
 use anyhow::Context;
 use std::collections::HashMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
+pub use crate::atomic::write_atomic;
 pub use model::ReportData;
 
 /// What [`write_report`] wrote.
@@ -144,22 +144,4 @@ pub fn write_report(
         trials_missing: data.trials_planned - data.trials_present,
         files,
     })
-}
-
-/// Write `bytes` to `path` through a temporary file in the same directory and a rename, so a
-/// reader sees the old file or the new one, never a partial one.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("cannot write {}", path.display()))
 }

@@ -44,7 +44,7 @@
 //! | `episodes_to_goal` | uint32, null | episodes up to and including the goal; null if never reached |
 //! | `episodes` | uint32 | episodes run |
 //! | `episodes_counted` | uint32 | what enters the cell's statistics: `episodes_to_goal`, or `max_episodes` if the goal was never reached |
-//! | `total_steps` | int64 | steps over all episodes |
+//! | `total_steps` | uint64 | steps over all episodes |
 //! | `stop` | utf8 | `goal`, `max-episodes`, `max-total-steps` or `diverged` |
 //! | `failure` | utf8, null | what went wrong, for diverged trials |
 //! | `episode_lengths` | list<uint32> | length of every episode, in order |
@@ -52,101 +52,46 @@
 //! | `seconds` | float64 | wall-clock seconds the trial took when computed (informational) |
 
 use super::model::{resolution_columns, CellData, ExpData, ReportData, TrialData};
+use crate::parquet_io::Cols;
 use crate::plan::{Cell, Experiment};
 use crate::sim::config::LearnerConfig;
 use crate::sim::Outcome;
-use arrow::array::{
-    ArrayRef, BooleanArray, Float64Array, Int64Array, ListBuilder, StringArray, UInt32Array, UInt32Builder,
-    UInt64Array,
-};
-use arrow::record_batch::RecordBatch;
-use parquet::arrow::ArrowWriter;
-use parquet::basic::{Compression, ZstdLevel};
-use parquet::file::properties::WriterProperties;
-use std::sync::Arc;
 
 /// A cell's identity: its experiment and itself.
 type Id<'a> = (&'a ExpData<'a>, &'a CellData<'a>);
 
-/// Columns under construction.
-#[derive(Default)]
-struct Cols(Vec<(&'static str, ArrayRef, bool)>);
-
-impl Cols {
-    fn str<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> String) {
-        self.0.push((name, Arc::new(StringArray::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+/// The columns identifying a cell, one row per entry of `ids`.
+fn cell_identity(cols: &mut Cols, ids: &[Id]) {
+    fn exp<'a>(r: &Id<'a>) -> &'a Experiment {
+        r.0.exp
     }
-    fn str_opt<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> Option<String>) {
-        self.0.push((name, Arc::new(StringArray::from(rows.iter().map(f).collect::<Vec<_>>())), true));
+    fn cell<'a>(r: &Id<'a>) -> &'a Cell {
+        r.1.cell
     }
-    fn u32<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> u32) {
-        self.0.push((name, Arc::new(UInt32Array::from(rows.iter().map(f).collect::<Vec<_>>())), false));
+    fn res(r: &Id) -> [Option<u32>; 4] {
+        resolution_columns(exp(r).system, &cell(r).config.repr.resolution)
     }
-    fn u32_opt<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> Option<u32>) {
-        self.0.push((name, Arc::new(UInt32Array::from(rows.iter().map(f).collect::<Vec<_>>())), true));
+    // Only pipelines with variants have the column, so other pipelines' files keep their bytes.
+    if ids.iter().any(|r| exp(r).variant.is_some()) {
+        cols.str("variant", ids, |r| exp(r).variant.as_deref().unwrap_or_default());
     }
-    fn i64<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> i64) {
-        self.0.push((name, Arc::new(Int64Array::from(rows.iter().map(f).collect::<Vec<_>>())), false));
-    }
-    fn f64<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> f64) {
-        self.0.push((name, Arc::new(Float64Array::from(rows.iter().map(f).collect::<Vec<_>>())), false));
-    }
-    fn f64_opt<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> Option<f64>) {
-        self.0.push((name, Arc::new(Float64Array::from(rows.iter().map(f).collect::<Vec<_>>())), true));
-    }
-    fn bool<T>(&mut self, name: &'static str, rows: &[T], f: impl Fn(&T) -> bool) {
-        self.0.push((name, Arc::new(BooleanArray::from(rows.iter().map(f).collect::<Vec<_>>())), false));
-    }
-    fn array(&mut self, name: &'static str, array: ArrayRef, nullable: bool) {
-        self.0.push((name, array, nullable));
-    }
-
-    /// The columns identifying a cell, one row per entry of `ids`.
-    fn cell_identity(&mut self, ids: &[Id]) {
-        fn exp<'a>(r: &Id<'a>) -> &'a Experiment {
-            r.0.exp
-        }
-        fn cell<'a>(r: &Id<'a>) -> &'a Cell {
-            r.1.cell
-        }
-        fn res(r: &Id) -> [Option<u32>; 4] {
-            resolution_columns(exp(r).system, &cell(r).config.repr.resolution)
-        }
-        // Only pipelines with variants have the column, so other pipelines' files keep their bytes.
-        if ids.iter().any(|r| exp(r).variant.is_some()) {
-            self.str("variant", ids, |r| exp(r).variant.clone().unwrap_or_default());
-        }
-        self.str("system", ids, |r| exp(r).system.name().into());
-        self.str("system_title", ids, |r| exp(r).system.title().into());
-        self.str("experiment", ids, |r| exp(r).id.clone());
-        self.str_opt("experiment_title", ids, |r| exp(r).title.clone());
-        self.str("repr", ids, |r| exp(r).repr.name().into());
-        self.str("algorithm", ids, |r| cell(r).algorithm.name().into());
-        self.str("label", ids, |r| cell(r).algorithm.label(exp(r).repr).into());
-        self.str("axis1_label", ids, |r| exp(r).axes[0].label.clone());
-        self.f64("axis1_value", ids, |r| cell(r).coords[0]);
-        self.str_opt("axis2_label", ids, |r| exp(r).axes.get(1).map(|a| a.label.clone()));
-        self.f64_opt("axis2_value", ids, |r| cell(r).coords.get(1).copied());
-        self.u32_opt("x", ids, |r| res(r)[0]);
-        self.u32_opt("x_dot", ids, |r| res(r)[1]);
-        self.u32_opt("theta", ids, |r| res(r)[2]);
-        self.u32_opt("theta_dot", ids, |r| res(r)[3]);
-        self.u32("actions", ids, |r| cell(r).config.actions);
-        self.u32("max_episodes", ids, |r| cell(r).config.limits.max_episodes);
-    }
-
-    fn into_parquet(self) -> anyhow::Result<Vec<u8>> {
-        let batch = RecordBatch::try_from_iter_with_nullable(self.0)?;
-        let props = WriterProperties::builder()
-            .set_compression(Compression::ZSTD(ZstdLevel::try_new(3)?))
-            .set_created_by(format!("qsweep {}", env!("CARGO_PKG_VERSION")))
-            .build();
-        let mut buf = Vec::new();
-        let mut w = ArrowWriter::try_new(&mut buf, batch.schema(), Some(props))?;
-        w.write(&batch)?;
-        w.close()?;
-        Ok(buf)
-    }
+    cols.str("system", ids, |r| exp(r).system.name());
+    cols.str("system_title", ids, |r| exp(r).system.title());
+    cols.str("experiment", ids, |r| exp(r).id.as_str());
+    cols.str_opt("experiment_title", ids, |r| exp(r).title.as_deref());
+    cols.str("repr", ids, |r| exp(r).repr.name());
+    cols.str("algorithm", ids, |r| cell(r).algorithm.name());
+    cols.str("label", ids, |r| cell(r).algorithm.label(exp(r).repr));
+    cols.str("axis1_label", ids, |r| exp(r).axes[0].label.as_str());
+    cols.f64("axis1_value", ids, |r| cell(r).coords[0]);
+    cols.str_opt("axis2_label", ids, |r| exp(r).axes.get(1).map(|a| a.label.as_str()));
+    cols.f64_opt("axis2_value", ids, |r| cell(r).coords.get(1).copied());
+    cols.u32_opt("x", ids, |r| res(r)[0]);
+    cols.u32_opt("x_dot", ids, |r| res(r)[1]);
+    cols.u32_opt("theta", ids, |r| res(r)[2]);
+    cols.u32_opt("theta_dot", ids, |r| res(r)[3]);
+    cols.u32("actions", ids, |r| cell(r).config.actions);
+    cols.u32("max_episodes", ids, |r| cell(r).config.limits.max_episodes);
 }
 
 /// `cells.parquet`: one row per cell (schema in the module documentation).
@@ -155,7 +100,7 @@ pub fn cells_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
     let best: Vec<bool> =
         data.experiments.iter().flat_map(|e| (0..e.cells.len()).map(move |i| e.is_best(i))).collect();
     let mut cols = Cols::default();
-    cols.cell_identity(&ids);
+    cell_identity(&mut cols, &ids);
     cols.i64("planned", &ids, |r| r.1.planned() as i64);
     cols.i64("n", &ids, |r| r.1.trials.len() as i64);
     cols.i64("successes", &ids, |r| r.1.successes as i64);
@@ -191,27 +136,17 @@ pub fn trials_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
         &t.record.config.learner
     }
     let mut cols = Cols::default();
-    cols.cell_identity(&ids);
-    cols.array(
-        "seed",
-        Arc::new(UInt64Array::from(trials.iter().map(|t| t.planned.seed).collect::<Vec<_>>())),
-        false,
-    );
+    cell_identity(&mut cols, &ids);
+    cols.u64("seed", &trials, |t| t.planned.seed);
     cols.str("key", &trials, |t| t.planned.key.hex());
     cols.bool("converged", &trials, |t| out(t).converged);
     cols.u32_opt("episodes_to_goal", &trials, |t| out(t).episodes_to_goal);
     cols.u32("episodes", &trials, |t| out(t).episodes);
     cols.u32("episodes_counted", &trials, |t| t.counted);
-    cols.i64("total_steps", &trials, |t| i64::try_from(out(t).total_steps).unwrap_or(i64::MAX));
-    cols.str("stop", &trials, |t| out(t).stop.name().into());
-    cols.str_opt("failure", &trials, |t| out(t).failure.clone());
-    let total: usize = trials.iter().map(|t| out(t).episode_lengths.len()).sum();
-    let mut lengths = ListBuilder::new(UInt32Builder::with_capacity(total));
-    for t in &trials {
-        lengths.values().append_slice(&out(t).episode_lengths);
-        lengths.append(true);
-    }
-    cols.array("episode_lengths", Arc::new(lengths.finish()), false);
+    cols.u64("total_steps", &trials, |t| out(t).total_steps);
+    cols.str("stop", &trials, |t| out(t).stop.name());
+    cols.str_opt("failure", &trials, |t| out(t).failure.as_deref());
+    cols.list_u32("episode_lengths", &trials, |t| &out(t).episode_lengths);
     cols.f64("epsilon", &trials, |t| learner(t).epsilon);
     cols.f64("gamma", &trials, |t| learner(t).gamma);
     cols.f64("alpha", &trials, |t| learner(t).alpha);

@@ -9,9 +9,10 @@ fn json_lists_config_steps_seconds_and_rate() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = v["results"].as_array().unwrap();
     assert_eq!(rows.len(), 3, "2^4/2a, 10^4/2a and 10^4/10a");
-    for r in &rows {
+    for r in rows {
         assert!(r["config"].as_str().unwrap().starts_with("cart-pole/crisp/q0/"));
         let steps = r["steps"].as_u64().unwrap();
         assert!((2000..4000).contains(&steps));

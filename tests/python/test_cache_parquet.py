@@ -9,6 +9,7 @@ from pathlib import Path
 import duckdb
 import pandas as pd
 import polars as pl
+import pyarrow as pa
 import pytest
 
 from conftest import REPO_ROOT
@@ -53,6 +54,17 @@ def check(df: pd.DataFrame) -> None:
 
 def test_pandas_reads_the_cache_directory(cache: Path) -> None:
     check(pd.read_parquet(cache))
+
+
+def test_pyarrow_backed_pandas_keeps_the_stored_types(cache: Path) -> None:
+    """The README's idiom: `dtype_backend="pyarrow"` keeps uint64 and the nullable uint32 (the
+    same types as trials.parquet) instead of float64 with NaN."""
+    df = pd.read_parquet(cache, dtype_backend="pyarrow")
+    assert len(df) == N_TRIALS
+    assert df["total_steps"].dtype == pd.ArrowDtype(pa.uint64())
+    assert df["seed"].dtype == pd.ArrowDtype(pa.uint64())
+    assert df["episodes_to_goal"].dtype == pd.ArrowDtype(pa.uint32())
+    assert (df["episodes_to_goal"].isna() == ~df["converged"].astype(bool)).all()
 
 
 def test_polars_reads_the_segment_glob(cache: Path) -> None:

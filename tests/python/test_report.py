@@ -84,7 +84,7 @@ TRIALS = IDENTITY | {
     "episodes_to_goal": pa.uint32(),
     "episodes": pa.uint32(),
     "episodes_counted": pa.uint32(),
-    "total_steps": pa.int64(),
+    "total_steps": pa.uint64(),
     "stop": pa.string(),
     "failure": pa.string(),
     "episode_lengths": pa.list_(pa.uint32()),
@@ -136,7 +136,7 @@ def test_pandas_polars_duckdb_agree_on_rows_and_types(cells: pd.DataFrame, trial
     types = {r[0]: r[1] for r in described}
     assert types["episode_lengths"] == "UINTEGER[]"
     assert types["seed"] == "UBIGINT"
-    assert types["total_steps"] == "BIGINT"
+    assert types["total_steps"] == "UBIGINT"
     assert types["converged"] == "BOOLEAN"
     assert types["key"] == "VARCHAR"
 
@@ -147,6 +147,18 @@ def test_pandas_polars_duckdb_agree_on_rows_and_types(cells: pd.DataFrame, trial
     # Every trial's episode list has one entry per episode run.
     assert (pl_trials["episode_lengths"].list.len() == pl_trials["episodes"].cast(pl.UInt32)).all()
     assert trials["key"].str.fullmatch(r"[0-9a-f]{64}").all()
+
+
+def test_pyarrow_backed_pandas_keeps_the_stored_types() -> None:
+    """The README's idiom: `dtype_backend="pyarrow"` keeps uint64 and the nullable uint32."""
+    t = pd.read_parquet(REPORT_DIR / "trials.parquet", dtype_backend="pyarrow")
+    assert t["total_steps"].dtype == pd.ArrowDtype(pa.uint64())
+    assert t["seed"].dtype == pd.ArrowDtype(pa.uint64())
+    assert t["episodes_to_goal"].dtype == pd.ArrowDtype(pa.uint32())
+    assert (t["episodes_to_goal"].isna() == ~t["converged"].astype(bool)).all()
+    # A trial shared by two cells is repeated per cell; distinct trials are one row per key.
+    distinct = t.drop_duplicates("key")
+    assert distinct["key"].is_unique and len(distinct) <= len(t)
 
 
 def test_episodes_counted_is_goal_or_cap(trials: pd.DataFrame) -> None:

@@ -1,0 +1,116 @@
+//! The `--json` outputs of `run`, `status`, `trial` and `bench`: one struct per format, each with
+//! a `format_version`.
+//!
+//! Like cargo-nextest's machine-readable formats, a format's version is bumped only on an
+//! incompatible change (a field removed, renamed or given another type or meaning); new fields may
+//! appear at any time without a bump, so readers should ignore fields they do not know. Every
+//! format is at version 1. The README documents each one.
+
+use crate::bench::BenchResult;
+use crate::sim::{Outcome, TrialConfig};
+use serde::{Deserialize, Serialize};
+
+/// `qsweep run --json`: one object, printed after the trials ran (before the report is written).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Version of this format ([`RunSummary::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Pipeline name.
+    pub pipeline: String,
+    /// Trials computed by this run (diverged ones included).
+    pub executed: usize,
+    /// Distinct trials of the plan (or shard) found in the cache and not run.
+    pub cached: usize,
+    /// Executed trials that diverged (stored with their reason; the run exits 1).
+    pub failed: usize,
+    /// The run was stopped by Ctrl-C or SIGTERM (it exits 130).
+    pub interrupted: bool,
+    /// Wall-clock seconds of the run.
+    pub seconds: f64,
+}
+
+impl RunSummary {
+    /// The current version of the `run --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// `qsweep status --json`: the pipeline's distinct trials, cached and missing, overall and per
+/// experiment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StatusReport {
+    /// Version of this format ([`StatusReport::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Pipeline name.
+    pub pipeline: String,
+    /// Distinct trials of the plan (a trial shared by two cells counts once).
+    pub trials: usize,
+    /// Of those, in the cache.
+    pub cached: usize,
+    /// Of those, not in the cache.
+    pub missing: usize,
+    /// One entry per experiment, in report order.
+    pub experiments: Vec<StatusExperiment>,
+    /// Cache segments that could not be read (their trials count as missing).
+    pub damaged_segments: usize,
+}
+
+impl StatusReport {
+    /// The current version of the `status --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// One experiment of [`StatusReport`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StatusExperiment {
+    /// The variant's id; only for pipelines that declare `variants:` (an addition, not a new version).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
+    /// `ball-beam`, `cart-pole` or `mountain-car`.
+    pub system: String,
+    /// Experiment id.
+    pub experiment: String,
+    /// `crisp` or `fuzzy`.
+    pub repr: String,
+    /// Cells of the experiment.
+    pub cells: usize,
+    /// Distinct trials of the experiment.
+    pub trials: usize,
+    /// Of those, in the cache.
+    pub cached: usize,
+    /// Of those, not in the cache.
+    pub missing: usize,
+}
+
+/// `qsweep trial --json`: the resolved configuration, the seed and everything the trial produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialReport {
+    /// Version of this format ([`TrialReport::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// The fully resolved configuration, as the cache's `config_json` stores it.
+    pub config: TrialConfig,
+    /// The seed.
+    pub seed: u64,
+    /// What the trial produced (fields as the cache's columns of the same names).
+    pub outcome: Outcome,
+    /// Wall-clock seconds of the trial.
+    pub seconds: f64,
+}
+
+impl TrialReport {
+    /// The current version of the `trial --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// `qsweep bench --json`: one result per configuration measured, in the standard order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BenchReport {
+    /// Version of this format ([`BenchReport::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// The configurations measured.
+    pub results: Vec<BenchResult>,
+}
+
+impl BenchReport {
+    /// The current version of the `bench --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
