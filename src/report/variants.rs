@@ -614,7 +614,7 @@ systems:
     fn run_all(plan: &Plan) -> HashMap<Key, TrialRecord> {
         plan.unique_trials()
             .into_iter()
-            .map(|(c, seed, key)| (key, TrialRecord::new(c.clone(), seed, run_trial(c, seed), 0.0)))
+            .map(|j| (j.key, TrialRecord::new(j.config.clone(), j.seed, run_trial(j.config, j.seed), 0.0)))
             .collect()
     }
 
