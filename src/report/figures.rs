@@ -32,10 +32,10 @@ const FONT: &str = "sans-serif";
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
 static REGISTER: Once = Once::new();
 
-const MISSING: RGBColor = RGBColor(200, 200, 200);
+pub(crate) const MISSING: RGBColor = RGBColor(200, 200, 200);
 const BEST: RGBColor = RGBColor(220, 0, 0);
-const INK: RGBColor = RGBColor(30, 30, 30);
-const SUBTLE: RGBColor = RGBColor(90, 90, 90);
+pub(crate) const INK: RGBColor = RGBColor(30, 30, 30);
+pub(crate) const SUBTLE: RGBColor = RGBColor(90, 90, 90);
 
 /// The algorithms (figure columns) of a system's experiments, in the paper's order.
 pub fn columns(exps: &[&ExpData]) -> Vec<Algorithm> {
@@ -53,30 +53,51 @@ pub fn figure_size(exps: &[&ExpData]) -> (u32, u32) {
 
 /// The figure of one system as SVG text and PNG bytes.
 pub fn render(data: &ReportData, system: SystemKind) -> anyhow::Result<(String, Vec<u8>)> {
+    let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
+    let (w, h) = figure_size(&exps);
+    let title = format!("{}: mean episodes to the learning goal ({})", system.title(), data.plan.name);
+    paint(&Heatmaps { exps: &exps, title: &title }, (w, h))
+        .map_err(|e| anyhow::anyhow!("drawing the {system} figure: {e}"))
+}
+
+/// What a figure draws: called once for the SVG and once for the bitmap, with the same result.
+pub(crate) trait Picture {
+    /// Draw onto `cv` (shapes directly, text through [`Canvas::text`]).
+    fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>) -> Res;
+}
+
+struct Heatmaps<'a, 'b> {
+    exps: &'a [&'a ExpData<'b>],
+    title: &'a str,
+}
+
+impl Picture for Heatmaps<'_, '_> {
+    fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>) -> Res {
+        draw(cv, self.exps, self.title)
+    }
+}
+
+/// Draw `picture` at `(w, h)` pixels into SVG text and PNG bytes, text in the embedded font.
+pub(crate) fn paint(picture: &impl Picture, (w, h): (u32, u32)) -> Result<(String, Vec<u8>), String> {
     REGISTER.call_once(|| {
         if plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_err() {
             panic!("the embedded font is a valid TrueType file");
         }
     });
-    let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
-    let (w, h) = figure_size(&exps);
-    let title = format!("{}: mean episodes to the learning goal ({})", system.title(), data.plan.name);
-    let err = |e: String| anyhow::anyhow!("drawing the {system} figure: {e}");
-
     let mut svg = String::new();
     {
         let mut canvas =
             Canvas { root: SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(), texts: Vec::new() };
-        draw(&mut canvas, &exps, &title).map_err(err)?;
+        picture.draw(&mut canvas)?;
         for t in std::mem::take(&mut canvas.texts) {
             let mut font = (FONT, t.size).into_font();
             if t.rotate {
                 font = font.transform(FontTransform::Rotate270);
             }
             let style = font.color(&t.color).pos(Pos::new(t.h, t.v));
-            canvas.root.draw(&Text::new(t.text, t.at, style)).map_err(|e| err(e.to_string()))?;
+            canvas.root.draw(&Text::new(t.text, t.at, style)).map_err(|e| e.to_string())?;
         }
-        canvas.root.present().map_err(|e| err(e.to_string()))?;
+        canvas.root.present().map_err(|e| e.to_string())?;
     }
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     let texts = {
@@ -84,12 +105,12 @@ pub fn render(data: &ReportData, system: SystemKind) -> anyhow::Result<(String, 
             root: BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area(),
             texts: Vec::new(),
         };
-        draw(&mut canvas, &exps, &title).map_err(err)?;
-        canvas.root.present().map_err(|e| err(e.to_string()))?;
+        picture.draw(&mut canvas)?;
+        canvas.root.present().map_err(|e| e.to_string())?;
         canvas.texts
     };
-    glyphs::draw(FONT_BYTES, &mut rgb, w, h, &texts)?;
-    Ok((svg, encode_png(&rgb, w, h)?))
+    glyphs::draw(FONT_BYTES, &mut rgb, w, h, &texts).map_err(|e| e.to_string())?;
+    Ok((svg, encode_png(&rgb, w, h).map_err(|e| e.to_string())?))
 }
 
 fn encode_png(rgb: &[u8], w: u32, h: u32) -> anyhow::Result<Vec<u8>> {
@@ -105,20 +126,23 @@ fn encode_png(rgb: &[u8], w: u32, h: u32) -> anyhow::Result<Vec<u8>> {
     Ok(out)
 }
 
-type Res = Result<(), String>;
+/// A drawing step's result (plotters' errors as text).
+pub(crate) type Res = Result<(), String>;
 
 /// A drawing area plus the text drawn on it, kept aside to be written last.
-struct Canvas<DB: DrawingBackend> {
-    root: DrawingArea<DB, Shift>,
-    texts: Vec<TextCmd>,
+pub(crate) struct Canvas<DB: DrawingBackend> {
+    /// The drawing area.
+    pub(crate) root: DrawingArea<DB, Shift>,
+    /// Text to write after the shapes.
+    pub(crate) texts: Vec<TextCmd>,
 }
 
 impl<DB: DrawingBackend> Canvas<DB> {
-    fn text(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor, h: HPos, v: VPos) {
+    pub(crate) fn text(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor, h: HPos, v: VPos) {
         self.texts.push(TextCmd { text: s.to_string(), at, size, color, h, v, rotate: false });
     }
 
-    fn text_up(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor) {
+    pub(crate) fn text_up(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor) {
         self.texts.push(TextCmd {
             text: s.to_string(),
             at,
@@ -130,16 +154,16 @@ impl<DB: DrawingBackend> Canvas<DB> {
         });
     }
 
-    fn rect(&self, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Res {
+    pub(crate) fn rect(&self, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Res {
         self.root.draw(&Rectangle::new([a, b], style)).map_err(|e| e.to_string())
     }
 
-    fn line(&self, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Res {
+    pub(crate) fn line(&self, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Res {
         self.root.draw(&PathElement::new(vec![a, b], style)).map_err(|e| e.to_string())
     }
 
     /// Diagonal hatching clipped to a rectangle.
-    fn hatch(&self, (x0, y0): (i32, i32), (x1, y1): (i32, i32), color: RGBColor) -> Res {
+    pub(crate) fn hatch(&self, (x0, y0): (i32, i32), (x1, y1): (i32, i32), color: RGBColor) -> Res {
         let style = color.mix(0.45).stroke_width(1);
         let mut k = 4;
         while k < (x1 - x0) + (y1 - y0) {
@@ -192,7 +216,8 @@ pub fn viridis(t: f64) -> RGBColor {
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
-fn ink_on(c: RGBColor) -> RGBColor {
+/// Text colour readable on `c`.
+pub(crate) fn ink_on(c: RGBColor) -> RGBColor {
     let lum = 0.299 * f64::from(c.0) + 0.587 * f64::from(c.1) + 0.114 * f64::from(c.2);
     if lum > 140.0 {
         INK
@@ -204,17 +229,22 @@ fn ink_on(c: RGBColor) -> RGBColor {
 /// A cell's printed value: 2 decimals below 10, 1 below 100, none above; `*` if a trial failed.
 pub fn cell_label(c: &CellData) -> String {
     let Some(m) = c.summary.mean else { return "—".into() };
-    let v = if m < 10.0 {
+    let v = cell_label_value(m);
+    if c.any_failed() {
+        format!("{v}*")
+    } else {
+        v
+    }
+}
+
+/// A non-negative value as printed in a cell: 2 decimals below 10, 1 below 100, none above.
+pub fn cell_label_value(m: f64) -> String {
+    if m < 10.0 {
         format!("{m:.2}")
     } else if m < 100.0 {
         format!("{m:.1}")
     } else {
         format!("{m:.0}")
-    };
-    if c.any_failed() {
-        format!("{v}*")
-    } else {
-        v
     }
 }
 

@@ -3,11 +3,13 @@
 //! `figures/<system>.svg`, inlined so the page alone shows everything) and a cell table per
 //! experiment, plus links to the data files and the figure files.
 
+use super::curves::CURVE_RULE;
 use super::model::{ReportData, BEST_RULE, CENSORING};
 use super::table::{cell_table, render, table3, Html};
 use crate::report::table::html::escape_html as esc;
 
-const STYLE: &str = "\
+/// The pages' stylesheet.
+pub(crate) const STYLE: &str = "\
 body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1100px;color:#1e1e1e;line-height:1.4;padding:0 1em}
 h1{margin-bottom:.2em}h2{margin-top:2em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;margin:1em 0;font-size:.9em}
@@ -21,8 +23,9 @@ figure{margin:1em 0}figure svg{display:block;max-width:100%;height:auto;border:1
 .scroll{overflow-x:auto}
 ";
 
-/// The page; `figures` holds each system's name and its figure as SVG text.
-pub fn page(data: &ReportData, figures: &[(String, String)]) -> String {
+/// The page; `figures` and `curves` hold each system's name and its heatmap / learning-curve
+/// figure as SVG text.
+pub fn page(data: &ReportData, figures: &[(String, String)], curves: &[(String, String)]) -> String {
     let plan = data.plan;
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
@@ -85,6 +88,17 @@ pub fn page(data: &ReportData, figures: &[(String, String)]) -> String {
                 esc(BEST_RULE),
             ));
         }
+        if let Some((_, svg)) = curves.iter().find(|(n, _)| n == s.name()) {
+            h.push_str(&format!(
+                "<figure>{1}\n<figcaption>Learning curves of the best cell of each experiment and \
+                 algorithm (the Table III rows): episode length against episode, log scale; dashed red line: the \
+                 learning goal. {2} <a href=\"figures/{0}-curves.png\">PNG</a> · \
+                 <a href=\"figures/{0}-curves.svg\">SVG</a></figcaption></figure>\n",
+                s.name(),
+                inline_svg(svg, &format!("{}: learning curves of the best cells", s.title())),
+                esc(CURVE_RULE)
+            ));
+        }
         for e in data.experiments.iter().filter(|e| e.exp.system == s) {
             let title = e.exp.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
             h.push_str(&format!("<h3>Exp. {}{}</h3>\n<div class=\"scroll\">\n", esc(&e.exp.id), esc(&title)));
@@ -98,7 +112,7 @@ pub fn page(data: &ReportData, figures: &[(String, String)]) -> String {
 
 /// An SVG file's text for inlining in HTML: labelled as one image for screen readers, and without
 /// the `xmlns` attribute, which HTML does not need (so the page names no URL at all).
-fn inline_svg(svg: &str, label: &str) -> String {
+pub(crate) fn inline_svg(svg: &str, label: &str) -> String {
     let svg = svg.trim().replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1);
     svg.replacen("<svg ", &format!("<svg role=\"img\" aria-label=\"{}\" ", esc(label)), 1)
 }

@@ -4,12 +4,14 @@
 //!   experiment and algorithm, with the paper's values when the pipeline gives them);
 //! - `cells.parquet`, `trials.parquet`: the data behind it (schemas in [`parquet`]);
 //! - `figures/<system>.svg` and `.png`: the paper's Figures 5–7 (see [`figures`]);
+//! - `figures/<system>-curves.svg` and `.png`: learning curves of the best cells (see [`curves`]);
 //! - `index.html`: one self-contained page with all of the above (the figures inlined as SVG).
 //!
 //! Trials missing from the records are left out and counted. Every file is written atomically
 //! (a temporary file in the same directory, then a rename), and the output is a pure function of
 //! the inputs: no timestamps, no hash-map order, a seeded bootstrap.
 
+pub mod curves;
 pub mod figures;
 pub mod glyphs;
 pub mod html;
@@ -118,13 +120,18 @@ pub fn write_report(
     put("cells.parquet", &parquet::cells_parquet(&data)?)?;
     put("trials.parquet", &parquet::trials_parquet(&data)?)?;
     let mut svgs = Vec::new();
+    let mut curve_svgs = Vec::new();
     for system in data.systems() {
         let (svg, png) = figures::render(&data, system)?;
         put(&format!("figures/{}.svg", system.name()), svg.as_bytes())?;
         put(&format!("figures/{}.png", system.name()), &png)?;
         svgs.push((system.name().to_string(), svg));
+        let (svg, png) = curves::render(&data, system)?;
+        put(&format!("figures/{}-curves.svg", system.name()), svg.as_bytes())?;
+        put(&format!("figures/{}-curves.png", system.name()), &png)?;
+        curve_svgs.push((system.name().to_string(), svg));
     }
-    put("index.html", html::page(&data, &svgs).as_bytes())?;
+    put("index.html", html::page(&data, &svgs, &curve_svgs).as_bytes())?;
 
     let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
     Ok(ReportSummary {

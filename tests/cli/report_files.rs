@@ -5,7 +5,7 @@
 
 use qsweep::cache::{Key, TrialRecord};
 use qsweep::plan::Plan;
-use qsweep::report::{figures, write_report};
+use qsweep::report::{curves, figures, write_report};
 use qsweep::sim::env::SystemKind;
 use qsweep::sim::repr::ReprKind;
 use qsweep::sim::{run_trial, Algorithm, Outcome, StopReason};
@@ -117,6 +117,8 @@ fn quick_report_is_complete_valid_and_deterministic() {
     for s in SystemKind::ALL {
         expected.push(Path::new("figures").join(format!("{}.svg", s.name())));
         expected.push(Path::new("figures").join(format!("{}.png", s.name())));
+        expected.push(Path::new("figures").join(format!("{}-curves.svg", s.name())));
+        expected.push(Path::new("figures").join(format!("{}-curves.png", s.name())));
     }
     expected.sort();
     let mut written = summary.files.clone();
@@ -148,6 +150,14 @@ fn quick_report_is_complete_valid_and_deterministic() {
         assert_eq!(doc.root_element().tag_name().name(), "svg");
         assert_eq!(doc.root_element().attribute("width"), Some(w.to_string().as_str()));
         assert!(svg.contains("Q(λ)-learning"), "{s} SVG has the panel titles");
+        // The learning curves: one panel per experiment, two per row.
+        let png = &files[&Path::new("figures").join(format!("{}-curves.png", s.name()))];
+        let reader = png::Decoder::new(std::io::Cursor::new(png.as_slice())).read_info().unwrap();
+        assert_eq!(
+            (reader.info().width, reader.info().height),
+            curves::figure_size(4),
+            "{s} curves PNG size"
+        );
     }
 
     // The page links only files of the report (or anchors on itself).
@@ -155,6 +165,7 @@ fn quick_report_is_complete_valid_and_deterministic() {
     assert!(!html.contains("http"), "index.html must not reference the network");
     let targets = links(&html);
     assert!(targets.iter().any(|t| t == "figures/cart-pole.svg"));
+    assert!(targets.iter().any(|t| t == "figures/cart-pole-curves.svg"));
     for t in targets {
         if let Some(anchor) = t.strip_prefix('#') {
             assert!(html.contains(&format!("id=\"{anchor}\"")), "anchor {t}");

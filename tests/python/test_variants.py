@@ -82,3 +82,43 @@ def _verdict(r: pd.Series) -> str:
     if 0.5 <= r["mean"] / r["paper_mean"] <= 2:
         return "within 2x"
     return "no"
+
+
+def test_variants_csv_is_recomputed_from_each_variants_table3(report: Path) -> None:
+    got = pd.read_csv(report / "variants.csv")
+    assert sorted(got["variant"]) == sorted(VARIANTS)
+    res_cols = ["x", "x_dot", "theta", "theta_dot"]
+    expected = {}
+    for v in VARIANTS:
+        t3 = pd.read_csv(report / v / "table3.csv", dtype={"experiment": str})
+        rows = t3[t3["paper_mean"].notna() & t3["mean"].notna()]
+        verdicts = [_verdict(r) for _, r in rows.iterrows()]
+        config = 0
+        for _, r in rows.iterrows():
+            ours = [int(r[c]) for c in res_cols if pd.notna(r[c])] + [int(r["actions"])]
+            paper = [int(r[f"paper_{c}"]) for c in res_cols + ["actions"] if pd.notna(r[f"paper_{c}"])]
+            config += ours == paper
+        order = ordered = 0
+        for _, same in t3.groupby(["system", "experiment"]):
+            if len(same) >= 2 and same["paper_mean"].notna().all() and same["mean"].notna().all():
+                ordered += 1
+                by_ours = same.sort_values("mean", kind="stable")["algorithm"].tolist()
+                by_paper = same.sort_values("paper_mean", kind="stable")["algorithm"].tolist()
+                order += by_ours == by_paper
+        geo = math.exp(sum(math.log(m / p) for m, p in zip(rows["mean"], rows["paper_mean"])) / len(rows))
+        expected[v] = (len(rows), verdicts.count("replicates"), verdicts.count("within 2x"), config, order, ordered, geo)
+    for _, r in got.iterrows():
+        n, rep, w2, config, order, ordered, geo = expected[r["variant"]]
+        assert (r["rows"], r["replicating"], r["within_2x"], r["config_match"]) == (n, rep, w2, config), r["variant"]
+        assert (r["order_match"], r["order_experiments"]) == (order, ordered), r["variant"]
+        assert r["geo_mean_ratio"] == pytest.approx(geo, rel=1e-9), r["variant"]
+    # Rows are in the stated fit order, ranked 1, 2, 3.
+    assert got["rank"].tolist() == [1, 2, 3]
+    keys = [(-r["replicating"], -r["within_2x"], abs(math.log(r["geo_mean_ratio"]))) for _, r in got.iterrows()]
+    assert keys == sorted(keys)
+    html = (report / "index.html").read_text()
+    for v in VARIANTS:
+        assert f'href="{v}/index.html"' in html
+    for v in VARIANTS[1:]:
+        assert (report / "figures" / f"diff-{v}-mountain-car.png").is_file()
+        assert f'src="figures/diff-{v}-mountain-car.svg"' in html
