@@ -236,7 +236,7 @@ def test_report_page_renders_in_chromium(quick_report: Path) -> None:
     assert errors_in(events) == [], f"console errors (screenshot: {screenshot})"
     for img in page["images"]:
         assert img["complete"] and img["naturalWidth"] > 0, f"image not decoded: {img}"
-    assert len(page["svgs"]) == len(systems), page["svgs"]
+    assert len(page["svgs"]) == 2 * len(systems), page["svgs"]  # heatmaps and learning curves
     for svg in page["svgs"]:
         assert svg["width"] > 100 and svg["height"] > 100, f"figure too small: {svg}"
         assert svg["width"] <= 1200, f"figure wider than the page: {svg}"

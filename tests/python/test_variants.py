@@ -114,7 +114,10 @@ def test_variants_csv_is_recomputed_from_each_variants_table3(report: Path) -> N
         assert r["geo_mean_ratio"] == pytest.approx(geo, rel=1e-9), r["variant"]
     # Rows are in the stated fit order, ranked 1, 2, 3.
     assert got["rank"].tolist() == [1, 2, 3]
-    keys = [(-r["replicating"], -r["within_2x"], abs(math.log(r["geo_mean_ratio"]))) for _, r in got.iterrows()]
+    keys = [
+        (-r["replicating"], -r["within_2x"], -r["config_match"], abs(math.log(r["geo_mean_ratio"])))
+        for _, r in got.iterrows()
+    ]
     assert keys == sorted(keys)
     html = (report / "index.html").read_text()
     for v in VARIANTS:
