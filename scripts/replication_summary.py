@@ -1,10 +1,14 @@
 #!/usr/bin/env python3
-"""Numbers behind REPLICATION.md's verdicts, computed from a report's cells.parquet.
+"""Numbers behind REPLICATION.md's verdicts, computed from a report's files.
 
-Usage: python3 scripts/replication_summary.py [reports/paper]
+Usage: .venv/bin/python scripts/replication_summary.py [reports/paper]
 
-Prints Markdown: the paper's conclusions, each with the figures that decide it. Analysis only;
-qsweep itself is Rust. Every figure here can be recomputed from cells.parquet with any tool.
+For a report of a pipeline with variants (reports/paper: one folder per reading of the paper,
+variants.csv), prints Markdown: every variant's tally recomputed from its table3.csv (and checked
+against variants.csv), the ranking by the pre-registered fit measure (docs/preregistration.md),
+Table III under `as-written` and under the best-fitting variant side by side, then the paper's
+conclusions re-checked under both. For a report without variants, the last part for that report.
+Analysis only; qsweep itself is Rust. Every figure here can be recomputed with any tool.
 """
 
 from __future__ import annotations
@@ -23,8 +27,114 @@ def best(cells: pd.DataFrame) -> pd.DataFrame:
     return cells[cells["best"]].set_index(["system", "experiment", "algorithm"])
 
 
+RES_COLS = ["x", "x_dot", "theta", "theta_dot"]
+
+
+def verdict(r: pd.Series) -> str:
+    """The REPLICATION.md rule: two standard errors, else within 2x, else not."""
+    if pd.isna(r["std"]) or pd.isna(r["mean"]):
+        return "does not replicate"
+    se = math.sqrt(r["paper_std"] ** 2 / 10 + r["std"] ** 2 / r["n"])
+    if abs(r["mean"] - r["paper_mean"]) <= 2 * se:
+        return "replicates"
+    if 0.5 <= r["mean"] / r["paper_mean"] <= 2:
+        return "within 2×"
+    return "does not replicate"
+
+
+def configs(r: pd.Series) -> tuple[list[int], list[int]]:
+    ours = [int(r[c]) for c in RES_COLS if pd.notna(r[c])] + [int(r["actions"])]
+    paper = [int(r[f"paper_{c}"]) for c in RES_COLS + ["actions"] if pd.notna(r[f"paper_{c}"])]
+    return ours, paper
+
+
+def tally(t3: pd.DataFrame) -> dict:
+    """One variant's fit, from its table3.csv, as variants.csv states it."""
+    rows = t3[t3["paper_mean"].notna() & t3["mean"].notna()]
+    v = [verdict(r) for _, r in rows.iterrows()]
+    config = sum(configs(r)[0] == configs(r)[1] for _, r in rows.iterrows())
+    order = ordered = 0
+    for _, same in rows.groupby(["system", "experiment"]):
+        if len(same) >= 2:
+            ordered += 1
+            a = same.sort_values("mean", kind="stable")["algorithm"].tolist()
+            b = same.sort_values("paper_mean", kind="stable")["algorithm"].tolist()
+            order += a == b
+    geo = math.exp(sum(math.log(r["mean"] / r["paper_mean"]) for _, r in rows.iterrows()) / len(rows))
+    return {
+        "rows": len(rows),
+        "replicating": v.count("replicates"),
+        "within_2x": v.count("within 2×"),
+        "config_match": config,
+        "order_match": order,
+        "order_experiments": ordered,
+        "geo_mean_ratio": geo,
+    }
+
+
+def fit_key(t: dict) -> tuple:
+    """The pre-registered order: replicating, within 2x, matching configurations, |ln g|."""
+    return (-t["replicating"], -t["within_2x"], -t["config_match"], abs(math.log(t["geo_mean_ratio"])))
+
+
+def study(d: Path) -> str:
+    """Print the variant study; return the id of the best-fitting variant."""
+    listed = pd.read_csv(d / "variants.csv")
+    ids = listed["variant"].tolist()
+    tallies = {v: tally(pd.read_csv(d / v / "table3.csv", dtype={"experiment": str})) for v in ids}
+    for _, r in listed.iterrows():
+        t = tallies[r["variant"]]
+        for k, want in t.items():
+            got = r[k]
+            ok = math.isclose(got, want, rel_tol=1e-9) if k == "geo_mean_ratio" else int(got) == want
+            assert ok, f"variants.csv {r['variant']}.{k} = {got}, recomputed {want}"
+    ranked = sorted(ids, key=lambda v: (fit_key(tallies[v]), ids.index(v)))
+    assert ranked == ids, f"variants.csv order {ids} differs from the recomputed ranking {ranked}"
+    print("### Every variant's fit (variants.csv, recomputed from each variant's table3.csv)\n")
+    print("| rank | variant | replicate | within 2× | do not | configs match | Q(0)/Q(λ) order | geo. mean ours/paper |")
+    print("|---:|---|---:|---:|---:|---:|---:|---:|")
+    for i, v in enumerate(ranked, 1):
+        t = tallies[v]
+        rest = t["rows"] - t["replicating"] - t["within_2x"]
+        print(
+            f"| {i} | `{v}` | {t['replicating']} | {t['within_2x']} | {rest} | {t['config_match']} "
+            f"| {t['order_match']}/{t['order_experiments']} | {t['geo_mean_ratio']:.2f} |"
+        )
+    best = ranked[0]
+    print(f"\nBest fit under the pre-registered measure: `{best}`.\n")
+    side_by_side(d, "as-written", best)
+    return best
+
+
+def side_by_side(d: Path, a: str, b: str) -> None:
+    ta = pd.read_csv(d / a / "table3.csv", dtype={"experiment": str})
+    tb = pd.read_csv(d / b / "table3.csv", dtype={"experiment": str})
+    print(f"### Table III: paper, `{a}` and `{b}`\n")
+    print(f"| system | exp. | algorithm | paper | paper config | `{a}` | verdict | `{b}` | config | successes | verdict |")
+    print("|---|---|---|---:|---|---:|---|---:|---|---:|---|")
+    for (_, x), (_, y) in zip(ta.iterrows(), tb.iterrows()):
+        assert (x.system, x.experiment, x.algorithm) == (y.system, y.experiment, y.algorithm)
+        ours_b, paper_cfg = configs(y)
+        print(
+            f"| {x.system} | {x.experiment} | {x.algorithm} | {x.paper_mean:g} ± {x.paper_std:g} | {paper_cfg} "
+            f"| {x['mean']:.1f} ± {x['std']:.1f} | {verdict(x)} | {y['mean']:.1f} ± {y['std']:.1f} | {ours_b} "
+            f"| {int(y.successes)}/{int(y.n)} | {verdict(y)} |"
+        )
+    print()
+
+
 def main() -> None:
     d = Path(sys.argv[1] if len(sys.argv) > 1 else "reports/paper")
+    if (d / "variants.csv").is_file():
+        best = study(d)
+        for v in dict.fromkeys(["as-written", best]):
+            print(f"\n## Conclusions under `{v}`\n")
+            conclusions(d / v)
+    else:
+        conclusions(d)
+
+
+def conclusions(d: Path) -> None:
     cells = pd.read_parquet(d / "cells.parquet")
     b = best(cells)
     conv = cells.groupby(["system", "experiment", "algorithm"]).agg(

@@ -359,8 +359,17 @@ fn expand_experiment<M: Resolve>(
             }
             c.normalize();
             c.validate().map_err(fail)?;
-            let trials =
-                spec.seeds.0.iter().map(|&seed| PlannedTrial { seed, key: Key::of(&c, seed) }).collect();
+            // One canonical encoding per cell, hashed once per seed (planning many variants stays fast).
+            let canonical = crate::cache::key::canonical_config(&c);
+            let trials = spec
+                .seeds
+                .0
+                .iter()
+                .map(|&seed| PlannedTrial {
+                    seed,
+                    key: Key::from_canonical(&canonical, seed, crate::cache::ENGINE_VERSION),
+                })
+                .collect();
             cells.push(Cell { algorithm, coords, config: c, trials });
         }
     }

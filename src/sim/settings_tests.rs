@@ -233,7 +233,11 @@ fn settings_resolve_from_every_level_and_from_set_paths() {
     let plan_of = |sets: &[&str]| {
         let overrides: Vec<_> = sets.iter().map(|s| crate::spec::Override::parse(s).unwrap()).collect();
         let spec = crate::spec::load_str(text, "t.yaml", &overrides).unwrap();
-        crate::plan::plan(&crate::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() }, None).unwrap()
+        crate::plan::plan(
+            &crate::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() },
+            None,
+        )
+        .unwrap()
     };
     let p = plan_of(&[]);
     let (a, b) = (&p.experiments[0].cells[0].config, &p.experiments[1].cells[0].config);

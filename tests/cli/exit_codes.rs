@@ -108,7 +108,11 @@ fn every_subcommand_exits_with_the_documented_codes() {
     case("gc", ok, cached().args(["gc", "--dry-run"]));
     case("gc", usage, Test::new().args(["gc"]));
 
-    case("feasible", ok, Test::new().args(["feasible", "--env", "cart-pole", "--resolution", "2", "--max-steps", "1000"]));
+    case(
+        "feasible",
+        ok,
+        Test::new().args(["feasible", "--env", "cart-pole", "--resolution", "2", "--max-steps", "1000"]),
+    );
     case("feasible", usage, Test::new().args(["feasible", "--env", "mountain-car", "--resolution", "2"]));
 
     case("slurm", ok, Test::new().pipeline("tiny.yaml").args(["slurm", "tiny.yaml", "--array", "2"]));
