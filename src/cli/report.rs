@@ -37,6 +37,28 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
     Ok(exit::OK)
 }
 
+/// Refuse (an error, exit 1) when `target` holds a report of more distinct trials than `present`.
+fn refuse_smaller(target: &Path, present: usize, store: &Store, planned: usize) -> anyhow::Result<()> {
+    let existing = crate::report::existing_trials(target).map_err(|e| {
+        e.context(format!(
+            "{} holds a report whose size cannot be read; replace it with --force",
+            target.display()
+        ))
+    })?;
+    if let Some(old) = existing {
+        anyhow::ensure!(
+            present >= old,
+            "{} holds a report of {old} distinct trials, but the cache ({}) has only {present} of this \
+             pipeline's {planned} distinct trials for it now; not replacing it with a smaller report. Run the \
+             missing trials first (`qsweep run`), write elsewhere with --out DIR, or replace it \
+             anyway with `qsweep report ... --force`",
+            target.display(),
+            store.dir().display(),
+        );
+    }
+    Ok(())
+}
+
 /// Write the report of `plan` from the cached trials. Unless `force`, refuse (an error, exit 1)
 /// when the directory already holds a report of more distinct trials than the cache has now.
 pub fn write(plan: &Plan, store: &Store, out: Option<&Path>, quiet: bool, force: bool) -> anyhow::Result<()> {
@@ -44,24 +66,25 @@ pub fn write(plan: &Plan, store: &Store, out: Option<&Path>, quiet: bool, force:
     let records: HashMap<_, _> = store.read(&keys)?.into_iter().map(|r| (r.key, r)).collect();
     let dir = out.map(Path::to_path_buf).unwrap_or_else(|| Path::new("reports").join(&plan.name));
     if !force {
-        let existing = crate::report::existing_trials(&dir).map_err(|e| {
-            e.context(format!(
-                "{} holds a report whose size cannot be read; replace it with --force",
-                dir.display()
-            ))
-        })?;
-        if let Some(old) = existing {
-            anyhow::ensure!(
-                records.len() >= old,
-                "{} holds a report of {old} distinct trials, but the cache ({}) has only {} of this \
-                 pipeline's {} distinct trials now; not replacing it with a smaller report. Run the \
-                 missing trials first (`qsweep run`), write elsewhere with --out DIR, or replace it \
-                 anyway with `qsweep report ... --force`",
-                dir.display(),
-                store.dir().display(),
-                records.len(),
-                keys.len()
-            );
+        // A report of some variants replaces only their folders; any other report, the whole directory.
+        let targets: Vec<(PathBuf, usize)> = if plan.variant_subset {
+            plan.variants
+                .iter()
+                .map(|v| {
+                    let mine: HashSet<_> = plan
+                        .trials()
+                        .filter(|(e, _, _)| e.variant.as_deref() == Some(v.id.as_str()))
+                        .map(|(_, _, t)| t.key)
+                        .filter(|k| records.contains_key(k))
+                        .collect();
+                    (dir.join(&v.id), mine.len())
+                })
+                .collect()
+        } else {
+            vec![(dir.clone(), records.len())]
+        };
+        for (target, present) in targets {
+            refuse_smaller(&target, present, store, keys.len())?;
         }
     }
     let s = crate::report::write_reports(plan, &records, &dir)?;

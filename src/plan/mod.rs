@@ -33,6 +33,9 @@ pub struct Plan {
     pub experiments: Vec<Experiment>,
     /// The planned variants, in file order (empty when the pipeline declares none).
     pub variants: Vec<Variant>,
+    /// Only some of the pipeline's variants were selected (`--variant`): reports then leave the
+    /// comparison of all variants alone.
+    pub variant_subset: bool,
     /// Notes for the user found while planning (e.g. a variant that changes no trial).
     pub warnings: Vec<String>,
 }
@@ -152,6 +155,7 @@ impl Plan {
             seeds: self.seeds.clone(),
             experiments: Vec::new(),
             variants: Vec::new(),
+            variant_subset: false,
             warnings: Vec::new(),
         }
     }

@@ -211,6 +211,7 @@ pub fn plan_variants(
         source: loaded.path.clone(),
         reference_source: spec.reference_source.clone(),
         seeds: spec.seeds.0.clone(),
+        variant_subset: !select.is_empty() && variants.len() < loaded.variants.len(),
         experiments,
         variants,
         warnings,

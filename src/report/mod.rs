@@ -70,6 +70,11 @@ pub fn write_reports(
         files.extend(s.files.into_iter().map(|f| Path::new(&v.id).join(f)));
     }
     let data = ReportData::build(plan, records);
+    if plan.variant_subset {
+        // The comparison and the combined data cover every variant: a report of some of them
+        // would replace it with less, so it is left as it is.
+        return Ok(summary(&data, files));
+    }
     write_atomic(&dir.join("cells.parquet"), &parquet::cells_parquet(&data)?)?;
     write_atomic(&dir.join("trials.parquet"), &parquet::trials_parquet(&data)?)?;
     files.extend(["cells.parquet", "trials.parquet"].map(PathBuf::from));
@@ -85,8 +90,12 @@ pub fn write_reports(
         })
         .collect();
     files.extend(variants::write_comparison(dir, &per_variant)?);
+    Ok(summary(&data, files))
+}
+
+fn summary(data: &ReportData, files: Vec<PathBuf>) -> ReportSummary {
     let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
-    Ok(ReportSummary {
+    ReportSummary {
         experiments: data.experiments.len(),
         cells: cells.len(),
         cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
@@ -94,7 +103,7 @@ pub fn write_reports(
         trials_present: data.trials_present,
         trials_missing: data.trials_planned - data.trials_present,
         files,
-    })
+    }
 }
 
 /// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it.

@@ -85,6 +85,22 @@ fn report_has_one_folder_per_variant_and_combined_data_with_a_variant_column() {
     // cache but appear under both variants in the combined trials.parquet.
     let rows = parquet_rows(&out.join("trials.parquet"));
     assert_eq!(rows, 3 * 24, "every variant's trials, shared ones repeated");
+
+    // Regression (a --variant run replaced the comparison of all variants with one of a single
+    // variant): a report of some variants rewrites only their folders.
+    let comparison = std::fs::read(out.join("variants.csv")).unwrap();
+    let before = std::fs::read(out.join("short-episodes/table3.csv")).unwrap();
+    let p = p.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    sb.qsweep(&["run", p, "--quiet", "--out", o, "--variant", "fast-crisp", "--set", "seeds=3"])
+        .assert()
+        .success();
+    assert_eq!(std::fs::read(out.join("variants.csv")).unwrap(), comparison);
+    assert_eq!(std::fs::read(out.join("short-episodes/table3.csv")).unwrap(), before);
+    assert_eq!(parquet_rows(&out.join("fast-crisp/trials.parquet")), 36, "3 seeds now");
+    // Going back to 2 seeds would shrink that variant's report: refused unless forced.
+    let err = fails_with(&mut sb.qsweep(&["report", p, "--out", o, "--variant", "fast-crisp"]), 1);
+    assert!(err.contains("fast-crisp holds a report of 36 distinct trials"), "{err}");
 }
 
 fn parquet_rows(path: &std::path::Path) -> i64 {
