@@ -3,6 +3,11 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    #[cfg(unix)]
+    // SAFETY: sets a signal disposition before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = <qsweep::cli::Cli as clap::Parser>::parse();
     match qsweep::cli::run(cli) {
         Ok(code) => ExitCode::from(code),

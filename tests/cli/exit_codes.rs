@@ -136,3 +136,22 @@ fn every_subcommand_exits_with_the_documented_codes() {
         }
     }
 }
+
+/// Regression: `qsweep … | head` panicked with "failed printing to stdout: Broken pipe".
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+        .args(["feasible", "--env", "cart-pole", "--resolution", "2"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away before anything is written
+    let mut err = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    child.wait().unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+}
