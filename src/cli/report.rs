@@ -49,7 +49,7 @@ fn refuse_smaller(target: &Path, present: usize, store: &Store, planned: usize) 
         anyhow::ensure!(
             present >= old,
             "{} holds a report of {old} distinct trials, but the cache ({}) has only {present} of this \
-             pipeline's {planned} distinct trials for it now; not replacing it with a smaller report. Run the \
+             pipeline's {planned} distinct trials now; not replacing it with a smaller report. Run the \
              missing trials first (`qsweep run`), write elsewhere with --out DIR, or replace it \
              anyway with `qsweep report ... --force`",
             target.display(),

@@ -125,3 +125,17 @@ def test_variants_csv_is_recomputed_from_each_variants_table3(report: Path) -> N
     for v in VARIANTS[1:]:
         assert (report / "figures" / f"diff-{v}-mountain-car.png").is_file()
         assert f'src="figures/diff-{v}-mountain-car.svg"' in html
+
+
+def test_replication_summary_recomputes_the_variant_study(report: Path, capsys: pytest.CaptureFixture) -> None:
+    """scripts/replication_summary.py's study part (REPLICATION.md's tallies) accepts the report:
+    the tallies recomputed from each variant's table3.csv equal variants.csv, in the pre-registered
+    order. (The conclusions part needs the paper's full grid and is not run on this fixture.)"""
+    import replication_summary
+
+    best = replication_summary.study(report)
+    out = capsys.readouterr().out
+    assert best == pd.read_csv(report / "variants.csv")["variant"][0]
+    assert "Best fit under the pre-registered measure" in out
+    for v in VARIANTS:
+        assert f"`{v}`" in out
