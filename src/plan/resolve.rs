@@ -176,16 +176,42 @@ pub fn plan_variants(
     if chosen.is_empty() {
         expand_all(spec, &origin, None, &mut experiments)?;
     } else {
-        let mut as_written = Vec::new();
-        expand_all(spec, &origin, None, &mut as_written)?;
-        let written: std::collections::HashSet<Key> = as_written
-            .iter()
-            .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key)))
-            .collect();
+        // The pipeline as written, to tell which variants change nothing. A variant without a
+        // `set` is exactly that, so it is planned first and its keys reused (no second plan).
+        let mut chosen = chosen;
+        chosen.sort_by_key(|v| !v.set.is_empty());
+        let keys_of = |exps: &[Experiment]| -> std::collections::HashSet<Key> {
+            exps.iter().flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key))).collect()
+        };
+        let mut written: Option<std::collections::HashSet<Key>> = None;
+        let mut by_variant: Vec<(usize, Vec<Experiment>)> = Vec::new();
+        for v in &chosen {
+            if v.set.is_empty() && written.is_none() {
+                let mut mine = Vec::new();
+                expand_all(&v.spec, &format!("{origin} (variant {})", v.id), Some(&v.id), &mut mine)?;
+                written = Some(keys_of(&mine));
+                let at = loaded.variants.iter().position(|x| x.id == v.id).unwrap_or(0);
+                by_variant.push((at, mine));
+            }
+        }
+        let written = match written {
+            Some(w) => w,
+            None => {
+                let mut as_written = Vec::new();
+                expand_all(spec, &origin, None, &mut as_written)?;
+                keys_of(&as_written)
+            }
+        };
+        chosen.sort_by_key(|v| loaded.variants.iter().position(|x| x.id == v.id));
         for v in chosen {
             let origin = format!("{origin} (variant {})", v.id);
             let first = experiments.len();
-            expand_all(&v.spec, &origin, Some(&v.id), &mut experiments)?;
+            let at = loaded.variants.iter().position(|x| x.id == v.id).unwrap_or(0);
+            if let Some(i) = by_variant.iter().position(|(a, _)| *a == at) {
+                experiments.extend(by_variant.swap_remove(i).1);
+            } else {
+                expand_all(&v.spec, &origin, Some(&v.id), &mut experiments)?;
+            }
             let changed = experiments[first..]
                 .iter()
                 .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter()))
