@@ -248,9 +248,14 @@ pub fn cell_label_value(m: f64) -> String {
     }
 }
 
-/// One heatmap panel: experiment `e`, algorithm `alg`, top-left corner at `(ox, oy)`.
-fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpData, alg: Algorithm) -> Res {
-    let exp = e.exp;
+/// A panel's title ("Exp. id: title — algorithm"); for an algorithm the experiment does not run,
+/// also a note in the middle, and `false`.
+pub(crate) fn panel_header<DB: DrawingBackend>(
+    cv: &mut Canvas<DB>,
+    (ox, oy): (i32, i32),
+    exp: &crate::plan::Experiment,
+    alg: Algorithm,
+) -> bool {
     let cx = ox + PANEL_W as i32 / 2;
     let name = match &exp.title {
         Some(t) => format!("Exp. {}: {t}", exp.id),
@@ -264,9 +269,19 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         HPos::Center,
         VPos::Center,
     );
-    if !exp.algorithms.contains(&alg) {
-        let mid = (cx, oy + PANEL_H as i32 / 2);
-        cv.text("not run in this experiment", mid, 13.0, SUBTLE, HPos::Center, VPos::Center);
+    if exp.algorithms.contains(&alg) {
+        return true;
+    }
+    let mid = (cx, oy + PANEL_H as i32 / 2);
+    cv.text("not run in this experiment", mid, 13.0, SUBTLE, HPos::Center, VPos::Center);
+    false
+}
+
+/// One heatmap panel: experiment `e`, algorithm `alg`, top-left corner at `(ox, oy)`.
+fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpData, alg: Algorithm) -> Res {
+    let exp = e.exp;
+    let cx = ox + PANEL_W as i32 / 2;
+    if !panel_header(cv, (ox, oy), exp, alg) {
         return Ok(());
     }
     let best = e.best_of(alg);

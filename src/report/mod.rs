@@ -141,17 +141,7 @@ pub fn write_report(
         curve_svgs.push((system.name().to_string(), svg));
     }
     put("index.html", html::page(&data, &svgs, &curve_svgs).as_bytes())?;
-
-    let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
-    Ok(ReportSummary {
-        experiments: data.experiments.len(),
-        cells: cells.len(),
-        cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
-        trials_planned: data.trials_planned,
-        trials_present: data.trials_present,
-        trials_missing: data.trials_planned - data.trials_present,
-        files,
-    })
+    Ok(summary(&data, files))
 }
 
 /// How many distinct trials the report already in `dir` holds (distinct `key`s of its

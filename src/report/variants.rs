@@ -355,21 +355,7 @@ fn diff_panel<DB: DrawingBackend>(
     let (pw, ph) = (figures::PANEL_W as i32, figures::PANEL_H as i32);
     let exp = e.exp;
     let cx = ox + pw / 2;
-    let name = match &exp.title {
-        Some(t) => format!("Exp. {}: {t}", exp.id),
-        None => format!("Exp. {}", exp.id),
-    };
-    cv.text(
-        &format!("{name} — {}", alg.label(exp.repr)),
-        (cx, oy + 14),
-        15.0,
-        INK,
-        HPos::Center,
-        VPos::Center,
-    );
-    if !exp.algorithms.contains(&alg) {
-        let mid = (cx, oy + ph / 2);
-        cv.text("not run in this experiment", mid, 13.0, SUBTLE, HPos::Center, VPos::Center);
+    if !figures::panel_header(cv, (ox, oy), exp, alg) {
         return Ok(());
     }
     let diffs: Vec<(usize, Option<CellDiff>)> = (0..e.cells.len())
