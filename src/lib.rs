@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod bench;
 pub mod cache;
 pub mod parquet_io;
+pub mod pipeline;
 pub mod plan;
 pub mod report;
 pub mod sim;

@@ -116,6 +116,19 @@ pub struct KeyScan {
     pub keys: HashSet<Key>,
     /// Unreadable segments (their rows count as missing).
     pub damaged: Vec<Damaged>,
+    /// Every readable segment with its keys in row order, sorted by path: where each row lives,
+    /// so a read of some keys decodes only the rows (and segments) that hold them.
+    pub segments: Vec<(PathBuf, Vec<Key>)>,
+}
+
+/// A stored trial's outcome without its configuration (which the plan already knows): what a
+/// report reads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredOutcome {
+    /// The outcome; `episode_lengths` is empty when the read left that column out.
+    pub outcome: Outcome,
+    /// Wall-clock seconds (informational).
+    pub seconds: f64,
 }
 
 /// A cache directory.
@@ -172,11 +185,44 @@ impl Store {
         let mut scan = KeyScan::default();
         for path in self.segments()? {
             match read_keys(&path) {
-                Ok(keys) => scan.keys.extend(keys),
+                Ok(keys) => {
+                    scan.keys.extend(keys.iter().copied());
+                    scan.segments.push((path, keys));
+                }
                 Err(e) => scan.damaged.push(Damaged { path, error: format!("{e:#}") }),
             }
         }
         Ok(scan)
+    }
+
+    /// The outcomes of the `wanted` keys, one per key (the first segment holding it wins), reading
+    /// only the outcome columns (`episode_lengths` only when `lengths`) of only the rows that hold
+    /// them, at the positions `scan` found. Segments are decoded in parallel; the result does not
+    /// depend on the number of threads.
+    pub fn read_outcomes(
+        &self,
+        scan: &KeyScan,
+        wanted: &HashSet<Key>,
+        lengths: bool,
+    ) -> anyhow::Result<std::collections::HashMap<Key, StoredOutcome>> {
+        use rayon::prelude::*;
+        let mut taken = HashSet::new();
+        let mut work: Vec<(&Path, Vec<usize>)> = Vec::new();
+        for (path, keys) in &scan.segments {
+            let rows: Vec<usize> =
+                (0..keys.len()).filter(|&i| wanted.contains(&keys[i]) && taken.insert(keys[i])).collect();
+            if !rows.is_empty() {
+                work.push((path, rows));
+            }
+        }
+        let parts: Vec<Vec<(Key, StoredOutcome)>> = work
+            .par_iter()
+            .map(|(path, rows)| {
+                read_outcome_rows(path, rows, lengths)
+                    .map_err(|e| e.context(format!("cannot read cache segment {}", path.display())))
+            })
+            .collect::<anyhow::Result<_>>()?;
+        Ok(parts.into_iter().flatten().collect())
     }
 
     /// The stored records whose key is in `wanted`, one per key (duplicates dropped), in segment
@@ -305,6 +351,73 @@ pub fn read_segment(path: &Path, keep: &dyn Fn(&Key) -> bool) -> anyhow::Result<
             });
         }
     }
+    Ok(out)
+}
+
+/// Decode the outcome columns of the given rows (ascending) of one segment.
+fn read_outcome_rows(
+    path: &Path,
+    rows: &[usize],
+    lengths: bool,
+) -> anyhow::Result<Vec<(Key, StoredOutcome)>> {
+    use parquet::arrow::arrow_reader::{RowSelection, RowSelector};
+    let builder = open_reader(path)?;
+    let mut names =
+        vec!["key", "converged", "episodes_to_goal", "episodes", "total_steps", "stop", "failure"];
+    names.push("seconds");
+    if lengths {
+        names.push("episode_lengths");
+    }
+    let idx: Vec<usize> = names.iter().map(|n| builder.schema().index_of(n)).collect::<Result<_, _>>()?;
+    let mask = ProjectionMask::roots(builder.parquet_schema(), idx);
+    let mut selectors = Vec::new();
+    let mut at = 0;
+    for &r in rows {
+        if r > at {
+            selectors.push(RowSelector::skip(r - at));
+        }
+        selectors.push(RowSelector::select(1));
+        at = r + 1;
+    }
+    let reader = builder.with_projection(mask).with_row_selection(RowSelection::from(selectors)).build()?;
+    let mut out = Vec::with_capacity(rows.len());
+    for batch in reader {
+        let b = batch?;
+        let key = column::<StringArray>(&b, "key")?;
+        let converged = column::<BooleanArray>(&b, "converged")?;
+        let to_goal = column::<UInt32Array>(&b, "episodes_to_goal")?;
+        let episodes = column::<UInt32Array>(&b, "episodes")?;
+        let total = column::<UInt64Array>(&b, "total_steps")?;
+        let stop = column::<StringArray>(&b, "stop")?;
+        let failure = column::<StringArray>(&b, "failure")?;
+        let seconds = column::<Float64Array>(&b, "seconds")?;
+        let lens = if lengths { Some(column::<ListArray>(&b, "episode_lengths")?) } else { None };
+        for i in 0..b.num_rows() {
+            let k = Key::parse_hex(key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))?;
+            let stop = parse_stop(stop.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: unknown stop"))?;
+            let episode_lengths = match lens {
+                Some(l) => l
+                    .value(i)
+                    .as_any()
+                    .downcast_ref::<UInt32Array>()
+                    .ok_or_else(|| anyhow::anyhow!("episode_lengths has an unexpected type"))?
+                    .values()
+                    .to_vec(),
+                None => Vec::new(),
+            };
+            let outcome = Outcome {
+                converged: converged.value(i),
+                episodes_to_goal: to_goal.is_valid(i).then(|| to_goal.value(i)),
+                episodes: episodes.value(i),
+                total_steps: total.value(i),
+                stop,
+                failure: failure.is_valid(i).then(|| failure.value(i).to_string()),
+                episode_lengths,
+            };
+            out.push((k, StoredOutcome { outcome, seconds: seconds.value(i) }));
+        }
+    }
+    anyhow::ensure!(out.len() == rows.len(), "expected {} rows, read {}", rows.len(), out.len());
     Ok(out)
 }
 

@@ -4,6 +4,8 @@
 use crate::cache::store::Store;
 use crate::error::user_error;
 use crate::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
+use crate::report::formats::{Format, Formats, DEFAULT_FORMATS};
+use crate::report::{ReportOptions, ReportOutcome};
 use crate::spec::{load, Override};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -72,4 +74,54 @@ pub fn cache_dir(flag: Option<&PathBuf>) -> PathBuf {
     flag.cloned()
         .or_else(|| std::env::var_os("QSWEEP_CACHE").filter(|v| !v.is_empty()).map(PathBuf::from))
         .unwrap_or_else(|| PathBuf::from("cache"))
+}
+
+/// Where and how to write the report (`run` and `report`).
+#[derive(Debug, Args)]
+pub struct ReportFlags {
+    /// Report directory [default: reports/<pipeline name>].
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// What the report writes, comma-separated: md (table3.md, README.md), csv, tex, cells
+    /// (cells.parquet), trials (trials.parquet), svg, png (figures), html (index.html).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = DEFAULT_FORMATS)]
+    pub formats: Vec<Format>,
+}
+
+impl ReportFlags {
+    /// The report options for `plan`.
+    pub fn options(&self, plan: &Plan, force: bool) -> ReportOptions {
+        ReportOptions {
+            dir: self.out.clone().unwrap_or_else(|| Path::new("reports").join(&plan.name)),
+            formats: Formats::of(&self.formats),
+            force,
+        }
+    }
+}
+
+/// Warn about each damaged cache segment that was moved aside (`run` and `report` alike).
+pub fn warn_quarantined(scan: &crate::pipeline::Scan) {
+    for (d, to) in &scan.quarantined {
+        eprintln!("warning: damaged cache segment {d}; moved to {}", to.display());
+    }
+}
+
+/// The report's closing lines.
+pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
+    let s = &o.summary;
+    let page = if opts.formats.has(Format::Html) { "index.html" } else { "" };
+    println!(
+        "report: {} ({} of {} planned trials present, {} of {} cells)",
+        opts.dir.join(page).display(),
+        s.trials_present,
+        s.trials_planned,
+        s.cells_with_trials,
+        s.cells
+    );
+    for r in &o.replaced {
+        println!("replaced {r}");
+    }
+    if !o.removed.is_empty() {
+        println!("removed {} files the earlier report wrote and this one does not", o.removed.len());
+    }
 }

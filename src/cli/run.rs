@@ -1,10 +1,8 @@
 //! `qsweep run`: execute the pipeline's missing trials, store them, then write the report.
 
-use super::pipeline_args::PipelineArgs;
-use crate::exec::{execute, ExecOptions, Job, ProgressMode, INTERRUPTED};
+use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
+use crate::exec::{ExecOptions, ProgressMode, INTERRUPTED};
 use clap::Args;
-use std::collections::HashSet;
-use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -33,9 +31,8 @@ pub struct RunArgs {
     /// Do not write the report afterwards.
     #[arg(long)]
     pub no_report: bool,
-    /// Report directory [default: reports/<pipeline name>].
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub report: ReportFlags,
     /// Flush finished trials to the cache after this many...
     #[arg(long, default_value_t = 500, value_name = "N")]
     pub batch_trials: usize,
@@ -50,40 +47,24 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
     let store = a.pipeline.store()?;
     install_ctrlc();
-    let unique = plan.unique_trials();
-    let scan = store.keys()?;
-    for d in &scan.damaged {
-        // Never serve or keep reading a segment we cannot read: move it aside, rerun its trials.
-        let to = store.quarantine(&d.path)?;
-        eprintln!("warning: damaged cache segment {d}; moved to {}", to.display());
-    }
-    let cached: HashSet<_> = if a.force { HashSet::new() } else { scan.keys };
-    let unique = match a.shard {
-        Some(shard) => {
-            let mine = crate::exec::shard::shard_keys(&unique, shard);
-            unique.into_iter().filter(|t| mine.contains(&t.key)).collect()
-        }
-        None => unique,
-    };
-    let jobs: Vec<Job> = unique.iter().filter(|t| !cached.contains(&t.key)).copied().collect();
-    let n_cached = unique.len() - jobs.len();
+    let scan = crate::pipeline::scan(&store)?;
+    warn_quarantined(&scan);
     let opts = ExecOptions {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
         batch_trials: a.batch_trials.max(1),
         batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
         progress: if a.quiet || a.json { ProgressMode::Hidden } else { ProgressMode::Auto },
     };
-    let report = execute(&jobs, &opts, |batch| {
-        store.write_segment(batch)?;
-        Ok(())
-    })?;
+    let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
+    let done = crate::pipeline::run(&plan, &store, &scan.keys, sel, &opts)?;
+    let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
         let v = super::json::RunSummary {
             format_version: super::json::RunSummary::FORMAT_VERSION,
             pipeline: plan.name.clone(),
             executed: report.executed,
-            cached: n_cached,
+            cached: done.cached,
             failed: report.failed,
             interrupted: report.interrupted,
             seconds,
@@ -92,7 +73,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     } else if !a.quiet {
         println!(
             "executed {}, cached {}, failed {} in {:.1} s",
-            report.executed, n_cached, report.failed, seconds
+            report.executed, done.cached, report.failed, seconds
         );
     }
     if report.interrupted {
@@ -102,7 +83,14 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         return Ok(crate::error::exit::INTERRUPTED);
     }
     if !a.no_report {
-        super::report::write(&plan, &store, a.out.as_deref(), a.quiet || a.json, false)?;
+        // The trials just stored are in new segments: scan again.
+        let scan = crate::pipeline::scan(&store)?;
+        warn_quarantined(&scan);
+        let ropts = a.report.options(&plan, false);
+        let outcome = crate::report::write(&plan, &store, &scan.keys, &ropts)?;
+        if !(a.quiet || a.json) {
+            print_report(&outcome, &ropts);
+        }
     }
     if report.failed > 0 {
         eprintln!("{} trials failed (diverged); see the `failure` column of trials.parquet", report.failed);

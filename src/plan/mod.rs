@@ -126,6 +126,23 @@ impl Plan {
 }
 
 impl Plan {
+    /// The variant a report of this plan shows: its only variant, when it has exactly one (the
+    /// plan of one variant, [`Plan::only_variant`]).
+    pub fn report_variant(&self) -> Option<&Variant> {
+        match self.variants.as_slice() {
+            [v] => Some(v),
+            _ => None,
+        }
+    }
+
+    /// What a report of this plan shows, for titles: `paper`, or `paper / gym-v0-reset`.
+    pub fn report_name(&self) -> String {
+        match self.report_variant() {
+            Some(v) => format!("{} / {}", self.name, v.id),
+            None => self.name.clone(),
+        }
+    }
+
     /// The plan of one variant alone (experiments of other variants dropped).
     pub fn only_variant(&self, id: &str) -> Plan {
         Plan {

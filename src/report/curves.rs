@@ -92,11 +92,8 @@ impl Curve {
 
     /// The curve of a cell's present trials.
     pub fn of_cell(cell: &CellData) -> Self {
-        let seeds: Vec<(&[u32], bool)> = cell
-            .trials
-            .iter()
-            .map(|t| (&t.record.outcome.episode_lengths[..], t.record.outcome.converged))
-            .collect();
+        let seeds: Vec<(&[u32], bool)> =
+            cell.trials.iter().map(|t| (&t.outcome.episode_lengths[..], t.outcome.converged)).collect();
         Self::of(&seeds)
     }
 
@@ -131,9 +128,21 @@ pub fn figure_size(panels: usize) -> (u32, u32) {
 
 /// The curves figure of one system as SVG text and PNG bytes.
 pub fn render(data: &ReportData, system: SystemKind) -> anyhow::Result<(String, Vec<u8>)> {
+    let d = render_as(data, system, true, true)?;
+    Ok((d.svg.unwrap_or_default(), d.png.unwrap_or_default()))
+}
+
+/// The curves figure of one system, drawn only in the formats asked for.
+pub fn render_as(
+    data: &ReportData,
+    system: SystemKind,
+    svg: bool,
+    png: bool,
+) -> anyhow::Result<figures::Drawn> {
     let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
-    let title = format!("{}: learning curves of the best cells ({})", system.title(), data.plan.name);
-    figures::paint(&Curves { exps: &exps, title: &title }, figure_size(exps.len()))
+    let title =
+        format!("{}: learning curves of the best cells ({})", system.title(), data.plan.report_name());
+    figures::paint_as(&Curves { exps: &exps, title: &title }, figure_size(exps.len()), svg, png)
         .map_err(|e| anyhow::anyhow!("drawing the {system} learning curves: {e}"))
 }
 

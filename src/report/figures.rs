@@ -11,6 +11,7 @@
 
 use super::glyphs::{self, TextCmd};
 use super::model::{CellData, ExpData, ReportData};
+use crate::plan::Experiment;
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 use plotters::coord::Shift;
@@ -38,26 +39,42 @@ pub(crate) const INK: RGBColor = RGBColor(30, 30, 30);
 pub(crate) const SUBTLE: RGBColor = RGBColor(90, 90, 90);
 
 /// The algorithms (figure columns) of a system's experiments, in the paper's order.
-pub fn columns(exps: &[&ExpData]) -> Vec<Algorithm> {
-    let mut a: Vec<Algorithm> = exps.iter().flat_map(|e| e.exp.algorithms.iter().copied()).collect();
+pub fn columns<E: AsRef<Experiment>>(exps: &[&E]) -> Vec<Algorithm> {
+    let mut a: Vec<Algorithm> = exps.iter().flat_map(|e| e.as_ref().algorithms.iter().copied()).collect();
     a.sort();
     a.dedup();
     a
 }
 
 /// Pixel size of a system's figure.
-pub fn figure_size(exps: &[&ExpData]) -> (u32, u32) {
+pub fn figure_size<E: AsRef<Experiment>>(exps: &[&E]) -> (u32, u32) {
     let cols = columns(exps).len().max(1) as u32;
     (cols * PANEL_W, HEADER_H + exps.len().max(1) as u32 * PANEL_H + FOOTER_H)
 }
 
 /// The figure of one system as SVG text and PNG bytes.
 pub fn render(data: &ReportData, system: SystemKind) -> anyhow::Result<(String, Vec<u8>)> {
+    let d = render_as(data, system, true, true)?;
+    Ok((d.svg.unwrap_or_default(), d.png.unwrap_or_default()))
+}
+
+/// The figure of one system, drawn only in the formats asked for.
+pub fn render_as(data: &ReportData, system: SystemKind, svg: bool, png: bool) -> anyhow::Result<Drawn> {
     let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == system).collect();
     let (w, h) = figure_size(&exps);
-    let title = format!("{}: mean episodes to the learning goal ({})", system.title(), data.plan.name);
-    paint(&Heatmaps { exps: &exps, title: &title }, (w, h))
+    let title =
+        format!("{}: mean episodes to the learning goal ({})", system.title(), data.plan.report_name());
+    paint_as(&Heatmaps { exps: &exps, title: &title }, (w, h), svg, png)
         .map_err(|e| anyhow::anyhow!("drawing the {system} figure: {e}"))
+}
+
+/// A figure drawn as SVG text and/or PNG bytes.
+#[derive(Debug, Clone, Default)]
+pub struct Drawn {
+    /// The SVG text ([`super::svg::compact`]ed), if asked for.
+    pub svg: Option<String>,
+    /// The PNG bytes, if asked for.
+    pub png: Option<Vec<u8>>,
 }
 
 /// What a figure draws: called once for the SVG and once for the bitmap, with the same result.
@@ -77,13 +94,25 @@ impl Picture for Heatmaps<'_, '_> {
     }
 }
 
-/// Draw `picture` at `(w, h)` pixels into SVG text and PNG bytes, text in the embedded font.
-pub(crate) fn paint(picture: &impl Picture, (w, h): (u32, u32)) -> Result<(String, Vec<u8>), String> {
+/// Draw `picture` as SVG (if `svg`) and PNG (if `png`).
+pub(crate) fn paint_as(
+    picture: &impl Picture,
+    size: (u32, u32),
+    svg: bool,
+    png: bool,
+) -> Result<Drawn, String> {
     REGISTER.call_once(|| {
         if plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_err() {
             panic!("the embedded font is a valid TrueType file");
         }
     });
+    Ok(Drawn {
+        svg: if svg { Some(super::svg::compact(&paint_svg(picture, size)?)) } else { None },
+        png: if png { Some(paint_png(picture, size)?) } else { None },
+    })
+}
+
+fn paint_svg(picture: &impl Picture, (w, h): (u32, u32)) -> Result<String, String> {
     let mut svg = String::new();
     {
         let mut canvas =
@@ -99,6 +128,10 @@ pub(crate) fn paint(picture: &impl Picture, (w, h): (u32, u32)) -> Result<(Strin
         }
         canvas.root.present().map_err(|e| e.to_string())?;
     }
+    Ok(svg)
+}
+
+fn paint_png(picture: &impl Picture, (w, h): (u32, u32)) -> Result<Vec<u8>, String> {
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     let texts = {
         let mut canvas = Canvas {
@@ -110,7 +143,7 @@ pub(crate) fn paint(picture: &impl Picture, (w, h): (u32, u32)) -> Result<(Strin
         canvas.texts
     };
     glyphs::draw(FONT_BYTES, &mut rgb, w, h, &texts).map_err(|e| e.to_string())?;
-    Ok((svg, encode_png(&rgb, w, h).map_err(|e| e.to_string())?))
+    encode_png(&rgb, w, h).map_err(|e| e.to_string())
 }
 
 fn encode_png(rgb: &[u8], w: u32, h: u32) -> anyhow::Result<Vec<u8>> {
@@ -293,21 +326,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     }
     cv.text(&sub.join("; "), (cx, oy + 33), 12.0, SUBTLE, HPos::Center, VPos::Center);
 
-    // Grid geometry: rows = first axis, columns = second (a one-axis experiment is one row).
-    let two = exp.axes.len() > 1;
-    let (rows, cols) = if two {
-        (&exp.axes[0].values[..], &exp.axes[1].values[..])
-    } else {
-        (&[0.0][..], &exp.axes[0].values[..])
-    };
-    let (left, right, top) = (ox + 78, ox + PANEL_W as i32 - 88, oy + 52);
-    let full = (oy + PANEL_H as i32 - 58 - top) as f64;
-    let cw = (right - left) as f64 / cols.len() as f64;
-    let ch = if two { full / rows.len() as f64 } else { full.min(cw.max(60.0)) };
-    let bottom = top + (ch * rows.len() as f64).round() as i32;
-    let at = |ri: usize, ci: usize| {
-        (left + (ci as f64 * cw).round() as i32, top + (ri as f64 * ch).round() as i32)
-    };
+    let g = Grid::of(exp, (ox, oy));
 
     // Colour scale of this panel.
     let means: Vec<f64> =
@@ -316,13 +335,12 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     let hi = means.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let scale = |m: f64| if hi > lo { (m - lo) / (hi - lo) } else { 0.5 };
 
-    let font = (cw / 4.2).min(ch / 2.2).clamp(8.0, 14.0);
+    let font = g.font();
     let mut best_rect = None;
-    for (ri, &rv) in rows.iter().enumerate() {
-        for (ci, &cv_) in cols.iter().enumerate() {
-            let (a, b) = (at(ri, ci), at(ri + 1, ci + 1));
-            let coords: Vec<f64> = if two { vec![rv, cv_] } else { vec![cv_] };
-            let idx = e.find(alg, &coords);
+    for ri in 0..g.rows.len() {
+        for ci in 0..g.cols.len() {
+            let (a, b) = (g.at(ri, ci), g.at(ri + 1, ci + 1));
+            let idx = e.find(alg, &g.coords(ri, ci));
             let cell = idx.map(|i| &e.cells[i]);
             let fill = cell.and_then(|c| c.summary.mean).map_or(MISSING, |m| viridis(scale(m)));
             cv.rect(a, b, fill.filled())?;
@@ -348,24 +366,97 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         cv.rect((a.0 + 1, a.1 + 1), (b.0 - 1, b.1 - 1), BEST.stroke_width(3))?;
     }
 
-    // Ticks and axis labels.
-    for (ci, v) in cols.iter().enumerate() {
-        let x = left + ((ci as f64 + 0.5) * cw).round() as i32;
-        cv.text(&crate::spec::format_value(*v), (x, bottom + 5), 12.0, INK, HPos::Center, VPos::Top);
-    }
-    let col_axis = &exp.axes[usize::from(two)].label;
-    cv.text(col_axis, ((left + right) / 2, bottom + 25), 13.0, INK, HPos::Center, VPos::Top);
-    if two {
-        for (ri, v) in rows.iter().enumerate() {
-            let y = top + ((ri as f64 + 0.5) * ch).round() as i32;
-            cv.text(&crate::spec::format_value(*v), (left - 6, y), 12.0, INK, HPos::Right, VPos::Center);
-        }
-        cv.text_up(&exp.axes[0].label, (ox + 30, (top + bottom) / 2), 13.0, INK);
-    }
+    g.axes(cv, exp);
     if means.is_empty() {
         return Ok(());
     }
-    colorbar(cv, (right + 14, top), (right + 30, bottom.max(top + 120)), lo, hi)
+    let (a, b) = g.bar();
+    colorbar(cv, a, b, lo, hi)
+}
+
+/// The cell grid of one heatmap panel (shared by the system figures and the comparison's
+/// difference figures): rows = the first axis, columns = the second (a one-axis experiment is
+/// one row), and where each cell, tick and colour bar goes.
+pub(crate) struct Grid<'e> {
+    /// Row values (`[0.0]` for a one-axis experiment).
+    pub rows: &'e [f64],
+    /// Column values.
+    pub cols: &'e [f64],
+    two: bool,
+    ox: i32,
+    left: i32,
+    right: i32,
+    top: i32,
+    bottom: i32,
+    cw: f64,
+    ch: f64,
+}
+
+impl<'e> Grid<'e> {
+    /// The grid of experiment `exp` in the panel whose top-left corner is `(ox, oy)`.
+    pub fn of(exp: &'e Experiment, (ox, oy): (i32, i32)) -> Self {
+        let two = exp.axes.len() > 1;
+        let (rows, cols) = if two {
+            (&exp.axes[0].values[..], &exp.axes[1].values[..])
+        } else {
+            (&[0.0][..], &exp.axes[0].values[..])
+        };
+        let (left, right, top) = (ox + 78, ox + PANEL_W as i32 - 88, oy + 52);
+        let full = (oy + PANEL_H as i32 - 58 - top) as f64;
+        let cw = (right - left) as f64 / cols.len() as f64;
+        let ch = if two { full / rows.len() as f64 } else { full.min(cw.max(60.0)) };
+        let bottom = top + (ch * rows.len() as f64).round() as i32;
+        Self { rows, cols, two, ox, left, right, top, bottom, cw, ch }
+    }
+
+    /// Top-left pixel of cell (`ri`, `ci`); (`ri + 1`, `ci + 1`) is its bottom-right.
+    pub fn at(&self, ri: usize, ci: usize) -> (i32, i32) {
+        (self.left + (ci as f64 * self.cw).round() as i32, self.top + (ri as f64 * self.ch).round() as i32)
+    }
+
+    /// The experiment coordinates of cell (`ri`, `ci`).
+    pub fn coords(&self, ri: usize, ci: usize) -> Vec<f64> {
+        if self.two {
+            vec![self.rows[ri], self.cols[ci]]
+        } else {
+            vec![self.cols[ci]]
+        }
+    }
+
+    /// Font size of the cell labels.
+    pub fn font(&self) -> f64 {
+        (self.cw / 4.2).min(self.ch / 2.2).clamp(8.0, 14.0)
+    }
+
+    /// Corners of the colour bar right of the grid.
+    pub fn bar(&self) -> ((i32, i32), (i32, i32)) {
+        ((self.right + 14, self.top), (self.right + 30, self.bottom.max(self.top + 120)))
+    }
+
+    /// Ticks and axis labels.
+    pub fn axes<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>, exp: &Experiment) {
+        for (ci, v) in self.cols.iter().enumerate() {
+            let x = self.left + ((ci as f64 + 0.5) * self.cw).round() as i32;
+            cv.text(&crate::spec::format_value(*v), (x, self.bottom + 5), 12.0, INK, HPos::Center, VPos::Top);
+        }
+        let col_axis = &exp.axes[usize::from(self.two)].label;
+        let mid = (self.left + self.right) / 2;
+        cv.text(col_axis, (mid, self.bottom + 25), 13.0, INK, HPos::Center, VPos::Top);
+        if self.two {
+            for (ri, v) in self.rows.iter().enumerate() {
+                let y = self.top + ((ri as f64 + 0.5) * self.ch).round() as i32;
+                cv.text(
+                    &crate::spec::format_value(*v),
+                    (self.left - 6, y),
+                    12.0,
+                    INK,
+                    HPos::Right,
+                    VPos::Center,
+                );
+            }
+            cv.text_up(&exp.axes[0].label, (self.ox + 30, (self.top + self.bottom) / 2), 13.0, INK);
+        }
+    }
 }
 
 /// A vertical colour bar from `lo` (bottom) to `hi` (top) with round ticks (one if `lo == hi`).

@@ -1,14 +1,16 @@
-//! `index.html`: one self-contained page (inline CSS, no script, no network) with the pipeline's
-//! name and description, trial counts, Table III, each system's figure (the SVG of
-//! `figures/<system>.svg`, inlined so the page alone shows everything) and a cell table per
-//! experiment, plus links to the data files and the figure files.
+//! `index.html`: one page (inline CSS, no script, no network) with the report's identity (the
+//! pipeline, and for a variant its id, title, `set` overrides and a link back to the comparison),
+//! trial counts, Table III, each system's figures (linked from `figures/`, so every figure is
+//! stored once) and a cell table per experiment, plus links to the data files.
 
 use super::curves::CURVE_RULE;
-use super::model::{ReportData, BEST_RULE, CENSORING};
+use super::formats::Formats;
+use super::model::{ExpData, ReportData, BEST_RULE, CENSORING};
 use super::table::{cell_table, render, table3, Html};
 use crate::report::table::html::escape_html as esc;
 
-/// The pages' stylesheet.
+/// The pages' stylesheet (`.aK`: the tables whose number columns follow the first K, see
+/// [`super::table::html`]).
 pub(crate) const STYLE: &str = "\
 body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1100px;color:#1e1e1e;line-height:1.4;padding:0 1em}
 h1{margin-bottom:.2em}h2{margin-top:2em;border-bottom:1px solid #ccc}
@@ -21,17 +23,45 @@ tr.best td{background:#ffecec;font-weight:600}
 figure{margin:1em 0}figure svg{display:block;max-width:100%;height:auto;border:1px solid #eee}
 .meta{color:#555}nav a{margin-right:1em}code{background:#f3f3f3;padding:0 .2em}
 .scroll{overflow-x:auto}
+img{max-width:100%;height:auto;border:1px solid #eee}
+.a1 :is(td,th):nth-child(n+2),.a2 :is(td,th):nth-child(n+3),.a3 :is(td,th):nth-child(n+4),.a4 :is(td,th):nth-child(n+5){text-align:right;font-variant-numeric:tabular-nums}
+.caption{color:#444;max-width:100%}
 ";
 
-/// The page; `figures` and `curves` hold each system's name and its heatmap / learning-curve
-/// figure as SVG text.
-pub fn page(data: &ReportData, figures: &[(String, String)], curves: &[(String, String)]) -> String {
+/// Which report a page belongs to, as its heading and first paragraph say: the pipeline, and for
+/// a variant's folder the variant's id, title and `set` overrides, with a link back to the
+/// comparison of all variants.
+pub(crate) fn identity(data: &ReportData) -> (String, Vec<String>) {
     let plan = data.plan;
+    let mut notes = Vec::new();
+    if let Some(v) = plan.report_variant() {
+        let title = v.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
+        notes.push(format!("Variant {}{title} of pipeline {}.", v.id, plan.name));
+        if v.set.is_empty() {
+            notes.push("Its settings: the pipeline as written (no `set`).".into());
+        } else {
+            notes.push(format!("Its settings: the pipeline with {}.", v.set.join(", ")));
+        }
+    }
+    (plan.report_name(), notes)
+}
+
+/// The page of one report: tables inline, figures linked as `figures/<system>.<ext>` (the SVG
+/// when written, else the PNG; none without either).
+pub fn page(data: &ReportData, formats: Formats) -> String {
+    let plan = data.plan;
+    let (name, notes) = identity(data);
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
-    h.push_str(&format!("<title>qsweep report: {}</title>\n", esc(&plan.name)));
+    h.push_str(&format!("<title>qsweep report: {}</title>\n", esc(&name)));
     h.push_str(&format!("<style>\n{STYLE}</style>\n</head>\n<body>\n"));
-    h.push_str(&format!("<h1>qsweep report: {}</h1>\n", esc(&plan.name)));
+    h.push_str(&format!("<h1>qsweep report: {}</h1>\n", esc(&name)));
+    if plan.report_variant().is_some() {
+        h.push_str(&format!(
+            "<p class=\"variant\">{} <a href=\"../index.html\">All variants compared</a></p>\n",
+            esc(&notes.join(" "))
+        ));
+    }
     if let Some(d) = &plan.description {
         h.push_str(&format!("<p>{}</p>\n", esc(d)));
     }
@@ -56,11 +86,17 @@ pub fn page(data: &ReportData, figures: &[(String, String)], curves: &[(String, 
         h.push_str(&format!(" Reference values: {}.", esc(src)));
     }
     h.push_str("</p>\n");
-    h.push_str(
+    let trials = if plan.report_variant().is_some() {
+        "<a href=\"../trials.parquet\">../trials.parquet</a> (one row per trial of every variant, with a \
+         <code>variant</code> column; written by <code>qsweep report</code>, not committed)"
+    } else {
+        "<a href=\"trials.parquet\">trials.parquet</a> (one row per trial)"
+    };
+    h.push_str(&format!(
         "<p>Data: <a href=\"table3.csv\">table3.csv</a> · <a href=\"table3.md\">table3.md</a> · \
          <a href=\"table3.tex\">table3.tex</a> · <a href=\"cells.parquet\">cells.parquet</a> (one row per cell) · \
-         <a href=\"trials.parquet\">trials.parquet</a> (one row per trial)</p>\n",
-    );
+         {trials}</p>\n"
+    ));
     let systems = data.systems();
     h.push_str("<nav><a href=\"#table3\">Table III</a>");
     for s in &systems {
@@ -74,28 +110,29 @@ pub fn page(data: &ReportData, figures: &[(String, String)], curves: &[(String, 
 
     for s in systems {
         h.push_str(&format!("<h2 id=\"{}\">{}</h2>\n", s.name(), esc(s.title())));
-        if let Some((_, svg)) = figures.iter().find(|(n, _)| n == s.name()) {
+        let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == s).collect();
+        if let Some(ext) = formats.figure_ext() {
+            let (w, ht) = super::figures::figure_size(&exps);
             h.push_str(&format!(
-                "<figure>{1}\n<figcaption>Mean episodes to the learning goal per cell; \
+                "<figure><img src=\"figures/{0}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
+                 <figcaption>Mean episodes to the learning goal per cell; \
                  red outline: the best cell (Table III); hatched with *: some trials never reached the goal; \
-                 grey: no trials. {2} Files: <a href=\"figures/{0}.png\">PNG</a> · \
-                 <a href=\"figures/{0}.svg\">SVG</a></figcaption></figure>\n",
+                 grey: no trials. {2}</figcaption></figure>\n",
                 s.name(),
-                inline_svg(
-                    svg,
-                    &format!("{}: heatmaps of mean episodes per experiment and algorithm", s.title())
-                ),
+                esc(&format!(
+                    "{}: heatmaps of mean episodes per experiment and algorithm ({name})",
+                    s.title()
+                )),
                 esc(BEST_RULE),
             ));
-        }
-        if let Some((_, svg)) = curves.iter().find(|(n, _)| n == s.name()) {
+            let (w, ht) = super::curves::figure_size(exps.len());
             h.push_str(&format!(
-                "<figure>{1}\n<figcaption>Learning curves of the best cell of each experiment and \
+                "<figure><img src=\"figures/{0}-curves.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
+                 <figcaption>Learning curves of the best cell of each experiment and \
                  algorithm (the Table III rows): episode length against episode, log scale; dashed red line: the \
-                 learning goal. {2} <a href=\"figures/{0}-curves.png\">PNG</a> · \
-                 <a href=\"figures/{0}-curves.svg\">SVG</a></figcaption></figure>\n",
+                 learning goal. {2}</figcaption></figure>\n",
                 s.name(),
-                inline_svg(svg, &format!("{}: learning curves of the best cells", s.title())),
+                esc(&format!("{}: learning curves of the best cells ({name})", s.title())),
                 esc(CURVE_RULE)
             ));
         }
@@ -108,11 +145,4 @@ pub fn page(data: &ReportData, figures: &[(String, String)], curves: &[(String, 
     }
     h.push_str(&format!("<p class=\"meta\">{}</p>\n</body>\n</html>\n", esc(CENSORING)));
     h
-}
-
-/// An SVG file's text for inlining in HTML: labelled as one image for screen readers, and without
-/// the `xmlns` attribute, which HTML does not need (so the page names no URL at all).
-pub(crate) fn inline_svg(svg: &str, label: &str) -> String {
-    let svg = svg.trim().replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1);
-    svg.replacen("<svg ", &format!("<svg role=\"img\" aria-label=\"{}\" ", esc(label)), 1)
 }

@@ -1,37 +1,47 @@
-//! The report stage: from a plan and the trial records found for it, write
+//! The report stage: from a plan and the trial outcomes found for it, write
 //!
 //! - `table3.md`, `table3.csv`, `table3.tex`: the paper's Table III (best cell per system,
 //!   experiment and algorithm, with the paper's values when the pipeline gives them);
 //! - `cells.parquet`, `trials.parquet`: the data behind it (schemas in [`parquet`]);
-//! - `figures/<system>.svg` and `.png`: the paper's Figures 5–7 (see [`figures`]);
-//! - `figures/<system>-curves.svg` and `.png`: learning curves of the best cells (see [`curves`]);
-//! - `index.html`: one self-contained page with all of the above (the figures inlined as SVG).
+//! - `figures/<system>.svg` (`.png` on request): the paper's Figures 5–7 (see [`figures`]);
+//! - `figures/<system>-curves.svg`: learning curves of the best cells (see [`curves`]);
+//! - `index.html` and `README.md`: the tables and the figures on one page, for a browser and for
+//!   a repository web page;
+//! - `manifest.json`: what the folder holds ([`manifest`]), read by the overwrite guard.
 //!
-//! Trials missing from the records are left out and counted. Every file is written atomically
-//! (a temporary file in the same directory, then a rename), and the output is a pure function of
-//! the inputs: no timestamps, no hash-map order, a seeded bootstrap.
+//! [`stage::write`] is the whole stage for a pipeline, one variant at a time ([`compare`] for the
+//! comparison of variants); [`write_report`] writes one report from outcomes already in memory.
+//! Which files are written is chosen by [`formats`]. Trials missing from the records are left
+//! out and counted. Every file is written atomically (a temporary file in the same directory,
+//! then a rename), and the output is a pure function of the inputs: no timestamps, no hash-map
+//! order, a seeded bootstrap.
 
+pub mod compare;
 pub mod curves;
 pub mod figures;
+pub mod formats;
 pub mod glyphs;
 pub mod html;
+pub mod manifest;
+pub mod markdown;
 pub mod model;
 pub mod parquet;
+pub mod stage;
 pub mod stats;
+pub mod svg;
 pub mod table;
-pub mod variants;
 
-use crate::cache::{Key, TrialRecord};
 use crate::plan::Plan;
 use anyhow::Context;
-use std::collections::HashMap;
+use formats::{Format, Formats};
 use std::path::{Path, PathBuf};
 
 pub use crate::atomic::write_atomic;
-pub use model::ReportData;
+pub use model::{Outcomes, ReportData};
+pub use stage::{write, ReportOptions, ReportOutcome};
 
-/// What [`write_report`] wrote.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// What a report wrote.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct ReportSummary {
     /// Experiments in the plan.
     pub experiments: usize,
@@ -49,99 +59,106 @@ pub struct ReportSummary {
     pub files: Vec<PathBuf>,
 }
 
-/// Write the report of `plan` into `dir`: for a pipeline without variants, [`write_report`]; with
-/// variants, each variant's full report into `dir/<variant-id>/`, and into `dir` itself the
-/// comparison of the variants and `cells.parquet` / `trials.parquet` of all of them (with a
-/// `variant` column). Returns the summary of the whole plan.
-pub fn write_reports(
-    plan: &Plan,
-    records: &HashMap<Key, TrialRecord>,
-    dir: &Path,
-) -> anyhow::Result<ReportSummary> {
-    if plan.variants.is_empty() {
-        return write_report(plan, records, dir);
+impl ReportSummary {
+    /// The summary of `data` with the files written.
+    fn of(data: &ReportData, files: Vec<PathBuf>) -> Self {
+        let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
+        Self {
+            experiments: data.experiments.len(),
+            cells: cells.len(),
+            cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
+            trials_planned: data.trials_planned,
+            trials_present: data.trials_present,
+            trials_missing: data.trials_planned - data.trials_present,
+            files,
+        }
     }
-    std::fs::create_dir_all(dir.join("figures"))
-        .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
-    let subs: Vec<Plan> = plan.variants.iter().map(|v| plan.only_variant(&v.id)).collect();
-    let mut files = Vec::new();
-    for (v, sub) in plan.variants.iter().zip(&subs) {
-        let s = write_report(sub, records, &dir.join(&v.id))?;
-        files.extend(s.files.into_iter().map(|f| Path::new(&v.id).join(f)));
-    }
-    let data = ReportData::build(plan, records);
-    if plan.variant_subset {
-        // The comparison and the combined data cover every variant: a report of some of them
-        // would replace it with less, so it is left as it is.
-        return Ok(summary(&data, files));
-    }
-    write_atomic(&dir.join("cells.parquet"), &parquet::cells_parquet(&data)?)?;
-    write_atomic(&dir.join("trials.parquet"), &parquet::trials_parquet(&data)?)?;
-    files.extend(["cells.parquet", "trials.parquet"].map(PathBuf::from));
-    let per_variant: Vec<(variants::VariantInfo, ReportData)> = plan
-        .variants
-        .iter()
-        .zip(&subs)
-        .map(|(v, sub)| {
-            (
-                variants::VariantInfo { id: v.id.clone(), title: v.title.clone() },
-                ReportData::build(sub, records),
-            )
-        })
-        .collect();
-    files.extend(variants::write_comparison(dir, &per_variant)?);
-    Ok(summary(&data, files))
-}
 
-fn summary(data: &ReportData, files: Vec<PathBuf>) -> ReportSummary {
-    let cells: Vec<_> = data.experiments.iter().flat_map(|e| &e.cells).collect();
-    ReportSummary {
-        experiments: data.experiments.len(),
-        cells: cells.len(),
-        cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
-        trials_planned: data.trials_planned,
-        trials_present: data.trials_present,
-        trials_missing: data.trials_planned - data.trials_present,
-        files,
+    /// Add another report's counts (the files stay).
+    fn add(&mut self, o: &ReportSummary) {
+        self.experiments += o.experiments;
+        self.cells += o.cells;
+        self.cells_with_trials += o.cells_with_trials;
+        self.trials_planned += o.trials_planned;
+        self.trials_present += o.trials_present;
+        self.trials_missing += o.trials_missing;
     }
 }
 
-/// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it.
-pub fn write_report(
+/// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it, in
+/// the default formats, with its own `trials.parquet`.
+pub fn write_report(plan: &Plan, records: &dyn Outcomes, dir: &Path) -> anyhow::Result<ReportSummary> {
+    write_report_as(plan, records, dir, Formats::default())
+}
+
+/// [`write_report`] in the given formats.
+pub fn write_report_as(
     plan: &Plan,
-    records: &HashMap<Key, TrialRecord>,
+    records: &dyn Outcomes,
     dir: &Path,
+    formats: Formats,
 ) -> anyhow::Result<ReportSummary> {
+    let data = ReportData::build(plan, records);
+    let files = write_folder(&data, dir, formats, true)?;
+    Ok(ReportSummary::of(&data, files))
+}
+
+/// Write one report folder of `data` into `dir` in `formats`; `trials.parquet` only if
+/// `own_trials` (a variant's trial rows go to the pipeline's combined file instead). Returns the
+/// files written, relative to `dir`, in writing order.
+pub fn write_folder(
+    data: &ReportData,
+    dir: &Path,
+    formats: Formats,
+    own_trials: bool,
+) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir.join("figures"))
         .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
-    let data = ReportData::build(plan, records);
     let mut files = Vec::new();
     let mut put = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
         write_atomic(&dir.join(name), bytes)?;
         files.push(PathBuf::from(name));
         Ok(())
     };
-
-    let t3 = table::table3(&data);
-    put("table3.md", table::render(&t3, &table::Markdown).as_bytes())?;
-    put("table3.csv", table::render(&t3, &table::Csv).as_bytes())?;
-    put("table3.tex", table::render(&t3, &table::Latex).as_bytes())?;
-    put("cells.parquet", &parquet::cells_parquet(&data)?)?;
-    put("trials.parquet", &parquet::trials_parquet(&data)?)?;
-    let mut svgs = Vec::new();
-    let mut curve_svgs = Vec::new();
-    for system in data.systems() {
-        let (svg, png) = figures::render(&data, system)?;
-        put(&format!("figures/{}.svg", system.name()), svg.as_bytes())?;
-        put(&format!("figures/{}.png", system.name()), &png)?;
-        svgs.push((system.name().to_string(), svg));
-        let (svg, png) = curves::render(&data, system)?;
-        put(&format!("figures/{}-curves.svg", system.name()), svg.as_bytes())?;
-        put(&format!("figures/{}-curves.png", system.name()), &png)?;
-        curve_svgs.push((system.name().to_string(), svg));
+    let t3 = table::table3(data);
+    if formats.has(Format::Md) {
+        put("table3.md", table::render(&t3, &table::Markdown).as_bytes())?;
     }
-    put("index.html", html::page(&data, &svgs, &curve_svgs).as_bytes())?;
-    Ok(summary(&data, files))
+    if formats.has(Format::Csv) {
+        put("table3.csv", table::render(&t3, &table::Csv).as_bytes())?;
+    }
+    if formats.has(Format::Tex) {
+        put("table3.tex", table::render(&t3, &table::Latex).as_bytes())?;
+    }
+    if formats.has(Format::Cells) {
+        put("cells.parquet", &parquet::cells_parquet(data)?)?;
+    }
+    if own_trials && formats.has(Format::Trials) {
+        put("trials.parquet", &parquet::trials_parquet(data)?)?;
+    }
+    let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
+    if svg || png {
+        for system in data.systems() {
+            for (stem, d) in [
+                (system.name().to_string(), figures::render_as(data, system, svg, png)?),
+                (format!("{}-curves", system.name()), curves::render_as(data, system, svg, png)?),
+            ] {
+                if let Some(s) = d.svg {
+                    put(&format!("figures/{stem}.svg"), s.as_bytes())?;
+                }
+                if let Some(p) = d.png {
+                    put(&format!("figures/{stem}.png"), &p)?;
+                }
+            }
+        }
+    }
+    if formats.has(Format::Html) {
+        put("index.html", html::page(data, formats).as_bytes())?;
+    }
+    if formats.has(Format::Md) {
+        put("README.md", markdown::page(data, &t3, formats).as_bytes())?;
+    }
+    Ok(files)
 }
 
 /// How many distinct trials the report already in `dir` holds (distinct `key`s of its

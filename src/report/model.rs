@@ -7,11 +7,32 @@
 //! raise a cell's mean instead of vanishing from it.
 
 use super::stats::Summary;
+use crate::cache::store::StoredOutcome;
 use crate::cache::{Key, TrialRecord};
 use crate::plan::{Cell, Experiment, Plan, PlannedTrial};
 use crate::sim::env::SystemKind;
-use crate::sim::Algorithm;
+use crate::sim::{Algorithm, Outcome};
+use rayon::prelude::*;
 use std::collections::HashMap;
+
+/// Where a report finds a trial's outcome by key: the cache's outcome columns
+/// ([`StoredOutcome`]), or whole records (in tests and tools that ran the trials themselves).
+pub trait Outcomes: Sync {
+    /// The outcome of `key` and its wall-clock seconds, if present.
+    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64)>;
+}
+
+impl Outcomes for HashMap<Key, StoredOutcome> {
+    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64)> {
+        self.get(key).map(|s| (&s.outcome, s.seconds))
+    }
+}
+
+impl Outcomes for HashMap<Key, TrialRecord> {
+    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64)> {
+        self.get(key).map(|r| (&r.outcome, r.seconds))
+    }
+}
 
 /// State-variable columns of the report, in Table III order.
 pub const VAR_COLUMNS: [&str; 4] = ["x", "x_dot", "theta", "theta_dot"];
@@ -25,11 +46,11 @@ pub const CENSORING: &str = "Trials that never reached the goal are not dropped:
 episode cap (max_episodes), so those means are lower bounds. std is the sample standard deviation \
 (n − 1).";
 
-/// Episodes a trial contributes to its cell's statistics.
-pub fn episodes_counted(r: &TrialRecord) -> u32 {
-    match (r.outcome.converged, r.outcome.episodes_to_goal) {
+/// Episodes a trial contributes to its cell's statistics, under the episode cap `max_episodes`.
+pub fn episodes_counted(outcome: &Outcome, max_episodes: u32) -> u32 {
+    match (outcome.converged, outcome.episodes_to_goal) {
         (true, Some(e)) => e,
-        _ => r.config.limits.max_episodes,
+        _ => max_episodes,
     }
 }
 
@@ -45,8 +66,10 @@ pub fn resolution_columns(system: SystemKind, resolution: &[u32]) -> [Option<u32
 pub struct TrialData<'a> {
     /// The planned trial (seed, key).
     pub planned: &'a PlannedTrial,
-    /// Its record.
-    pub record: &'a TrialRecord,
+    /// Its outcome.
+    pub outcome: &'a Outcome,
+    /// Wall-clock seconds it took when computed (informational).
+    pub seconds: f64,
     /// Episodes it contributes ([`episodes_counted`]).
     pub counted: u32,
 }
@@ -96,6 +119,12 @@ pub struct ExpData<'a> {
     pub best: Vec<(Algorithm, Option<Best>)>,
 }
 
+impl AsRef<Experiment> for ExpData<'_> {
+    fn as_ref(&self) -> &Experiment {
+        self.exp
+    }
+}
+
 impl ExpData<'_> {
     /// The best cell of `algorithm`, if any.
     pub fn best_of(&self, algorithm: Algorithm) -> Option<Best> {
@@ -128,8 +157,10 @@ pub struct ReportData<'a> {
 
 impl<'a> ReportData<'a> {
     /// Gather the present trials of every cell and compute statistics and best cells.
-    pub fn build(plan: &'a Plan, records: &'a HashMap<Key, TrialRecord>) -> Self {
-        let mut planned = 0;
+    /// Each cell's statistics are computed here, once (in parallel; each cell's bootstrap is
+    /// seeded by its own trials, so the result does not depend on the threads).
+    pub fn build(plan: &'a Plan, records: &'a dyn Outcomes) -> Self {
+        let planned = plan.trial_count();
         let mut present = 0;
         let experiments = plan
             .experiments
@@ -137,24 +168,25 @@ impl<'a> ReportData<'a> {
             .map(|exp| {
                 let cells: Vec<CellData> = exp
                     .cells
-                    .iter()
+                    .par_iter()
                     .map(|cell| {
+                        let cap = cell.config.limits.max_episodes;
                         let trials: Vec<TrialData> = cell
                             .trials
                             .iter()
                             .filter_map(|t| {
-                                records.get(&t.key).map(|r| TrialData {
+                                records.outcome(&t.key).map(|(o, seconds)| TrialData {
                                     planned: t,
-                                    record: r,
-                                    counted: episodes_counted(r),
+                                    outcome: o,
+                                    seconds,
+                                    counted: episodes_counted(o, cap),
                                 })
                             })
                             .collect();
-                        planned += cell.trials.len();
-                        present += trials.len();
                         cell_data(cell, trials)
                     })
                     .collect();
+                present += cells.iter().map(|c| c.trials.len()).sum::<usize>();
                 let best = exp
                     .algorithms
                     .iter()
@@ -190,7 +222,7 @@ impl<'a> ReportData<'a> {
 
 fn cell_data<'a>(cell: &'a Cell, trials: Vec<TrialData<'a>>) -> CellData<'a> {
     let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
-    let successes = trials.iter().filter(|t| t.record.outcome.converged).count();
+    let successes = trials.iter().filter(|t| t.outcome.converged).count();
     let summary = Summary::of(&values, bootstrap_seed(trials.iter().map(|t| &t.planned.key)));
     CellData { cell, trials, successes, summary }
 }

@@ -96,6 +96,11 @@ fn cell_identity(cols: &mut Cols, ids: &[Id]) {
 
 /// `cells.parquet`: one row per cell (schema in the module documentation).
 pub fn cells_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
+    crate::parquet_io::to_parquet(&cells_batch(data)?)
+}
+
+/// The rows of `cells.parquet` as one Arrow batch.
+pub fn cells_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::RecordBatch> {
     let ids: Vec<Id> = data.experiments.iter().flat_map(|e| e.cells.iter().map(move |c| (e, c))).collect();
     let best: Vec<bool> =
         data.experiments.iter().flat_map(|e| (0..e.cells.len()).map(move |i| e.is_best(i))).collect();
@@ -114,43 +119,46 @@ pub fn cells_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
     cols.f64_opt("iqm", &ids, |r| r.1.summary.iqm);
     cols.f64_opt("ci_lo", &ids, |r| r.1.summary.ci_lo);
     cols.f64_opt("ci_hi", &ids, |r| r.1.summary.ci_hi);
-    cols.into_parquet()
+    cols.into_batch()
 }
 
 /// `trials.parquet`: one row per present trial of each cell (schema in the module documentation).
 pub fn trials_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
+    crate::parquet_io::to_parquet(&trials_batch(data)?)
+}
+
+/// The rows of `trials.parquet` as one Arrow batch (so several reports' rows can be streamed into
+/// one file).
+pub fn trials_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::RecordBatch> {
     let mut ids: Vec<Id> = Vec::new();
-    let mut trials: Vec<&TrialData> = Vec::new();
+    let mut trials: Vec<(&TrialData, &LearnerConfig)> = Vec::new();
     for e in &data.experiments {
         for c in &e.cells {
             for t in &c.trials {
                 ids.push((e, c));
-                trials.push(t);
+                trials.push((t, &c.cell.config.learner));
             }
         }
     }
-    fn out<'a>(t: &&'a TrialData) -> &'a Outcome {
-        &t.record.outcome
-    }
-    fn learner<'a>(t: &&'a TrialData) -> &'a LearnerConfig {
-        &t.record.config.learner
+    fn out<'a>(t: &(&'a TrialData, &LearnerConfig)) -> &'a Outcome {
+        t.0.outcome
     }
     let mut cols = Cols::default();
     cell_identity(&mut cols, &ids);
-    cols.u64("seed", &trials, |t| t.planned.seed);
-    cols.str("key", &trials, |t| t.planned.key.hex());
+    cols.u64("seed", &trials, |t| t.0.planned.seed);
+    cols.str("key", &trials, |t| t.0.planned.key.hex());
     cols.bool("converged", &trials, |t| out(t).converged);
     cols.u32_opt("episodes_to_goal", &trials, |t| out(t).episodes_to_goal);
     cols.u32("episodes", &trials, |t| out(t).episodes);
-    cols.u32("episodes_counted", &trials, |t| t.counted);
+    cols.u32("episodes_counted", &trials, |t| t.0.counted);
     cols.u64("total_steps", &trials, |t| out(t).total_steps);
     cols.str("stop", &trials, |t| out(t).stop.name());
     cols.str_opt("failure", &trials, |t| out(t).failure.as_deref());
     cols.list_u32("episode_lengths", &trials, |t| &out(t).episode_lengths);
-    cols.f64("epsilon", &trials, |t| learner(t).epsilon);
-    cols.f64("gamma", &trials, |t| learner(t).gamma);
-    cols.f64("alpha", &trials, |t| learner(t).alpha);
-    cols.f64("lambda", &trials, |t| learner(t).lambda);
-    cols.f64("seconds", &trials, |t| t.record.seconds);
-    cols.into_parquet()
+    cols.f64("epsilon", &trials, |t| t.1.epsilon);
+    cols.f64("gamma", &trials, |t| t.1.gamma);
+    cols.f64("alpha", &trials, |t| t.1.alpha);
+    cols.f64("lambda", &trials, |t| t.1.lambda);
+    cols.f64("seconds", &trials, |t| t.0.seconds);
+    cols.into_batch()
 }

@@ -14,7 +14,7 @@ fn report_refuses_to_replace_a_bigger_report_unless_forced() {
         .file("empty/.keep", "")
         .args(["report", "tiny.yaml", "--cache", "empty"])
         .status(1)
-        .stderr_contains("reports/tiny holds a report of 56 distinct trials")
+        .stderr_contains("reports/tiny holds a report of 56 trials, 28 cells")
         .stderr_contains("has only 0 of this pipeline's 56 distinct trials now")
         .stderr_contains("--force")
         .run();
@@ -35,22 +35,39 @@ fn report_refuses_to_replace_a_bigger_report_unless_forced() {
     assert!(after.contains("Trials present: 0 of 56 planned"), "{after}");
 }
 
+/// Regression: the guard refused a complete report of a changed pipeline (lowering `seeds`), although
+/// every planned trial was cached. Now it replaces the report and says what changed; a report
+/// whose plan lacks trials still refuses.
 #[test]
-fn run_stores_its_trials_but_does_not_shrink_the_report() {
+fn lowering_seeds_replaces_a_complete_report_and_says_what_changed() {
     let done = Test::new()
         .pipeline("tiny.yaml")
         .args(["run", "tiny.yaml", "--quiet"])
         .run()
         .then()
         .args(["run", "tiny.yaml", "--set", "seeds=1"])
-        .status(1)
         .stdout_contains("executed 0, cached 28, failed 0")
-        .stderr_contains("holds a report of 56 distinct trials")
+        .stdout_contains("replaced reports/tiny: 56 trials, 28 cells → 28 trials, 28 cells")
         .run();
     let index = std::fs::read_to_string(done.sandbox.path("reports/tiny/index.html")).unwrap();
-    assert!(index.contains("Trials present: 56 of 56 planned"));
-    // Elsewhere, the same run writes its report.
-    done.then().args(["run", "tiny.yaml", "--set", "seeds=1", "--out", "one-seed"]).run();
+    assert!(index.contains("Trials present: 28 of 28 planned"));
+    // Raising them again: the new plan lacks trials and the kept report holds fewer, so the
+    // report is written (it holds more than the kept one); `--no-report` keeps it as it is.
+    let done = done
+        .then()
+        .args(["report", "tiny.yaml", "--set", "seeds=3"])
+        .stdout_contains("(56 of 84 planned trials present")
+        .run();
+    // Fewer than the kept report and incomplete: refused, nothing written.
+    let before = std::fs::read(done.sandbox.path("reports/tiny/index.html")).unwrap();
+    let done = done
+        .then()
+        .args(["report", "tiny.yaml", "--set", "seeds=4", "--cache", "empty"])
+        .file("empty/.keep", "")
+        .status(1)
+        .stderr_contains("holds a report of 56 trials")
+        .run();
+    assert_eq!(std::fs::read(done.sandbox.path("reports/tiny/index.html")).unwrap(), before);
 }
 
 #[test]

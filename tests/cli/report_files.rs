@@ -5,7 +5,8 @@
 
 use qsweep::cache::{Key, TrialRecord};
 use qsweep::plan::Plan;
-use qsweep::report::{curves, figures, write_report};
+use qsweep::report::formats::{Format, Formats};
+use qsweep::report::{curves, figures, write_report, write_report_as};
 use qsweep::sim::env::SystemKind;
 use qsweep::sim::repr::ReprKind;
 use qsweep::sim::{run_trial, Algorithm, Outcome, StopReason};
@@ -101,7 +102,8 @@ fn quick_report_is_complete_valid_and_deterministic() {
     let recs = records(&plan);
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("quick");
-    let summary = write_report(&plan, &recs, &dir).unwrap();
+    let all = Formats::of(&Format::ALL);
+    let summary = write_report_as(&plan, &recs, &dir, all).unwrap();
     assert_eq!(summary.experiments, 12);
     assert_eq!(summary.trials_planned, plan.trial_count());
     assert_eq!(summary.trials_present, plan.trial_count());
@@ -109,11 +111,18 @@ fn quick_report_is_complete_valid_and_deterministic() {
     assert_eq!(summary.cells_with_trials, summary.cells);
 
     let files = files_under(&dir);
-    let mut expected: Vec<PathBuf> =
-        ["table3.md", "table3.csv", "table3.tex", "cells.parquet", "trials.parquet", "index.html"]
-            .iter()
-            .map(PathBuf::from)
-            .collect();
+    let mut expected: Vec<PathBuf> = [
+        "table3.md",
+        "table3.csv",
+        "table3.tex",
+        "cells.parquet",
+        "trials.parquet",
+        "index.html",
+        "README.md",
+    ]
+    .iter()
+    .map(PathBuf::from)
+    .collect();
     for s in SystemKind::ALL {
         expected.push(Path::new("figures").join(format!("{}.svg", s.name())));
         expected.push(Path::new("figures").join(format!("{}.png", s.name())));
@@ -189,12 +198,30 @@ fn quick_report_is_complete_valid_and_deterministic() {
     assert!(md.contains("lowest mean among the cells where every seed reached"));
     assert!(md.contains("count at the episode cap"));
 
+    // The Markdown page shows Table III and links the SVG figures.
+    let readme = String::from_utf8(files[Path::new("README.md")].clone()).unwrap();
+    assert!(readme.starts_with("# qsweep report: quick\n"), "{readme}");
+    assert!(
+        readme.contains("](figures/cart-pole.svg)") && readme.contains("**Table III (quick).**"),
+        "{readme}"
+    );
+
     // A second run, into the same directory and into another, is byte-identical.
-    write_report(&plan, &recs, &dir).unwrap();
+    write_report_as(&plan, &recs, &dir, all).unwrap();
     assert_eq!(files_under(&dir), files);
     let other = tmp.path().join("again");
-    write_report(&plan, &recs, &other).unwrap();
+    write_report_as(&plan, &recs, &other, all).unwrap();
     assert_eq!(files_under(&other), files);
+
+    // The default formats: no PNG, the same bytes for everything else.
+    let default = tmp.path().join("default");
+    let s = write_report(&plan, &recs, &default).unwrap();
+    assert!(s.files.iter().all(|f| f.extension().is_some_and(|e| e != "png")), "{:?}", s.files);
+    let d = files_under(&default);
+    assert_eq!(d.len() + 6, files.len());
+    for (name, bytes) in &d {
+        assert_eq!(&files[name], bytes, "{}", name.display());
+    }
 }
 
 #[test]

@@ -74,11 +74,22 @@ fn report_has_one_folder_per_variant_and_combined_data_with_a_variant_column() {
     let out = sb.path("rep");
     sb.qsweep(&["run", p.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()]).assert().success();
     for id in ["as-written", "fast-crisp", "short-episodes"] {
-        for f in ["index.html", "table3.md", "table3.csv", "cells.parquet", "trials.parquet"] {
+        for f in ["index.html", "README.md", "table3.md", "table3.csv", "cells.parquet", "manifest.json"] {
             assert!(out.join(id).join(f).is_file(), "{id}/{f}");
         }
+        // The trial rows live once, in the combined file (one raw copy: the cache).
+        assert!(!out.join(id).join("trials.parquet").exists(), "{id}/trials.parquet");
+        assert!(!out.join(id).join("figures/cart-pole.png").exists(), "no PNG by default");
+        // Every page names the pipeline and the variant, and links back to the comparison.
+        let page = std::fs::read_to_string(out.join(id).join("index.html")).unwrap();
+        assert!(page.contains(&format!("<title>qsweep report: variants / {id}</title>")), "{page}");
+        assert!(page.contains("href=\"../index.html\""), "{id} links back");
+        let t3 = std::fs::read_to_string(out.join(id).join("table3.md")).unwrap();
+        assert!(t3.starts_with(&format!("**Table III (variants / {id}).**")), "{t3}");
     }
-    for f in ["cells.parquet", "trials.parquet"] {
+    let fast = std::fs::read_to_string(out.join("fast-crisp/index.html")).unwrap();
+    assert!(fast.contains("Its settings: the pipeline with systems."), "the set overrides are shown");
+    for f in ["cells.parquet", "trials.parquet", "manifest.json", "README.md", "index.html"] {
         assert!(out.join(f).is_file(), "{f}");
     }
     // The shared trials (fuzzy experiment 3 in as-written and fast-crisp) are one row each in the
@@ -97,10 +108,17 @@ fn report_has_one_folder_per_variant_and_combined_data_with_a_variant_column() {
         .success();
     assert_eq!(std::fs::read(out.join("variants.csv")).unwrap(), comparison);
     assert_eq!(std::fs::read(out.join("short-episodes/table3.csv")).unwrap(), before);
-    assert_eq!(parquet_rows(&out.join("fast-crisp/trials.parquet")), 36, "3 seeds now");
-    // Going back to 2 seeds would shrink that variant's report: refused unless forced.
-    let err = fails_with(&mut sb.qsweep(&["report", p, "--out", o, "--variant", "fast-crisp"]), 1);
-    assert!(err.contains("fast-crisp holds a report of 36 distinct trials"), "{err}");
+    let manifest = |id: &str| -> Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(id).join("manifest.json")).unwrap()).unwrap()
+    };
+    assert_eq!(manifest("fast-crisp")["trials_present"], 36, "3 seeds now");
+    // Regression (the guard refused a complete report of a changed plan): back at 2 seeds, every
+    // planned trial is cached, so the report replaces the bigger one and says what changed.
+    let done = sb.qsweep(&["report", p, "--out", o, "--variant", "fast-crisp"]).output().unwrap();
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    let said = String::from_utf8_lossy(&done.stdout);
+    assert!(said.contains("fast-crisp: 36 trials, 12 cells → 24 trials, 12 cells"), "{said}");
+    assert_eq!(manifest("fast-crisp")["trials_present"], 24);
 }
 
 fn parquet_rows(path: &std::path::Path) -> i64 {

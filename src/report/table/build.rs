@@ -117,7 +117,7 @@ pub fn table3(data: &ReportData) -> Table {
             data.trials_present, data.trials_planned
         ));
     }
-    Table { title: "Table III".into(), caption, columns, rows }
+    Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows }
 }
 
 /// Every cell of one experiment with its statistics; the best cell of each algorithm highlighted.

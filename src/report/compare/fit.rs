@@ -1,0 +1,194 @@
+//! How well one variant's Table III reproduces the pipeline's `reference:` values: the verdict
+//! of each row ([`verdict`], the one definition of the rule that `scripts/replication_summary.py`
+//! recomputes independently), the per-variant tally ([`Fit`]) and the order of the comparison
+//! table ([`FIT_ORDER`]).
+
+use super::super::model::{resolution_columns, ReportData};
+use super::super::table::{Align, Column, Row, Table, Value};
+use super::VariantInfo;
+
+/// Seeds behind each reference value (the paper's ten runs), for the standard error.
+pub const REFERENCE_N: f64 = 10.0;
+
+/// The verdict rule, as stated in the caption.
+pub const VERDICT_RULE: &str = "A Table III row replicates its reference when |ours − reference| ≤ \
+2·√(s_ref²/10 + s_ours²/n) (two standard errors; the reference has 10 runs, a row with a single \
+trial has no std and does not replicate); it is within 2× when it does not replicate but 0.5 ≤ \
+ours/reference ≤ 2.";
+
+/// How the rows are ordered, as stated in the caption.
+pub const FIT_ORDER: &str = "Rows are ordered by fit (the measure pre-registered in \
+docs/preregistration.md): most replicating rows first, then most rows within 2×, then most matching \
+best configurations, then the geometric mean of ours/reference closest to 1 (smallest |ln|), then \
+pipeline order.";
+
+/// How well one variant's Table III matches the reference values.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Fit {
+    /// Table III rows with a reference value and a best cell.
+    pub rows: usize,
+    /// Of those, rows that replicate ([`VERDICT_RULE`]).
+    pub replicating: usize,
+    /// Rows that do not replicate but are within a factor 2.
+    pub within_2x: usize,
+    /// Rows whose best cell has the reference's resolution and action count.
+    pub config_match: usize,
+    /// Experiments whose algorithms rank by mean as in the reference.
+    pub order_match: usize,
+    /// Experiments with two or more algorithms, every one with a reference and a best cell.
+    pub order_experiments: usize,
+    /// Geometric mean of ours / reference over the rows (`None` without rows).
+    pub geo_mean: Option<f64>,
+}
+
+/// Verdict of one Table III row against its reference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Within two standard errors.
+    Replicates,
+    /// Not replicating, but ours/reference ∈ [0.5, 2].
+    Within2x,
+    /// Neither.
+    DoesNotReplicate,
+}
+
+/// The verdict for our mean and std over `n` trials against a reference mean and std.
+pub fn verdict(ours: f64, ours_std: Option<f64>, n: usize, ref_mean: f64, ref_std: f64) -> Verdict {
+    let replicates = ours_std.is_some_and(|s| {
+        let se = (ref_std * ref_std / REFERENCE_N + s * s / n as f64).sqrt();
+        (ours - ref_mean).abs() <= 2.0 * se
+    });
+    if replicates {
+        Verdict::Replicates
+    } else if ref_mean > 0.0 && (0.5..=2.0).contains(&(ours / ref_mean)) {
+        Verdict::Within2x
+    } else {
+        Verdict::DoesNotReplicate
+    }
+}
+
+impl Fit {
+    /// Score a variant's report data.
+    pub fn of(data: &ReportData) -> Self {
+        let mut f = Self::default();
+        let mut logs = Vec::new();
+        for e in &data.experiments {
+            let system = e.exp.system;
+            let mut ranked = Vec::new();
+            for &alg in &e.exp.algorithms {
+                let Some(r) = e.exp.reference.get(&alg) else { continue };
+                let Some(c) = e.best_of(alg).map(|b| &e.cells[b.cell]) else { continue };
+                let Some(mean) = c.summary.mean else { continue };
+                f.rows += 1;
+                match verdict(mean, c.summary.std, c.trials.len(), r.mean, r.std) {
+                    Verdict::Replicates => f.replicating += 1,
+                    Verdict::Within2x => f.within_2x += 1,
+                    Verdict::DoesNotReplicate => {}
+                }
+                let cfg = &c.cell.config;
+                let ours: Vec<u32> = resolution_columns(system, &cfg.repr.resolution)
+                    .into_iter()
+                    .flatten()
+                    .chain([cfg.actions])
+                    .collect();
+                let theirs: Vec<u32> = r
+                    .resolution
+                    .as_ref()
+                    .map_or([None; 4], |res| resolution_columns(system, res))
+                    .into_iter()
+                    .flatten()
+                    .chain(r.actions)
+                    .collect();
+                f.config_match += usize::from(ours == theirs);
+                if mean > 0.0 && r.mean > 0.0 {
+                    logs.push((mean / r.mean).ln());
+                }
+                ranked.push((mean, r.mean));
+            }
+            if ranked.len() >= 2 && ranked.len() == e.exp.algorithms.len() {
+                f.order_experiments += 1;
+                f.order_match +=
+                    usize::from(rank(ranked.iter().map(|r| r.0)) == rank(ranked.iter().map(|r| r.1)));
+            }
+        }
+        if !logs.is_empty() {
+            f.geo_mean = Some((logs.iter().sum::<f64>() / logs.len() as f64).exp());
+        }
+        f
+    }
+}
+
+/// Indices in ascending order of value (stable: ties keep algorithm order).
+fn rank(values: impl Iterator<Item = f64>) -> Vec<usize> {
+    let v: Vec<f64> = values.collect();
+    let mut idx: Vec<usize> = (0..v.len()).collect();
+    idx.sort_by(|&i, &j| v[i].total_cmp(&v[j]));
+    idx
+}
+
+/// Indices of `fits` in [`FIT_ORDER`].
+pub fn fit_order(fits: &[Fit]) -> Vec<usize> {
+    let off = |f: &Fit| f.geo_mean.map_or(f64::INFINITY, |g| g.ln().abs());
+    let mut idx: Vec<usize> = (0..fits.len()).collect();
+    idx.sort_by(|&i, &j| {
+        let (a, b) = (&fits[i], &fits[j]);
+        b.replicating
+            .cmp(&a.replicating)
+            .then(b.within_2x.cmp(&a.within_2x))
+            .then(b.config_match.cmp(&a.config_match))
+            .then(off(a).total_cmp(&off(b)))
+    });
+    idx
+}
+
+/// The comparison table: one row per variant, in [`FIT_ORDER`].
+pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
+    let columns = vec![
+        Column::new("Rank", "rank", Align::Right),
+        Column::new("Variant", "variant", Align::Left),
+        Column::new("Title", "title", Align::Left),
+        Column::new("Rows with reference", "rows", Align::Right),
+        Column::new("Replicate", "replicating", Align::Right),
+        Column::new("Within 2×", "within_2x", Align::Right),
+        Column::new("Config matches", "config_match", Align::Right),
+        Column::new("Order matches", "order_match", Align::Right),
+        Column::new("Experiments ordered", "order_experiments", Align::Right),
+        Column::new("Geo. mean ours/ref.", "geo_mean_ratio", Align::Right),
+    ];
+    let fits: Vec<Fit> = variants.iter().map(|v| v.1).collect();
+    let rows = fit_order(&fits)
+        .into_iter()
+        .enumerate()
+        .map(|(k, i)| {
+            let (v, f) = &variants[i];
+            let int = |n: usize| Value::Int(n as u64);
+            Row {
+                values: vec![
+                    int(k + 1),
+                    Value::Text(v.id.clone()),
+                    v.title.clone().map_or(Value::Missing, Value::Text),
+                    int(f.rows),
+                    int(f.replicating),
+                    int(f.within_2x),
+                    int(f.config_match),
+                    int(f.order_match),
+                    int(f.order_experiments),
+                    f.geo_mean.map_or(Value::Missing, |value| Value::Num {
+                        value,
+                        decimals: 3,
+                        signed: false,
+                    }),
+                ],
+                highlight: k == 0,
+            }
+        })
+        .collect();
+    let caption = format!(
+        "How well each variant reproduces the reference values (one row per variant; counts over its \
+         Table III rows that have a reference value and a best cell). {VERDICT_RULE} Config matches: the \
+         best cell has the reference's bins or sets per variable and action count. Order matches: of the \
+         experiments where every algorithm has a reference, those whose algorithms (Q(0), Q(λ)) rank by \
+         mean as in the reference. Geo. mean: exp of the mean of ln(ours/reference) over the rows. {FIT_ORDER}"
+    );
+    Table { title: "Variants".into(), caption, columns, rows }
+}

@@ -1,0 +1,43 @@
+//! `README.md` of a report folder: what a repository web page shows of it (such pages render
+//! Markdown and SVG images, not HTML pages). The same identity as `index.html` (pipeline,
+//! variant, its `set` overrides), Table III, and each system's figures.
+
+use super::formats::Formats;
+use super::html::identity;
+use super::model::{ReportData, CENSORING};
+use super::table::{render, Markdown, Table};
+
+/// The Markdown page of one report; `t3` is its Table III.
+pub fn page(data: &ReportData, t3: &Table, formats: Formats) -> String {
+    let (name, notes) = identity(data);
+    let mut m = format!("# qsweep report: {name}\n\n");
+    if data.plan.report_variant().is_some() {
+        m.push_str(&format!("{} [All variants compared](../README.md).\n\n", notes.join(" ")));
+    }
+    if let Some(d) = &data.plan.description {
+        m.push_str(&format!("{}\n\n", d.trim()));
+    }
+    m.push_str(&format!(
+        "Trials present: {} of {} planned. Data: [table3.csv](table3.csv), [table3.tex](table3.tex), \
+         [cells.parquet](cells.parquet); `index.html` shows every cell.\n\n",
+        data.trials_present, data.trials_planned
+    ));
+    m.push_str(&render(t3, &Markdown));
+    if let Some(ext) = formats.figure_ext() {
+        for s in data.systems() {
+            m.push_str(&format!("\n## {}\n\n", s.title()));
+            m.push_str(&format!(
+                "![{0}: mean episodes per cell ({name})](figures/{1}.{ext})\n\n",
+                s.title(),
+                s.name()
+            ));
+            m.push_str(&format!(
+                "![{0}: learning curves of the best cells ({name})](figures/{1}-curves.{ext})\n",
+                s.title(),
+                s.name()
+            ));
+        }
+    }
+    m.push_str(&format!("\n{CENSORING}\n"));
+    m
+}

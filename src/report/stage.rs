@@ -1,0 +1,282 @@
+//! The report stage of a pipeline, streaming: one variant at a time, read only that variant's
+//! outcome columns for only its rows, compute every cell's statistics once, write its folder,
+//! keep a small digest ([`VariantDigest`]) for the comparison and the rows for the combined
+//! `trials.parquet`, and drop its trials before the next variant. Memory is one variant's.
+//!
+//! Before anything is written, the overwrite guard ([`manifest::guard`]) reads the manifest of
+//! every folder the report would replace: it refuses (exit 1, nothing written) only when the new
+//! report's plan lacks trials and the kept report holds more. A complete report of a changed
+//! plan replaces the old one, and [`ReportOutcome::replaced`] says what changed.
+
+use super::compare::{self, VariantDigest, VariantInfo};
+use super::formats::{Format, Formats};
+use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
+use super::model::ReportData;
+use super::{parquet, write_atomic, write_folder, ReportSummary};
+use crate::cache::store::{KeyScan, Store};
+use crate::cache::Key;
+use crate::error::user_error;
+use crate::plan::Plan;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// How to write a pipeline's report.
+#[derive(Debug, Clone)]
+pub struct ReportOptions {
+    /// The report directory (`reports/<name>` unless `--out`).
+    pub dir: PathBuf,
+    /// Which files to write.
+    pub formats: Formats,
+    /// Replace a kept report even when the new one holds fewer trials.
+    pub force: bool,
+}
+
+/// What the stage wrote.
+#[derive(Debug, Clone)]
+pub struct ReportOutcome {
+    /// Counts over the whole plan and every file written (relative to the directory).
+    pub summary: ReportSummary,
+    /// The whole plan's distinct-trial counts.
+    pub counts: Counts,
+    /// One line per replaced folder whose contents changed: `DIR: 216 trials, 24 cells → 144
+    /// trials, 16 cells`.
+    pub replaced: Vec<String>,
+    /// Files of the kept reports that this one no longer writes, removed.
+    pub removed: Vec<PathBuf>,
+}
+
+/// The files an earlier qsweep wrote into a report folder without a manifest, as far as they are
+/// there: they are replaced or, when no longer written, removed.
+fn legacy_files(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for name in ["table3.md", "table3.csv", "table3.tex", "cells.parquet", "trials.parquet", "index.html"] {
+        if dir.join(name).is_file() {
+            out.push(name.to_string());
+        }
+    }
+    if let Ok(entries) = std::fs::read_dir(dir.join("figures")) {
+        let mut figs: Vec<String> = entries
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".svg") || n.ends_with(".png"))
+            .map(|n| format!("figures/{n}"))
+            .collect();
+        figs.sort();
+        out.extend(figs);
+    }
+    out
+}
+
+/// One folder the report writes: where, its plan's counts, and what is there now.
+struct Target {
+    dir: PathBuf,
+    counts: Counts,
+    kept: Option<Kept>,
+}
+
+impl Target {
+    /// With `force`, a kept report that cannot be read is replaced like any other.
+    fn new(dir: PathBuf, plan: &Plan, present: &HashSet<Key>, force: bool) -> anyhow::Result<Self> {
+        let kept = match manifest::read(&dir) {
+            Ok(k) => k,
+            Err(_) if force => None,
+            Err(e) => return Err(e),
+        };
+        Ok(Self { counts: Counts::of(plan, present), kept, dir })
+    }
+
+    /// Write the manifest, remove the kept report's files that were not written again, and say
+    /// what changed.
+    fn finish(
+        &self,
+        plan: &Plan,
+        variant: Option<&str>,
+        formats: Formats,
+        files: &[PathBuf],
+        out: &mut ReportOutcome,
+    ) -> anyhow::Result<()> {
+        let names: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
+        let m = Manifest {
+            format_version: MANIFEST_VERSION,
+            pipeline: plan.name.clone(),
+            variant: variant.map(str::to_owned),
+            counts: self.counts.clone(),
+            formats: formats.to_string(),
+            files: names.clone(),
+        };
+        manifest::write(&self.dir, &m)?;
+        let Some(kept) = &self.kept else { return Ok(()) };
+        let stale: Vec<String> = match kept {
+            Kept::Manifest(k) => k.files.clone(),
+            Kept::Legacy { .. } => Vec::new(),
+        };
+        for f in stale.iter().filter(|f| !names.contains(f)) {
+            let p = self.dir.join(f);
+            // Only plain files inside the folder, named by our own manifest.
+            if !f.contains("..") && p.is_file() {
+                std::fs::remove_file(&p)
+                    .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
+                out.removed.push(p);
+            }
+        }
+        let same = match kept {
+            Kept::Manifest(k) => k.counts == self.counts,
+            Kept::Legacy { .. } => false,
+        };
+        if !same {
+            out.replaced.push(format!(
+                "{}: {} → {} trials, {} cells",
+                self.dir.display(),
+                kept.describe(),
+                self.counts.trials_present,
+                self.counts.cells_with_trials
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A legacy folder's files that the new report no longer writes (a per-variant `trials.parquet`,
+/// figures in a format no longer asked for): removed, since the old layout wrote them.
+fn remove_legacy(t: &Target, written: &[PathBuf], out: &mut ReportOutcome) -> anyhow::Result<()> {
+    if !matches!(t.kept, Some(Kept::Legacy { .. })) {
+        return Ok(());
+    }
+    let written: Vec<String> = written.iter().map(|f| f.to_string_lossy().into_owned()).collect();
+    for f in legacy_files(&t.dir).into_iter().filter(|f| !written.contains(f)) {
+        let p = t.dir.join(&f);
+        std::fs::remove_file(&p).map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
+        out.removed.push(p);
+    }
+    Ok(())
+}
+
+/// Write the report of `plan` from the cache: for a pipeline without variants, one folder; with
+/// variants, each variant's folder `DIR/<id>/`, then (unless only some variants were selected) the
+/// comparison, every variant's `cells.parquet` rows and the combined `trials.parquet` in `DIR`.
+pub fn write(
+    plan: &Plan,
+    store: &Store,
+    scan: &KeyScan,
+    opts: &ReportOptions,
+) -> anyhow::Result<ReportOutcome> {
+    let dir = &opts.dir;
+    if dir.exists() && !dir.is_dir() {
+        return Err(user_error(format!(
+            "report directory {} is a file, not a directory; give another with --out DIR",
+            dir.display()
+        )));
+    }
+    let formats = opts.formats;
+    let subs: Vec<(Option<VariantInfo>, Plan)> = if plan.variants.is_empty() {
+        vec![(None, plan.clone())]
+    } else {
+        plan.variants
+            .iter()
+            .map(|v| {
+                (Some(VariantInfo { id: v.id.clone(), title: v.title.clone() }), plan.only_variant(&v.id))
+            })
+            .collect()
+    };
+    let with_comparison = !plan.variants.is_empty() && !plan.variant_subset;
+
+    // The guard first, over every folder this report replaces: nothing is written on a refusal.
+    let mut targets = Vec::new();
+    for (info, sub) in &subs {
+        let d = info.as_ref().map_or_else(|| dir.clone(), |v| dir.join(&v.id));
+        targets.push(Target::new(d, sub, &scan.keys, opts.force)?);
+    }
+    let top =
+        if with_comparison { Some(Target::new(dir.clone(), plan, &scan.keys, opts.force)?) } else { None };
+    if !opts.force {
+        for t in targets.iter().chain(&top) {
+            if let Some(kept) = &t.kept {
+                manifest::guard(&t.dir, kept, &t.counts, store.dir()).map_err(|e| anyhow::anyhow!(e))?;
+            }
+        }
+    }
+
+    let mut out = ReportOutcome {
+        summary: ReportSummary::default(),
+        counts: Counts::of(plan, &scan.keys),
+        replaced: Vec::new(),
+        removed: Vec::new(),
+    };
+    let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
+    let mut digests: Vec<VariantDigest> = Vec::new();
+    let mut cells = Vec::new();
+    let mut trials =
+        if with_comparison && formats.has(Format::Trials) { Some(TrialsSink::default()) } else { None };
+    for ((info, sub), target) in subs.iter().zip(&targets) {
+        let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
+        let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
+        let data = ReportData::build(sub, &outcomes);
+        let files = write_folder(&data, &target.dir, formats, info.is_none())?;
+        remove_legacy(target, &files, &mut out)?;
+        target.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, &files, &mut out)?;
+        let s = ReportSummary::of(&data, Vec::new());
+        out.summary.add(&s);
+        match info {
+            Some(v) => {
+                out.summary.files.extend(files.into_iter().map(|f| Path::new(&v.id).join(f)));
+                if with_comparison {
+                    if formats.has(Format::Cells) {
+                        cells.push(parquet::cells_batch(&data)?);
+                    }
+                    if let Some(sink) = &mut trials {
+                        sink.push(&parquet::trials_batch(&data)?)?;
+                    }
+                    digests.push(VariantDigest::of(v.clone(), sub, &data));
+                }
+            }
+            None => out.summary.files.extend(files),
+        }
+        out.summary
+            .files
+            .push(target.dir.strip_prefix(dir).unwrap_or(Path::new("")).join(manifest::MANIFEST));
+    }
+
+    if let Some(top) = &top {
+        let mut files = Vec::new();
+        if let Some(first) = cells.first() {
+            let all = arrow::compute::concat_batches(&first.schema(), &cells)?;
+            write_atomic(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
+            files.push(PathBuf::from("cells.parquet"));
+        }
+        if let Some(bytes) = trials.take().map(TrialsSink::finish).transpose()?.flatten() {
+            write_atomic(&dir.join("trials.parquet"), &bytes)?;
+            files.push(PathBuf::from("trials.parquet"));
+        }
+        files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
+        remove_legacy(top, &files, &mut out)?;
+        top.finish(plan, None, formats, &files, &mut out)?;
+        out.summary.files.extend(files);
+        out.summary.files.push(PathBuf::from(manifest::MANIFEST));
+    }
+    Ok(out)
+}
+
+/// The combined `trials.parquet`, written one variant's rows at a time (one row group each) into
+/// memory, then to disk atomically.
+#[derive(Default)]
+struct TrialsSink {
+    writer: Option<::parquet::arrow::ArrowWriter<Vec<u8>>>,
+}
+
+impl TrialsSink {
+    fn push(&mut self, batch: &arrow::record_batch::RecordBatch) -> anyhow::Result<()> {
+        if self.writer.is_none() {
+            let props = crate::parquet_io::writer_properties()?;
+            self.writer =
+                Some(::parquet::arrow::ArrowWriter::try_new(Vec::new(), batch.schema(), Some(props))?);
+        }
+        let w = self.writer.as_mut().expect("created above");
+        w.write(batch)?;
+        w.flush()?;
+        Ok(())
+    }
+
+    fn finish(self) -> anyhow::Result<Option<Vec<u8>>> {
+        self.writer.map(|w| Ok(w.into_inner()?)).transpose()
+    }
+}
