@@ -31,12 +31,15 @@ RES_COLS = ["x", "x_dot", "theta", "theta_dot"]
 
 
 def verdict(r: pd.Series) -> str:
-    """The REPLICATION.md rule: two standard errors, else within 2x, else not."""
-    if pd.isna(r["std"]) or pd.isna(r["mean"]):
+    """The REPLICATION.md rule, recomputed independently of qsweep's (src/report/compare/fit.rs):
+    two standard errors, else within 2x, else not. A row without std (one trial) cannot
+    replicate but can be within 2x."""
+    if pd.isna(r["mean"]):
         return "does not replicate"
-    se = math.sqrt(r["paper_std"] ** 2 / 10 + r["std"] ** 2 / r["n"])
-    if abs(r["mean"] - r["paper_mean"]) <= 2 * se:
-        return "replicates"
+    if pd.notna(r["std"]):
+        se = math.sqrt(r["paper_std"] ** 2 / 10 + r["std"] ** 2 / r["n"])
+        if abs(r["mean"] - r["paper_mean"]) <= 2 * se:
+            return "replicates"
     if 0.5 <= r["mean"] / r["paper_mean"] <= 2:
         return "within 2×"
     return "does not replicate"
@@ -154,19 +157,12 @@ def conclusions(d: Path) -> None:
     for _, r in t3.iterrows():
         ours = [int(r[c]) for c in res_cols if pd.notna(r[c])] + [int(r["actions"])]
         paper_cfg = [int(r[f"paper_{c}"]) for c in res_cols + ["actions"] if pd.notna(r[f"paper_{c}"])]
-        se = math.sqrt(r["paper_std"] ** 2 / 10 + r["std"] ** 2 / r["n"])
-        diff = abs(r["mean"] - r["paper_mean"])
-        if diff <= 2 * se:
-            verdict = "replicates"
-        elif 0.5 <= r["mean"] / r["paper_mean"] <= 2:
-            verdict = "within 2×"
-        else:
-            verdict = "does not replicate"
+        verdict_ = verdict(r)
         same = t3[(t3.system == r.system) & (t3.experiment == r.experiment)]
         order = same.sort_values("mean")["algorithm"].tolist() == same.sort_values("paper_mean")["algorithm"].tolist()
         print(
             f"| {r.system} | {r.experiment} | {r.algorithm} | {r.paper_mean:g} ± {r.paper_std:g} | {paper_cfg} "
-            f"| {r['mean']:.1f} ± {r['std']:.1f} | {ours} | {int(r.successes)}/{int(r.n)} | {verdict} "
+            f"| {r['mean']:.1f} ± {r['std']:.1f} | {ours} | {int(r.successes)}/{int(r.n)} | {verdict_} "
             f"| {'same' if order else 'reversed'} | {'same' if ours == paper_cfg else 'differs'} |"
         )
     print()

@@ -25,7 +25,7 @@ figure{margin:1em 0}figure svg{display:block;max-width:100%;height:auto;border:1
 .scroll{overflow-x:auto}
 img{max-width:100%;height:auto;border:1px solid #eee}
 .a1 :is(td,th):nth-child(n+2),.a2 :is(td,th):nth-child(n+3),.a3 :is(td,th):nth-child(n+4),.a4 :is(td,th):nth-child(n+5){text-align:right;font-variant-numeric:tabular-nums}
-.caption{color:#444;max-width:100%}
+.caption{color:#444;max-width:100%}.fit td{white-space:normal}.fit td:nth-child(3){min-width:14em}
 ";
 
 /// Which report a page belongs to, as its heading and first paragraph say: the pipeline, and for

@@ -1,9 +1,12 @@
 """The report page in a real browser: a freshly generated quick report's index.html, opened in
 headless Chromium (Debian's `chromium` package; `.ci/run` installs it).
 
-Checks: no console errors or failed loads, every <img> decoded (naturalWidth > 0), every inline
-<svg> figure present with a nonzero size, Table III and one cell table per experiment present and
-filled. The full-page screenshot is written to target/report-screenshot.png for a human to look at.
+Checks: no console errors or failed loads, every figure (an <img> of figures/*.svg) decoded and
+shown at a nonzero size within the page, Table III and one cell table per experiment present and
+filled, nothing wider than the window. A pipeline with variants: the comparison page and a
+variant's page at 1300 px, where the fit table and its caption must fit, and the variant's page
+names the pipeline and the variant and links back. Full-page screenshots are written to
+target/report-screenshot.png (and -comparison, -variant) for a human to look at.
 
 Chromium is driven over the DevTools protocol through `--remote-debugging-pipe` (JSON messages
 separated by NUL bytes on file descriptors 3 and 4), so no websocket client or open port is needed.
@@ -167,22 +170,81 @@ def errors_in(events: list[dict]) -> list[str]:
 
 # Everything the page shows, measured in the page itself.
 PROBE = """JSON.stringify({
-  images: [...document.images].map(i => ({src: i.getAttribute('src'), complete: i.complete,
-                                          naturalWidth: i.naturalWidth, width: i.width})),
-  svgs: [...document.querySelectorAll('figure > svg')].map(s => {
-    const r = s.getBoundingClientRect();
-    return {label: s.getAttribute('aria-label'), width: r.width, height: r.height,
-            shapes: s.querySelectorAll('rect, polyline, text').length};
+  title: document.title,
+  images: [...document.images].map(i => {
+    const r = i.getBoundingClientRect();
+    return {src: i.getAttribute('src'), complete: i.complete, naturalWidth: i.naturalWidth,
+            width: r.width, height: r.height, right: r.right};
   }),
   tables: [...document.querySelectorAll('table')].map(t => ({
     rows: t.tBodies.length ? [...t.tBodies].reduce((n, b) => n + b.rows.length, 0) : t.rows.length - 1,
-    width: t.getBoundingClientRect().width})),
+    width: t.getBoundingClientRect().width, right: t.getBoundingClientRect().right})),
+  captions: [...document.querySelectorAll('p.caption, caption')].map(c => c.getBoundingClientRect().right),
   overflowing: [...document.querySelectorAll('.scroll')].filter(d => d.scrollWidth > d.clientWidth + 1)
     .map(d => d.previousElementSibling?.textContent + ': ' + d.scrollWidth + ' px'),
+  links: [...document.querySelectorAll('a')].map(a => a.getAttribute('href')),
   h3: document.querySelectorAll('h3').length,
   width: document.documentElement.scrollWidth,
   height: document.documentElement.scrollHeight,
 })"""
+
+
+def chromium_or_skip() -> str:
+    exe = find_chromium()
+    if exe is None:
+        message = "Chromium not found (apt-get install chromium, or set $CHROMIUM)"
+        if os.environ.get("CI") == "true":
+            pytest.fail(message + "; CI must run this test", pytrace=False)
+        pytest.skip(message)
+    return exe
+
+
+def render(exe: str, page_path: Path, width: int, shot_name: str) -> tuple[dict, list[dict], Path]:
+    """Open `page_path` at `width` px; return the probe, the browser's events and the screenshot."""
+    with tempfile.TemporaryDirectory(prefix="qsweep-chromium-") as profile:
+        browser = Browser(exe, Path(profile))
+        try:
+            browser.open_page()
+            browser.send("Emulation.setDeviceMetricsOverride",
+                         {"width": width, "height": 900, "deviceScaleFactor": 1, "mobile": False})
+            events: list[dict] = []
+            browser.send("Page.navigate", {"url": page_path.as_uri()})
+            browser.wait_for("Page.loadEventFired", events)
+            page = json.loads(browser.send(
+                "Runtime.evaluate", {"expression": PROBE, "returnByValue": True})["result"]["value"])
+            # The whole page in one picture (up to Chromium's texture limit): a viewport as tall as it.
+            browser.send("Emulation.setDeviceMetricsOverride",
+                         {"width": width, "height": min(page["height"], 16000), "deviceScaleFactor": 1,
+                          "mobile": False})
+            shot = browser.send("Page.captureScreenshot", {"format": "png"})
+            browser.drain(events)
+        finally:
+            browser.close()
+    screenshot = target_dir() / shot_name
+    screenshot.parent.mkdir(parents=True, exist_ok=True)
+    screenshot.write_bytes(base64.b64decode(shot["data"]))
+    return page, events, screenshot
+
+
+def shapes(svg: Path) -> int:
+    """Rectangles, paths and texts drawn by an SVG figure (it must show a heatmap or curves)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(svg).getroot()
+    return sum(1 for e in root.iter() if e.tag.rsplit("}", 1)[-1] in ("rect", "path", "polyline", "text"))
+
+
+def check_fits(page: dict, width: int, screenshot: Path) -> None:
+    assert page["width"] <= width, f"the page scrolls sideways at {width} px (screenshot: {screenshot})"
+    assert page["overflowing"] == [], f"tables wider than the page at {width} px (they scroll sideways)"
+    for t in page["tables"]:
+        assert t["right"] <= width, f"a table overflows a {width} px window: {t}"
+    for right in page["captions"]:
+        assert right <= width, f"a caption overflows a {width} px window: {right}"
+    for img in page["images"]:
+        assert img["complete"] and img["naturalWidth"] > 0, f"image not decoded: {img}"
+        assert img["width"] > 100 and img["height"] > 100, f"figure too small: {img}"
+        assert img["right"] <= width, f"figure wider than the page: {img}"
 
 
 @pytest.fixture(scope="module")
@@ -198,53 +260,65 @@ def quick_report(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> 
 
 
 def test_report_page_renders_in_chromium(quick_report: Path) -> None:
-    exe = find_chromium()
-    if exe is None:
-        message = "Chromium not found (apt-get install chromium, or set $CHROMIUM)"
-        if os.environ.get("CI") == "true":
-            pytest.fail(message + "; CI must run this test", pytrace=False)
-        pytest.skip(message)
-
+    exe = chromium_or_skip()
     cells = pq.read_table(quick_report / "cells.parquet", columns=["system", "experiment"]).to_pylist()
     experiments = {(c["system"], c["experiment"]) for c in cells}
     systems = {c["system"] for c in cells}
 
-    with tempfile.TemporaryDirectory(prefix="qsweep-chromium-") as profile:
-        browser = Browser(exe, Path(profile))
-        try:
-            browser.open_page()
-            browser.send("Emulation.setDeviceMetricsOverride",
-                         {"width": 1200, "height": 900, "deviceScaleFactor": 1, "mobile": False})
-            events: list[dict] = []
-            browser.send("Page.navigate", {"url": (quick_report / "index.html").as_uri()})
-            browser.wait_for("Page.loadEventFired", events)
-            page = json.loads(browser.send(
-                "Runtime.evaluate", {"expression": PROBE, "returnByValue": True})["result"]["value"])
-            # The whole page in one picture (up to Chromium's texture limit): a viewport as tall as it.
-            browser.send("Emulation.setDeviceMetricsOverride",
-                         {"width": 1200, "height": min(page["height"], 16000), "deviceScaleFactor": 1,
-                          "mobile": False})
-            shot = browser.send("Page.captureScreenshot", {"format": "png"})
-            browser.drain(events)
-        finally:
-            browser.close()
-
-    screenshot = target_dir() / "report-screenshot.png"
-    screenshot.parent.mkdir(parents=True, exist_ok=True)
-    screenshot.write_bytes(base64.b64decode(shot["data"]))
-
+    page, events, screenshot = render(exe, quick_report / "index.html", 1200, "report-screenshot.png")
     assert errors_in(events) == [], f"console errors (screenshot: {screenshot})"
+    assert page["title"] == "qsweep report: quick"
+    # Heatmaps and learning curves: every figure once, as a file the page links.
+    assert sorted(i["src"] for i in page["images"]) == sorted(
+        f"figures/{s}{k}.svg" for s in systems for k in ("", "-curves")
+    )
     for img in page["images"]:
-        assert img["complete"] and img["naturalWidth"] > 0, f"image not decoded: {img}"
-    assert len(page["svgs"]) == 2 * len(systems), page["svgs"]  # heatmaps and learning curves
-    for svg in page["svgs"]:
-        assert svg["width"] > 100 and svg["height"] > 100, f"figure too small: {svg}"
-        assert svg["width"] <= 1200, f"figure wider than the page: {svg}"
-        assert svg["shapes"] > 50, f"figure has no heatmap: {svg}"
+        assert shapes(quick_report / img["src"]) > 50, f"figure has no heatmap: {img}"
+    check_fits(page, 1200, screenshot)
     # Table III, then one cell table per experiment; none empty.
     assert page["h3"] == len(experiments)
     assert len(page["tables"]) == 1 + len(experiments), page["tables"]
     assert page["tables"][0]["rows"] == 2 * len(experiments), "Table III: one row per experiment and algorithm"
     assert all(t["rows"] > 0 and t["width"] > 0 for t in page["tables"]), page["tables"]
-    assert page["width"] <= 1200, "the page scrolls sideways"
-    assert page["overflowing"] == [], "tables wider than the page at 1200 px (they scroll sideways)"
+
+
+@pytest.fixture(scope="module")
+def variants_report(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    tmp = tmp_path_factory.mktemp("browser-variants")
+    # Titles as long as paper.yaml's, which made the fit table overflow.
+    text = (REPO_ROOT / "tests/fixtures/pipelines/variants.yaml").read_text()
+    for short in ["The pipeline as written", "Crisp learning rate 0.05", "Episodes cut at 200 steps"]:
+        assert short in text
+        text = text.replace(short, f"{short}, with Gymnasium TimeLimits CartPole-v0 200, MountainCar-v0 200, random starts")
+    pipeline = tmp / "variants.yaml"
+    pipeline.write_text(text)
+    out = subprocess.run(
+        [str(qsweep_bin), "run", str(pipeline), "--quiet",
+         "--cache", str(tmp / "cache"), "--out", str(tmp / "report")],
+        capture_output=True, text=True, timeout=1200,
+    )
+    assert out.returncode == 0, out.stderr
+    return tmp / "report"
+
+
+def test_comparison_and_variant_pages_fit_a_1300_px_window(variants_report: Path) -> None:
+    """Regression: the comparison page's fit table and its caption overflowed a 1300-px window, and
+    a variant's page was titled by the pipeline alone, never naming its variant."""
+    exe = chromium_or_skip()
+    page, events, screenshot = render(exe, variants_report / "index.html", 1300,
+                                      "report-screenshot-comparison.png")
+    assert errors_in(events) == [], f"console errors (screenshot: {screenshot})"
+    assert page["title"] == "qsweep variants: variants"
+    assert page["tables"] and page["tables"][0]["rows"] == 3, "the fit table: one row per variant"
+    assert len(page["captions"]) >= 1, "the fit table's caption"
+    check_fits(page, 1300, screenshot)
+    for v in ["as-written", "fast-crisp", "short-episodes"]:
+        assert f"{v}/index.html" in page["links"], v
+
+    page, events, screenshot = render(exe, variants_report / "fast-crisp" / "index.html", 1300,
+                                      "report-screenshot-variant.png")
+    assert errors_in(events) == [], f"console errors (screenshot: {screenshot})"
+    assert page["title"] == "qsweep report: variants / fast-crisp"
+    assert "../index.html" in page["links"], "a variant's page links back to the comparison"
+    assert page["images"], "the variant's figures"
+    check_fits(page, 1300, screenshot)

@@ -61,8 +61,12 @@ def test_each_variants_rows_equal_its_own_report(report: Path) -> None:
         own = pd.read_parquet(report / v / "cells.parquet")
         mine = cells[cells["variant"] == v].drop(columns="variant").reset_index(drop=True)
         pd.testing.assert_frame_equal(mine, own.drop(columns="variant"), check_exact=True)
-        own_t = pd.read_parquet(report / v / "trials.parquet")
-        assert sorted(trials[trials["variant"] == v]["key"]) == sorted(own_t["key"])
+        # The trial rows live once, in the combined file: a variant's rows are its cells' trials.
+        assert not (report / v / "trials.parquet").exists()
+        mine_t = trials[trials["variant"] == v]
+        assert len(mine_t) == int(own["n"].sum())
+        per_cell = mine_t.groupby(["experiment", "algorithm", "axis1_value", "axis2_value"], dropna=False).size()
+        assert sorted(per_cell.tolist()) == sorted(own["n"].tolist())
 
 
 def test_shared_trials_appear_under_each_variant_that_plans_them(report: Path) -> None:
@@ -123,7 +127,8 @@ def test_variants_csv_is_recomputed_from_each_variants_table3(report: Path) -> N
     for v in VARIANTS:
         assert f'href="{v}/index.html"' in html
     for v in VARIANTS[1:]:
-        assert (report / "figures" / f"diff-{v}-mountain-car.png").is_file()
+        assert (report / "figures" / f"diff-{v}-mountain-car.svg").is_file()
+        assert not (report / "figures" / f"diff-{v}-mountain-car.png").exists(), "no PNG by default"
         assert f'src="figures/diff-{v}-mountain-car.svg"' in html
 
 
@@ -139,3 +144,26 @@ def test_replication_summary_recomputes_the_variant_study(report: Path, capsys: 
     assert "Best fit under the pre-registered measure" in out
     for v in VARIANTS:
         assert f"`{v}`" in out
+
+
+def test_python_and_rust_verdicts_agree_when_a_row_has_one_trial(qsweep_bin: Path, tmp_path: Path) -> None:
+    """Regression: scripts/replication_summary.py called every n = 1 row "does not replicate"
+    while qsweep (whose rule is the one definition) lets it be within 2x. With one seed every
+    row has n = 1 and no std; the tallies recomputed in Python must equal variants.csv."""
+    import replication_summary
+
+    out = tmp_path / "report"
+    subprocess.run(
+        [str(qsweep_bin), "run", str(REPO_ROOT / "tests/fixtures/pipelines/variants.yaml"), "--cache",
+         str(tmp_path / "cache"), "--out", str(out), "--quiet", "--set", "seeds=1"],
+        check=True,
+    )
+    got = pd.read_csv(out / "variants.csv").set_index("variant")
+    for v in VARIANTS:
+        t3 = pd.read_csv(out / v / "table3.csv", dtype={"experiment": str})
+        assert (t3["n"] == 1).all() and t3["std"].isna().all()
+        t = replication_summary.tally(t3)
+        assert (t["rows"], t["replicating"], t["within_2x"]) == tuple(got.loc[v, ["rows", "replicating", "within_2x"]]), v
+    row = pd.Series({"mean": 6.0, "std": float("nan"), "n": 1, "paper_mean": 6.0, "paper_std": 3.0})
+    assert replication_summary.verdict(row) == "within 2×", "no std: cannot replicate, but within 2x"
+    assert replication_summary.verdict(pd.Series({**row, "mean": 13.0})) == "does not replicate"
