@@ -24,6 +24,11 @@ fn every_bad_pipeline_is_a_clean_usage_error_that_writes_nothing() {
         } else {
             "is a directory".to_string()
         };
+        // An expectation that every message meets (empty, or just `:`) tests nothing.
+        assert!(
+            expect.chars().filter(|c| c.is_alphanumeric()).count() >= 4,
+            "{name}: `# expect:` must name a real part of the message, not {expect:?}"
+        );
         let out = sb
             .qsweep(&["run", path.to_str().unwrap()])
             .timeout(std::time::Duration::from_secs(30))

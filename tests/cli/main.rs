@@ -12,6 +12,7 @@ mod mutations;
 mod no_overwrite;
 mod pipeline;
 mod report_files;
+mod report_guard;
 mod schemas;
 mod simulate;
 mod slurm;
