@@ -127,12 +127,17 @@ pub fn trials_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
     crate::parquet_io::to_parquet(&trials_batch(data)?)
 }
 
-/// The rows of `trials.parquet` as one Arrow batch (so several reports' rows can be streamed into
-/// one file).
+/// The rows of `trials.parquet` as one Arrow batch.
 pub fn trials_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::RecordBatch> {
+    trials_batch_of(&data.experiments)
+}
+
+/// The rows of `trials.parquet` of some experiments, so a large report's rows can be streamed
+/// into one file an experiment at a time.
+pub fn trials_batch_of(experiments: &[ExpData]) -> anyhow::Result<arrow::record_batch::RecordBatch> {
     let mut ids: Vec<Id> = Vec::new();
     let mut trials: Vec<(&TrialData, &LearnerConfig)> = Vec::new();
-    for e in &data.experiments {
+    for e in experiments {
         for c in &e.cells {
             for t in &c.trials {
                 ids.push((e, c));

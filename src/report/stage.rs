@@ -206,12 +206,24 @@ pub fn write(
     let mut digests: Vec<VariantDigest> = Vec::new();
     let mut cells = Vec::new();
     let mut trials =
-        if with_comparison && formats.has(Format::Trials) { Some(TrialsSink::default()) } else { None };
+        (with_comparison && formats.has(Format::Trials)).then(|| TrialsSink::new(dir.join("trials.parquet")));
+    if trials.is_some() {
+        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+    }
     for ((info, sub), target) in subs.iter().zip(&targets) {
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
         let data = ReportData::build(sub, &outcomes);
-        let files = write_folder(&data, &target.dir, formats, info.is_none())?;
+        // The folder's files and this variant's rows of the combined trials.parquet at once.
+        let (files, pushed) = rayon::join(
+            || write_folder(&data, &target.dir, formats, info.is_none()),
+            || match &mut trials {
+                Some(sink) if info.is_some() => sink.push(&data),
+                _ => Ok(()),
+            },
+        );
+        let files = files?;
+        pushed?;
         remove_legacy(target, &files, &mut out)?;
         target.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, &files, &mut out)?;
         let s = ReportSummary::of(&data, Vec::new());
@@ -222,9 +234,6 @@ pub fn write(
                 if with_comparison {
                     if formats.has(Format::Cells) {
                         cells.push(parquet::cells_batch(&data)?);
-                    }
-                    if let Some(sink) = &mut trials {
-                        sink.push(&parquet::trials_batch(&data)?)?;
                     }
                     digests.push(VariantDigest::of(v.clone(), sub, &data));
                 }
@@ -243,8 +252,7 @@ pub fn write(
             write_atomic(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
             files.push(PathBuf::from("cells.parquet"));
         }
-        if let Some(bytes) = trials.take().map(TrialsSink::finish).transpose()?.flatten() {
-            write_atomic(&dir.join("trials.parquet"), &bytes)?;
+        if trials.take().map(TrialsSink::finish).transpose()?.unwrap_or(false) {
             files.push(PathBuf::from("trials.parquet"));
         }
         files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
@@ -256,27 +264,58 @@ pub fn write(
     Ok(out)
 }
 
-/// The combined `trials.parquet`, written one variant's rows at a time (one row group each) into
-/// memory, then to disk atomically.
-#[derive(Default)]
+/// The combined `trials.parquet`, written one variant's rows at a time (one row group each) to a
+/// hidden temporary file beside it, renamed into place when complete (so memory holds one
+/// variant's rows, and a reader never sees a partial file).
 struct TrialsSink {
-    writer: Option<::parquet::arrow::ArrowWriter<Vec<u8>>>,
+    tmp: PathBuf,
+    path: PathBuf,
+    writer: Option<::parquet::arrow::ArrowWriter<std::fs::File>>,
 }
 
 impl TrialsSink {
-    fn push(&mut self, batch: &arrow::record_batch::RecordBatch) -> anyhow::Result<()> {
-        if self.writer.is_none() {
-            let props = crate::parquet_io::writer_properties()?;
-            self.writer =
-                Some(::parquet::arrow::ArrowWriter::try_new(Vec::new(), batch.schema(), Some(props))?);
+    fn new(path: PathBuf) -> Self {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let tmp = path.with_file_name(format!("{}{name}.{}", crate::atomic::TEMP_PREFIX, std::process::id()));
+        Self { tmp, path, writer: None }
+    }
+
+    /// Append one report's rows (built an experiment at a time, so only one experiment's rows are
+    /// ever in memory uncompressed) as one row group.
+    fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
+        for k in 0..data.experiments.len() {
+            let batch = parquet::trials_batch_of(&data.experiments[k..k + 1])?;
+            if self.writer.is_none() {
+                let file = std::fs::File::create(&self.tmp)
+                    .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.tmp.display()))?;
+                let props = crate::parquet_io::writer_properties()?;
+                self.writer =
+                    Some(::parquet::arrow::ArrowWriter::try_new(file, batch.schema(), Some(props))?);
+            }
+            self.writer.as_mut().expect("created above").write(&batch)?;
         }
-        let w = self.writer.as_mut().expect("created above");
-        w.write(batch)?;
-        w.flush()?;
+        if let Some(w) = &mut self.writer {
+            w.flush()?;
+        }
         Ok(())
     }
 
-    fn finish(self) -> anyhow::Result<Option<Vec<u8>>> {
-        self.writer.map(|w| Ok(w.into_inner()?)).transpose()
+    /// Close, fsync and rename; `false` when no rows were pushed (no file).
+    fn finish(mut self) -> anyhow::Result<bool> {
+        let Some(w) = self.writer.take() else { return Ok(false) };
+        let file = w.into_inner()?;
+        file.sync_all()?;
+        std::fs::rename(&self.tmp, &self.path)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.path.display()))?;
+        Ok(true)
+    }
+}
+
+impl Drop for TrialsSink {
+    fn drop(&mut self) {
+        // Not finished (an error on the way): leave no temporary file behind.
+        if self.writer.is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
     }
 }
