@@ -4,6 +4,7 @@
 
 pub mod atomic;
 pub mod bench;
+pub mod bench_pipeline;
 pub mod cache;
 pub mod parquet_io;
 pub mod pipeline;

@@ -55,6 +55,7 @@ pub const SEGMENT_PREFIX: &str = "seg-";
 /// | `failure` | utf8, nullable | why a diverged trial failed |
 /// | `episode_lengths` | list<uint32> | every episode's length, in order |
 /// | `seconds` | float64 | wall-clock time of the trial (informational only) |
+/// | `cpu_seconds` | float64, nullable | CPU time of the thread that ran the trial (informational; load does not inflate it); absent in segments written before qsweep recorded it, which still read (as null) |
 pub fn schema() -> SchemaRef {
     static SCHEMA: OnceLock<SchemaRef> = OnceLock::new();
     SCHEMA.get_or_init(|| Arc::new(columns(&[]).schema())).clone()
@@ -91,8 +92,13 @@ fn columns(records: &[TrialRecord]) -> Cols {
     c.str_opt("failure", r, |r| r.outcome.failure.as_deref());
     c.list_u32("episode_lengths", r, |r| &r.outcome.episode_lengths);
     c.f64("seconds", r, |r| r.seconds);
+    c.f64_opt("cpu_seconds", r, |r| r.cpu_seconds);
     c
 }
+
+/// Columns added to the schema after segments were first written: a segment without them still
+/// reads, with nulls.
+pub const LATER_COLUMNS: [&str; 1] = ["cpu_seconds"];
 
 /// A segment that could not be read, and why.
 #[derive(Debug, Clone, PartialEq)]
@@ -129,6 +135,8 @@ pub struct StoredOutcome {
     pub outcome: Outcome,
     /// Wall-clock seconds (informational).
     pub seconds: f64,
+    /// Thread CPU seconds, when recorded.
+    pub cpu_seconds: Option<f64>,
 }
 
 /// A cache directory.
@@ -280,6 +288,7 @@ fn open_reader(path: &Path) -> anyhow::Result<ParquetRecordBatchReaderBuilder<Fi
             Ok(g) => {
                 anyhow::bail!("column `{}` has type {}, expected {}", f.name(), g.data_type(), f.data_type())
             }
+            Err(_) if LATER_COLUMNS.contains(&f.name().as_str()) => {}
             Err(_) => anyhow::bail!("column `{}` is missing (not a qsweep segment?)", f.name()),
         }
     }
@@ -320,6 +329,7 @@ pub fn read_segment(path: &Path, keep: &dyn Fn(&Key) -> bool) -> anyhow::Result<
         let failure = column::<StringArray>(&b, "failure")?;
         let lengths = column::<ListArray>(&b, "episode_lengths")?;
         let seconds = column::<Float64Array>(&b, "seconds")?;
+        let cpu = column::<Float64Array>(&b, "cpu_seconds").ok();
         for i in 0..b.num_rows() {
             let k = Key::parse_hex(key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))?;
             if !keep(&k) {
@@ -348,6 +358,7 @@ pub fn read_segment(path: &Path, keep: &dyn Fn(&Key) -> bool) -> anyhow::Result<
                     episode_lengths: lens.values().to_vec(),
                 },
                 seconds: seconds.value(i),
+                cpu_seconds: cpu.filter(|c| c.is_valid(i)).map(|c| c.value(i)),
             });
         }
     }
@@ -365,6 +376,9 @@ fn read_outcome_rows(
     let mut names =
         vec!["key", "converged", "episodes_to_goal", "episodes", "total_steps", "stop", "failure"];
     names.push("seconds");
+    if builder.schema().index_of("cpu_seconds").is_ok() {
+        names.push("cpu_seconds");
+    }
     if lengths {
         names.push("episode_lengths");
     }
@@ -391,6 +405,7 @@ fn read_outcome_rows(
         let stop = column::<StringArray>(&b, "stop")?;
         let failure = column::<StringArray>(&b, "failure")?;
         let seconds = column::<Float64Array>(&b, "seconds")?;
+        let cpu = column::<Float64Array>(&b, "cpu_seconds").ok();
         let lens = if lengths { Some(column::<ListArray>(&b, "episode_lengths")?) } else { None };
         for i in 0..b.num_rows() {
             let k = Key::parse_hex(key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))?;
@@ -414,7 +429,8 @@ fn read_outcome_rows(
                 failure: failure.is_valid(i).then(|| failure.value(i).to_string()),
                 episode_lengths,
             };
-            out.push((k, StoredOutcome { outcome, seconds: seconds.value(i) }));
+            let cpu_seconds = cpu.filter(|c| c.is_valid(i)).map(|c| c.value(i));
+            out.push((k, StoredOutcome { outcome, seconds: seconds.value(i), cpu_seconds }));
         }
     }
     anyhow::ensure!(out.len() == rows.len(), "expected {} rows, read {}", rows.len(), out.len());
@@ -444,7 +460,9 @@ mod tests {
                 c.limits.max_episodes = 5;
                 for seed in 0..2 {
                     let o = run_trial(&c, seed);
-                    out.push(TrialRecord::new(c.clone(), seed, o, 0.5));
+                    out.push(
+                        TrialRecord::new(c.clone(), seed, o, 0.5).with_cpu_seconds(Some(0.25 + seed as f64)),
+                    );
                 }
             }
         }
@@ -471,6 +489,20 @@ mod tests {
         assert_eq!(back, want);
         let one: HashSet<_> = [recs[4].key].into();
         assert_eq!(store.read(&one).unwrap(), vec![recs[4].clone()]);
+        // The report's read: only some rows of some segments, in any order of segments.
+        let some: HashSet<_> = [recs[0].key, recs[2].key, recs[5].key, recs[7].key].into();
+        for lengths in [true, false] {
+            let got = store.read_outcomes(&scan, &some, lengths).unwrap();
+            assert_eq!(got.len(), 4);
+            for r in recs.iter().filter(|r| some.contains(&r.key)) {
+                let mut want = r.outcome.clone();
+                if !lengths {
+                    want.episode_lengths.clear();
+                }
+                assert_eq!((&got[&r.key].outcome, got[&r.key].seconds), (&want, r.seconds));
+                assert_eq!(got[&r.key].cpu_seconds, r.cpu_seconds);
+            }
+        }
         // No temp files are left behind.
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert!(names.iter().all(|n| n.to_string_lossy().starts_with(SEGMENT_PREFIX)), "{names:?}");
@@ -488,7 +520,7 @@ mod tests {
         let back: Vec<RecordBatch> = reader.build().unwrap().map(Result::unwrap).collect();
         let want = to_batch(&recs).unwrap();
         assert_eq!(back, std::slice::from_ref(&want));
-        assert_eq!(want.num_columns(), 23);
+        assert_eq!(want.num_columns(), 24);
         // Spot checks of columns derived from the configuration rather than decoded back.
         let res = column::<ListArray>(&want, "resolution").unwrap().value(0);
         assert_eq!(res.as_any().downcast_ref::<UInt32Array>().unwrap().values(), &[3, 2]);
@@ -501,30 +533,57 @@ mod tests {
 
     /// `tests/fixtures/cache/seg-previous-layout.parquet` was written by qsweep before the cache
     /// schema was derived from the shared column builder (main at 458cd01: tiny.yaml with one seed,
-    /// plus absurd.yaml's diverged trials, compacted by `gc`). The cache on users' disks must stay
-    /// readable: same schema, every row decodes and re-hashes to its key.
+    /// plus absurd.yaml's diverged trials, compacted by `gc`), and before `cpu_seconds` existed. The
+    /// cache on users' disks must stay readable: the same columns but the later ones, every row
+    /// decodes (without CPU time) and re-hashes to its key.
     #[test]
     fn a_segment_in_the_previous_layout_still_reads() {
         let path =
             Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/cache/seg-previous-layout.parquet");
         let reader = ParquetRecordBatchReaderBuilder::try_new(File::open(&path).unwrap()).unwrap();
-        assert_eq!(reader.schema(), &schema(), "names, types, nullability and order unchanged");
+        let now = schema();
+        let without_later: Vec<_> =
+            now.fields().iter().filter(|f| !LATER_COLUMNS.contains(&f.name().as_str())).cloned().collect();
+        assert_eq!(reader.schema().fields().to_vec(), without_later, "names, types, nullability and order");
         let recs = read_segment(&path, &|_| true).unwrap();
         assert_eq!(recs.len(), 30);
         for r in &recs {
             assert_eq!(Key::from_canonical(&r.config_json(), r.seed, r.engine_version), r.key);
+            assert_eq!(r.cpu_seconds, None);
         }
         assert_eq!(recs.iter().filter(|r| r.outcome.failure.is_some()).count(), 2);
         assert!(recs.iter().any(|r| r.outcome.episodes_to_goal.is_some()));
-        // Re-encoding what was read gives the stored columns back, bit for bit.
+        // Re-encoding what was read gives the stored columns back, bit for bit, and nulls for the rest.
         let stored: Vec<RecordBatch> = ParquetRecordBatchReaderBuilder::try_new(File::open(&path).unwrap())
             .unwrap()
             .build()
             .unwrap()
             .map(Result::unwrap)
             .collect();
-        let stored = arrow::compute::concat_batches(&schema(), &stored).unwrap();
-        assert_eq!(to_batch(&recs).unwrap(), stored);
+        let stored = arrow::compute::concat_batches(&stored[0].schema(), &stored).unwrap();
+        let again = to_batch(&recs).unwrap();
+        for f in stored.schema().fields() {
+            assert_eq!(
+                again.column_by_name(f.name()).unwrap(),
+                stored.column_by_name(f.name()).unwrap(),
+                "{}",
+                f.name()
+            );
+        }
+        assert_eq!(again.column_by_name("cpu_seconds").unwrap().null_count(), 30);
+        // Its outcomes read through the report's projected read too.
+        let store = Store { dir: path.parent().unwrap().to_path_buf() };
+        let scan = KeyScan {
+            segments: vec![(path.clone(), recs.iter().map(|r| r.key).collect())],
+            ..KeyScan::default()
+        };
+        let wanted: HashSet<Key> = recs.iter().map(|r| r.key).collect();
+        let got = store.read_outcomes(&scan, &wanted, true).unwrap();
+        assert_eq!(got.len(), 30);
+        for r in &recs {
+            let o = &got[&r.key];
+            assert_eq!((&o.outcome, o.seconds, o.cpu_seconds), (&r.outcome, r.seconds, None));
+        }
     }
 
     #[test]

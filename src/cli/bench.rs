@@ -1,8 +1,10 @@
 //! `qsweep bench`: steps per second of the production engine on the standard configurations.
 
+use super::pipeline_args::PipelineArgs;
 use crate::bench::{self, BenchResult};
 use crate::error::user_error;
 use clap::Args;
+use std::path::PathBuf;
 
 /// Arguments of `qsweep bench`.
 #[derive(Debug, Args)]
@@ -19,10 +21,30 @@ pub struct BenchArgs {
     /// Print JSON (`{format_version, results: [{config, steps, seconds, steps_per_s}]}`) instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Benchmark real work instead: the most expensive cells of this pipeline's plan, each with its
+    /// real seeds to its real stop, timed by thread CPU time (ranked by the cached trials' CPU
+    /// time, or by the engine's estimate where some are not cached).
+    #[arg(long, value_name = "FILE")]
+    pub pipeline: Option<PathBuf>,
+    /// With --pipeline: how many cells to time.
+    #[arg(long, default_value_t = 10, value_name = "N")]
+    pub top: usize,
+    /// With --pipeline: only this variant (repeatable).
+    #[arg(long = "variant", value_name = "ID")]
+    pub variant: Vec<String>,
+    /// With --pipeline: override a field, as for `run`.
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    pub set: Vec<String>,
+    /// With --pipeline: the cache whose trials rank the cells [env: QSWEEP_CACHE; default: cache].
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
 }
 
 /// Run `qsweep bench`.
 pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
+    if let Some(pipeline) = a.pipeline.clone() {
+        return run_pipeline(a, pipeline);
+    }
     if !(1..=u64::from(u32::MAX)).contains(&a.steps) {
         return Err(user_error(format!("--steps: {} is not allowed; use 1 to {}", a.steps, u32::MAX)));
     }
@@ -51,6 +73,62 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
         let v =
             super::json::BenchReport { format_version: super::json::BenchReport::FORMAT_VERSION, results };
         println!("{}", serde_json::to_string_pretty(&v)?);
+    }
+    Ok(crate::error::exit::OK)
+}
+
+/// `qsweep bench --pipeline P`: time the plan's most expensive cells.
+fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
+    use crate::bench_pipeline::{format_row, header, ranked_cells, time_cell, CostBasis};
+    if a.top == 0 {
+        return Err(user_error("--top: must be at least 1"));
+    }
+    let p = PipelineArgs { pipeline, set: a.set, variant: a.variant, cache: a.cache, yes: true };
+    let plan = p.plan()?;
+    let dir = p.cache_dir();
+    // The cache only ranks the cells; a missing one is not created (ranking by the estimate).
+    let cache = if dir.is_dir() {
+        let store = p.store()?;
+        let scan = store.keys()?;
+        Some((store, scan))
+    } else {
+        None
+    };
+    let (cells, basis) = ranked_cells(&plan, cache.as_ref().map(|(s, k)| (s, k)))?;
+    let total: f64 = cells.iter().map(|c| c.cost).sum();
+    let unit = match basis {
+        CostBasis::Cached => "the cached trials' CPU seconds",
+        CostBasis::Estimated => "the engine's estimate (not every trial is cached)",
+    };
+    if !a.json {
+        println!(
+            "{}: the {} most expensive of {} distinct cells, ranked by {unit}",
+            plan.name,
+            a.top.min(cells.len()),
+            cells.len()
+        );
+        println!("{}", header());
+    }
+    let mut results = Vec::new();
+    for c in cells.iter().take(a.top) {
+        let r = time_cell(c, total);
+        if !a.json {
+            println!("{}", format_row(&r));
+        }
+        results.push(r);
+    }
+    if a.json {
+        let v = super::json::PipelineBenchReport {
+            format_version: super::json::PipelineBenchReport::FORMAT_VERSION,
+            pipeline: plan.name.clone(),
+            basis,
+            cells: cells.len(),
+            results,
+        };
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let share: f64 = results.iter().map(|r| r.share).sum();
+        println!("these cells: {:.1}% of the pipeline's cost", 100.0 * share);
     }
     Ok(crate::error::exit::OK)
 }

@@ -114,3 +114,23 @@ impl BenchReport {
     /// The current version of the `bench --json` format.
     pub const FORMAT_VERSION: u32 = 1;
 }
+
+/// `qsweep bench --pipeline P --json`.
+#[derive(Debug, Serialize)]
+pub struct PipelineBenchReport {
+    /// Version of this format ([`PipelineBenchReport::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Pipeline name.
+    pub pipeline: String,
+    /// How the cells were ranked: `cached` (CPU seconds of the cached trials) or `estimated`.
+    pub basis: crate::bench_pipeline::CostBasis,
+    /// Distinct cells of the plan.
+    pub cells: usize,
+    /// The timed cells, most expensive first.
+    pub results: Vec<crate::bench_pipeline::CellBench>,
+}
+
+impl PipelineBenchReport {
+    /// The current version of the `bench --pipeline --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}

@@ -66,6 +66,22 @@ pub struct Job<'a> {
     pub key: Key,
 }
 
+/// CPU seconds the calling thread has used so far (`CLOCK_THREAD_CPUTIME_ID`): what a trial costs,
+/// whatever else the machine is doing. `None` where the clock is not available.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    #[cfg(unix)]
+    {
+        let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+        // SAFETY: clock_gettime only writes the timespec it is given.
+        let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+        (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
+}
+
 /// A rough relative cost of a trial, used only to start long trials first.
 pub fn estimated_cost(c: &TrialConfig) -> f64 {
     let per_step = match c.repr.kind {
@@ -111,13 +127,16 @@ pub fn execute(
                         let Some(&j) = order.get(i) else { break };
                         let job = jobs[j];
                         let start = Instant::now();
+                        let cpu = thread_cpu_seconds();
                         let outcome = run_trial(job.config, job.seed);
+                        let cpu = thread_cpu_seconds().zip(cpu).map(|(b, a)| b - a);
                         let rec = TrialRecord::new(
                             job.config.clone(),
                             job.seed,
                             outcome,
                             start.elapsed().as_secs_f64(),
-                        );
+                        )
+                        .with_cpu_seconds(cpu);
                         debug_assert_eq!(rec.key, job.key);
                         if tx.send(rec).is_err() {
                             break;

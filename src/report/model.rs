@@ -18,19 +18,19 @@ use std::collections::HashMap;
 /// Where a report finds a trial's outcome by key: the cache's outcome columns
 /// ([`StoredOutcome`]), or whole records (in tests and tools that ran the trials themselves).
 pub trait Outcomes: Sync {
-    /// The outcome of `key` and its wall-clock seconds, if present.
-    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64)>;
+    /// The outcome of `key`, its wall-clock and its CPU seconds, if present.
+    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64, Option<f64>)>;
 }
 
 impl Outcomes for HashMap<Key, StoredOutcome> {
-    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64)> {
-        self.get(key).map(|s| (&s.outcome, s.seconds))
+    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64, Option<f64>)> {
+        self.get(key).map(|s| (&s.outcome, s.seconds, s.cpu_seconds))
     }
 }
 
 impl Outcomes for HashMap<Key, TrialRecord> {
-    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64)> {
-        self.get(key).map(|r| (&r.outcome, r.seconds))
+    fn outcome(&self, key: &Key) -> Option<(&Outcome, f64, Option<f64>)> {
+        self.get(key).map(|r| (&r.outcome, r.seconds, r.cpu_seconds))
     }
 }
 
@@ -70,6 +70,8 @@ pub struct TrialData<'a> {
     pub outcome: &'a Outcome,
     /// Wall-clock seconds it took when computed (informational).
     pub seconds: f64,
+    /// CPU seconds of its thread, when recorded.
+    pub cpu_seconds: Option<f64>,
     /// Episodes it contributes ([`episodes_counted`]).
     pub counted: u32,
 }
@@ -175,10 +177,11 @@ impl<'a> ReportData<'a> {
                             .trials
                             .iter()
                             .filter_map(|t| {
-                                records.outcome(&t.key).map(|(o, seconds)| TrialData {
+                                records.outcome(&t.key).map(|(o, seconds, cpu_seconds)| TrialData {
                                     planned: t,
                                     outcome: o,
                                     seconds,
+                                    cpu_seconds,
                                     counted: episodes_counted(o, cap),
                                 })
                             })

@@ -50,6 +50,7 @@
 //! | `episode_lengths` | list<uint32> | length of every episode, in order |
 //! | `epsilon`, `gamma`, `alpha`, `lambda` | float64 | hyperparameters (λ = 0 for Q(0)) |
 //! | `seconds` | float64 | wall-clock seconds the trial took when computed (informational) |
+//! | `cpu_seconds` | float64, null | CPU seconds of the thread that ran it (load does not inflate them); null for trials cached before qsweep recorded them |
 
 use super::model::{resolution_columns, CellData, ExpData, ReportData, TrialData};
 use crate::parquet_io::Cols;
@@ -165,5 +166,6 @@ pub fn trials_batch_of(experiments: &[ExpData]) -> anyhow::Result<arrow::record_
     cols.f64("alpha", &trials, |t| t.1.alpha);
     cols.f64("lambda", &trials, |t| t.1.lambda);
     cols.f64("seconds", &trials, |t| t.0.seconds);
+    cols.f64_opt("cpu_seconds", &trials, |t| t.0.cpu_seconds);
     cols.into_batch()
 }

@@ -30,3 +30,62 @@ fn unknown_filter_and_bad_budget_are_usage_errors() {
         .run();
     Test::new().args(["bench", "--steps", "0"]).status(2).run();
 }
+
+/// `bench --pipeline`: real cells with their real seeds to their real stop, so each timed cell's
+/// steps are exactly what its cached trials ran; ranked by the cached trials' cost, or by the
+/// estimate without a cache; shares of the pipeline's cost add up to at most 1.
+#[test]
+fn pipeline_bench_times_the_costliest_cells_to_their_real_stop() {
+    use crate::helpers::Sandbox;
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let p = p.to_str().unwrap();
+    let bench = |sb: &Sandbox, extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["bench", "--pipeline", p, "--top", "3", "--json"];
+        args.extend_from_slice(extra);
+        let out = sb.qsweep(&args).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let v = bench(&sb, &[]);
+    assert_eq!(v["basis"], "estimated", "no cache yet: {v}");
+    assert!(!sb.cache().exists(), "bench does not create the cache");
+    sb.run_json(std::path::Path::new(p), &[]);
+    let v = bench(&sb, &[]);
+    assert_eq!(v["format_version"], 1);
+    assert_eq!(v["basis"], "cached");
+    let rows = v["results"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    // The cache's own record of the same trials: total steps per cell.
+    let store = qsweep::cache::Store::open(&sb.cache()).unwrap();
+    let recs = store.read_all().unwrap();
+    let mut share = 0.0;
+    for r in rows {
+        let name = r["cell"].as_str().unwrap();
+        let steps: u64 = recs
+            .iter()
+            .filter(|rec| qsweep::bench_pipeline::cell_name(None, &cell_of(rec)) == name)
+            .map(|rec| rec.outcome.total_steps)
+            .sum();
+        assert_eq!(r["steps"].as_u64().unwrap(), steps, "{name}: the real trials, to their real stop");
+        assert_eq!(r["seeds"], 2);
+        assert!(r["cpu_seconds"].as_f64().unwrap() > 0.0);
+        share += r["share"].as_f64().unwrap();
+    }
+    assert!(share > 0.0 && share <= 1.0 + 1e-9, "{share}");
+    Test::new()
+        .pipeline("tiny.yaml")
+        .args(["bench", "--pipeline", "tiny.yaml", "--top", "0"])
+        .status(2)
+        .run();
+}
+
+/// A plan cell standing for a cached record (same configuration), for naming.
+fn cell_of(rec: &qsweep::cache::TrialRecord) -> qsweep::plan::Cell {
+    qsweep::plan::Cell {
+        algorithm: rec.config.learner.algorithm,
+        coords: vec![],
+        config: rec.config.clone(),
+        trials: vec![],
+    }
+}

@@ -87,3 +87,31 @@ def test_duckdb_reads_the_segment_glob(cache: Path) -> None:
     ).fetchall()
     assert len(per_cell) == N_TRIALS // 2
     assert all(row[-1] == 2 for row in per_cell)
+
+
+def test_a_cache_mixing_segments_from_before_cpu_seconds_reads_with_the_readme_idioms(
+    qsweep_bin: Path, tmp_path: Path
+) -> None:
+    """Segments written before qsweep recorded `cpu_seconds` lack the column; a cache holding both
+    kinds reads with the README's idioms (polars `concat(..., how="diagonal_relaxed")`, DuckDB
+    `union_by_name`), old rows null, and `qsweep gc` rewrites every segment in the current schema."""
+    import shutil
+
+    d = tmp_path / "cache"
+    subprocess.run([str(qsweep_bin), "run", str(TINY), "--cache", str(d), "--no-report", "--quiet",
+                    "--set", "seeds=1"], check=True)
+    shutil.copy(REPO_ROOT / "tests/fixtures/cache/seg-previous-layout.parquet", d / "seg-0-previous.parquet")
+    new = pl.read_parquet(sorted(set(d.glob("seg-*.parquet")) - {d / "seg-0-previous.parquet"}))
+    assert new["cpu_seconds"].null_count() == 0
+    assert (new["cpu_seconds"] > 0).all() and (new["cpu_seconds"] <= new["seconds"] * 1.5 + 0.05).all()
+    df = pl.concat([pl.read_parquet(f) for f in sorted(d.glob("seg-*.parquet"))], how="diagonal_relaxed")
+    old_rows = 30
+    assert df["cpu_seconds"].null_count() == old_rows
+    rows, with_cpu = duckdb.sql(
+        f"select count(*), count(cpu_seconds) from read_parquet('{d}/seg-*.parquet', union_by_name=true)"
+    ).fetchall()[0]
+    assert with_cpu == len(new) and rows == len(df)
+    subprocess.run([str(qsweep_bin), "gc", "--cache", str(d)], check=True, capture_output=True)
+    after = pl.read_parquet(d / "seg-*.parquet")  # one schema again: no option needed
+    assert "cpu_seconds" in after.columns
+    assert after["key"].n_unique() == after.height

@@ -91,7 +91,7 @@ TRIALS = IDENTITY | {
     "stop": pa.string(),
     "failure": pa.string(),
     "episode_lengths": pa.list_(pa.uint32()),
-    **{c: pa.float64() for c in ["epsilon", "gamma", "alpha", "lambda", "seconds"]},
+    **{c: pa.float64() for c in ["epsilon", "gamma", "alpha", "lambda", "seconds", "cpu_seconds"]},
 }
 
 
