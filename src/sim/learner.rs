@@ -25,10 +25,18 @@
 use super::config::{LearnerConfig, TraceKind};
 use super::repr::Activations;
 
-/// Dense traces when the table has at most this many features per feature a single state can
-/// activate: then most traces are live in practice and a linear sweep beats list bookkeeping
-/// (measured on Cart-Pole fuzzy Q(λ), 625 rules active at most: 6⁴ rules faster dense, 7⁴ sparse).
-pub const DENSE_TRACE_RATIO: usize = 3;
+/// Dense traces when the table has at most this many parameters (features × actions) per feature a
+/// single state can activate, and at most [`DENSE_MAX_PARAMS`] in all: then most traces are live in
+/// practice and a linear sweep beats list bookkeeping. A step extends the traces of one action
+/// only, so the rule counts parameters, not features: by features alone a 10-action table swept
+/// ten times the parameters its traces use, which made Cart-Pole fuzzy Q(λ) 6⁴ × 10 actions (the
+/// costliest cell of `paper.yaml`) 3.6× slower than the sparse list. Measured on real trials
+/// (docs/speed.md): 3⁴ × 10, 4⁴ × 8 and 5⁴ × 4 actions faster dense; 6⁴ × 4, 7⁴ × 2, 5⁴ × 10 sparse.
+/// Either layout gives bit-identical results.
+pub const DENSE_TRACE_RATIO: usize = 10;
+
+/// The most parameters a dense trace sweep covers (see [`DENSE_TRACE_RATIO`]).
+pub const DENSE_MAX_PARAMS: usize = 4096;
 
 /// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
 const MAX_UNROLLED_ACTIONS: usize = 16;
@@ -138,6 +146,9 @@ impl Learner {
     /// layout; results do not depend on it).
     pub fn new(n_features: usize, n_actions: usize, max_active: usize, cfg: &LearnerConfig) -> Self {
         let n = n_features * n_actions;
+        if std::env::var_os("QSWEEP_DEBUG_LAYOUT").is_some() {
+            eprintln!("layout nf={n_features} na={n_actions} max_active={max_active} n={n}");
+        }
         let rule = TraceRule {
             decay: cfg.gamma * cfg.lambda,
             cutoff: cfg.trace_cutoff,
@@ -145,7 +156,7 @@ impl Learner {
         };
         let traces = if rule.decay == 0.0 {
             Traces::None
-        } else if max_active > 1 && n_features <= DENSE_TRACE_RATIO * max_active {
+        } else if max_active > 1 && n <= DENSE_MAX_PARAMS && n <= DENSE_TRACE_RATIO * max_active {
             Traces::Dense(vec![0.0; n])
         } else {
             Traces::Sparse(SparseTraces::new(n))
@@ -544,6 +555,28 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Regression: the layout was chosen by features alone, so a 10-action table swept every
+    /// parameter each step (Cart-Pole fuzzy Q(λ) 6⁴ × 10 actions, the costliest cell of
+    /// `paper.yaml`, ran 3.6× the instructions it needs). The choice counts parameters now.
+    #[test]
+    fn many_action_tables_keep_their_traces_in_a_list() {
+        let cfg = config(0.5, false, 1e-10);
+        let layout = |nf, na, active| match Learner::new(nf, na, active, &cfg).traces {
+            Traces::Dense(_) => "dense",
+            Traces::Sparse(_) => "sparse",
+            Traces::None => "none",
+        };
+        assert_eq!(layout(1296, 10, 625), "sparse", "6⁴ × 10");
+        assert_eq!(layout(1296, 4, 625), "sparse", "6⁴ × 4");
+        assert_eq!(layout(625, 10, 625), "sparse", "5⁴ × 10");
+        assert_eq!(layout(2401, 2, 625), "sparse", "7⁴ × 2");
+        assert_eq!(layout(1296, 2, 625), "dense", "6⁴ × 2");
+        assert_eq!(layout(256, 8, 256), "dense", "4⁴ × 8");
+        assert_eq!(layout(81, 10, 81), "dense", "3⁴ × 10");
+        assert_eq!(layout(100, 3, 1), "sparse", "crisp: one feature a step");
+        assert!(matches!(Learner::new(1296, 10, 625, &config(0.0, false, 1e-10)).traces, Traces::None));
     }
 
     #[test]
