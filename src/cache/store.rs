@@ -311,54 +311,96 @@ fn read_keys(path: &Path) -> anyhow::Result<Vec<Key>> {
     Ok(out)
 }
 
+/// The outcome columns of one batch, decoded row by row: the one reading of them, shared by the
+/// full read ([`read_segment`]) and the report's projected one (`episode_lengths` may be left out).
+struct OutcomeColumns<'b> {
+    key: &'b StringArray,
+    converged: &'b BooleanArray,
+    to_goal: &'b UInt32Array,
+    episodes: &'b UInt32Array,
+    total: &'b UInt64Array,
+    stop: &'b StringArray,
+    failure: &'b StringArray,
+    seconds: &'b Float64Array,
+    cpu: Option<&'b Float64Array>,
+    lengths: Option<&'b ListArray>,
+}
+
+impl<'b> OutcomeColumns<'b> {
+    fn of(b: &'b RecordBatch) -> anyhow::Result<Self> {
+        Ok(Self {
+            key: column(b, "key")?,
+            converged: column(b, "converged")?,
+            to_goal: column(b, "episodes_to_goal")?,
+            episodes: column(b, "episodes")?,
+            total: column(b, "total_steps")?,
+            stop: column(b, "stop")?,
+            failure: column(b, "failure")?,
+            seconds: column(b, "seconds")?,
+            // Absent in segments written before it existed (LATER_COLUMNS), or left out.
+            cpu: column(b, "cpu_seconds").ok(),
+            lengths: column(b, "episode_lengths").ok(),
+        })
+    }
+
+    fn key(&self, i: usize) -> anyhow::Result<Key> {
+        Key::parse_hex(self.key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))
+    }
+
+    fn outcome(&self, i: usize) -> anyhow::Result<Outcome> {
+        let stop = parse_stop(self.stop.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: unknown stop"))?;
+        let episode_lengths = match self.lengths {
+            Some(l) => l
+                .value(i)
+                .as_any()
+                .downcast_ref::<UInt32Array>()
+                .ok_or_else(|| anyhow::anyhow!("episode_lengths has an unexpected type"))?
+                .values()
+                .to_vec(),
+            None => Vec::new(),
+        };
+        Ok(Outcome {
+            converged: self.converged.value(i),
+            episodes_to_goal: self.to_goal.is_valid(i).then(|| self.to_goal.value(i)),
+            episodes: self.episodes.value(i),
+            total_steps: self.total.value(i),
+            stop,
+            failure: self.failure.is_valid(i).then(|| self.failure.value(i).to_string()),
+            episode_lengths,
+        })
+    }
+
+    fn seconds(&self, i: usize) -> (f64, Option<f64>) {
+        (self.seconds.value(i), self.cpu.filter(|c| c.is_valid(i)).map(|c| c.value(i)))
+    }
+}
+
 /// Decode the rows of one segment whose key passes `keep`.
 pub fn read_segment(path: &Path, keep: &dyn Fn(&Key) -> bool) -> anyhow::Result<Vec<TrialRecord>> {
     let reader = open_reader(path)?.build()?;
     let mut out = Vec::new();
     for batch in reader {
         let b = batch?;
-        let key = column::<StringArray>(&b, "key")?;
+        let cols = OutcomeColumns::of(&b)?;
         let version = column::<UInt32Array>(&b, "engine_version")?;
         let seed = column::<UInt64Array>(&b, "seed")?;
         let config = column::<StringArray>(&b, "config_json")?;
-        let converged = column::<BooleanArray>(&b, "converged")?;
-        let to_goal = column::<UInt32Array>(&b, "episodes_to_goal")?;
-        let episodes = column::<UInt32Array>(&b, "episodes")?;
-        let total = column::<UInt64Array>(&b, "total_steps")?;
-        let stop = column::<StringArray>(&b, "stop")?;
-        let failure = column::<StringArray>(&b, "failure")?;
-        let lengths = column::<ListArray>(&b, "episode_lengths")?;
-        let seconds = column::<Float64Array>(&b, "seconds")?;
-        let cpu = column::<Float64Array>(&b, "cpu_seconds").ok();
         for i in 0..b.num_rows() {
-            let k = Key::parse_hex(key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))?;
+            let k = cols.key(i)?;
             if !keep(&k) {
                 continue;
             }
             let cfg: TrialConfig = serde_json::from_str(config.value(i))
                 .map_err(|e| anyhow::anyhow!("row {i}: config_json does not parse: {e}"))?;
-            let stop = parse_stop(stop.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: unknown stop"))?;
-            let lens = lengths.value(i);
-            let lens = lens
-                .as_any()
-                .downcast_ref::<UInt32Array>()
-                .ok_or_else(|| anyhow::anyhow!("episode_lengths has an unexpected type"))?;
+            let (seconds, cpu_seconds) = cols.seconds(i);
             out.push(TrialRecord {
                 key: k,
                 engine_version: version.value(i),
                 config: cfg,
                 seed: seed.value(i),
-                outcome: Outcome {
-                    converged: converged.value(i),
-                    episodes_to_goal: to_goal.is_valid(i).then(|| to_goal.value(i)),
-                    episodes: episodes.value(i),
-                    total_steps: total.value(i),
-                    stop,
-                    failure: failure.is_valid(i).then(|| failure.value(i).to_string()),
-                    episode_lengths: lens.values().to_vec(),
-                },
-                seconds: seconds.value(i),
-                cpu_seconds: cpu.filter(|c| c.is_valid(i)).map(|c| c.value(i)),
+                outcome: cols.outcome(i)?,
+                seconds,
+                cpu_seconds,
             });
         }
     }
@@ -397,40 +439,10 @@ fn read_outcome_rows(
     let mut out = Vec::with_capacity(rows.len());
     for batch in reader {
         let b = batch?;
-        let key = column::<StringArray>(&b, "key")?;
-        let converged = column::<BooleanArray>(&b, "converged")?;
-        let to_goal = column::<UInt32Array>(&b, "episodes_to_goal")?;
-        let episodes = column::<UInt32Array>(&b, "episodes")?;
-        let total = column::<UInt64Array>(&b, "total_steps")?;
-        let stop = column::<StringArray>(&b, "stop")?;
-        let failure = column::<StringArray>(&b, "failure")?;
-        let seconds = column::<Float64Array>(&b, "seconds")?;
-        let cpu = column::<Float64Array>(&b, "cpu_seconds").ok();
-        let lens = if lengths { Some(column::<ListArray>(&b, "episode_lengths")?) } else { None };
+        let cols = OutcomeColumns::of(&b)?;
         for i in 0..b.num_rows() {
-            let k = Key::parse_hex(key.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: malformed key"))?;
-            let stop = parse_stop(stop.value(i)).ok_or_else(|| anyhow::anyhow!("row {i}: unknown stop"))?;
-            let episode_lengths = match lens {
-                Some(l) => l
-                    .value(i)
-                    .as_any()
-                    .downcast_ref::<UInt32Array>()
-                    .ok_or_else(|| anyhow::anyhow!("episode_lengths has an unexpected type"))?
-                    .values()
-                    .to_vec(),
-                None => Vec::new(),
-            };
-            let outcome = Outcome {
-                converged: converged.value(i),
-                episodes_to_goal: to_goal.is_valid(i).then(|| to_goal.value(i)),
-                episodes: episodes.value(i),
-                total_steps: total.value(i),
-                stop,
-                failure: failure.is_valid(i).then(|| failure.value(i).to_string()),
-                episode_lengths,
-            };
-            let cpu_seconds = cpu.filter(|c| c.is_valid(i)).map(|c| c.value(i));
-            out.push((k, StoredOutcome { outcome, seconds: seconds.value(i), cpu_seconds }));
+            let (seconds, cpu_seconds) = cols.seconds(i);
+            out.push((cols.key(i)?, StoredOutcome { outcome: cols.outcome(i)?, seconds, cpu_seconds }));
         }
     }
     anyhow::ensure!(out.len() == rows.len(), "expected {} rows, read {}", rows.len(), out.len());

@@ -84,16 +84,10 @@ impl Formats {
 }
 
 impl Default for Formats {
+    /// Every format but PNG (SVG shows the same figures, and committed reports hold one format).
     fn default() -> Self {
-        Self::of(&[
-            Format::Md,
-            Format::Csv,
-            Format::Tex,
-            Format::Cells,
-            Format::Trials,
-            Format::Svg,
-            Format::Html,
-        ])
+        let all: Vec<Format> = Format::ALL.into_iter().filter(|f| *f != Format::Png).collect();
+        Self::of(&all)
     }
 }
 

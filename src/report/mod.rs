@@ -85,6 +85,29 @@ impl ReportSummary {
     }
 }
 
+/// A report folder being written: every file atomically, the names kept in writing order.
+pub(crate) struct Folder<'d> {
+    dir: &'d Path,
+    /// Files written, relative to the folder.
+    pub files: Vec<PathBuf>,
+}
+
+impl<'d> Folder<'d> {
+    /// Create `dir` (and its `figures/`).
+    pub fn create(dir: &'d Path) -> anyhow::Result<Self> {
+        std::fs::create_dir_all(dir.join("figures"))
+            .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
+        Ok(Self { dir, files: Vec::new() })
+    }
+
+    /// Write `name` (relative to the folder).
+    pub fn put(&mut self, name: &str, bytes: &[u8]) -> anyhow::Result<()> {
+        write_atomic(&self.dir.join(name), bytes)?;
+        self.files.push(PathBuf::from(name));
+        Ok(())
+    }
+}
+
 /// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it, in
 /// the default formats, with its own `trials.parquet`.
 pub fn write_report(plan: &Plan, records: &dyn Outcomes, dir: &Path) -> anyhow::Result<ReportSummary> {
@@ -112,14 +135,8 @@ pub fn write_folder(
     formats: Formats,
     own_trials: bool,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir.join("figures"))
-        .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
-    let mut files = Vec::new();
-    let mut put = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
-        write_atomic(&dir.join(name), bytes)?;
-        files.push(PathBuf::from(name));
-        Ok(())
-    };
+    let mut out = Folder::create(dir)?;
+    let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
     let t3 = table::table3(data);
     if formats.has(Format::Md) {
         put("table3.md", table::render(&t3, &table::Markdown).as_bytes())?;
@@ -158,7 +175,7 @@ pub fn write_folder(
     if formats.has(Format::Md) {
         put("README.md", markdown::page(data, &t3, formats).as_bytes())?;
     }
-    Ok(files)
+    Ok(out.files)
 }
 
 /// How many distinct trials the report already in `dir` holds (distinct `key`s of its

@@ -38,9 +38,9 @@ fn the_cache_and_the_report_files_agree_on_every_shared_column() {
             }
         }
     }
-    // cache/trials: 18 columns (identity, outcome, learner settings, seconds); cells/trials: the
+    // cache/trials: 19 columns (identity, outcome, learner settings, seconds, cpu_seconds); cells/trials: the
     // 17 cell-identity columns; cache/cells: system, repr, algorithm, actions.
-    assert_eq!(shared, 18 + 17 + 4);
+    assert_eq!(shared, 19 + 17 + 4);
     let trials = &files[2].1;
     for name in ["total_steps", "seed"] {
         assert_eq!(trials.field_with_name(name).unwrap().data_type(), &arrow::datatypes::DataType::UInt64);

@@ -19,12 +19,10 @@ use super::formats::{Format, Formats};
 use super::model::ReportData;
 use super::table::html::escape_html as esc;
 use super::table::{render, Csv, Html, Markdown, Table};
-use super::write_atomic;
 use crate::cache::Key;
 use crate::plan::{Cell, Experiment, Plan};
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
-use anyhow::Context;
 use std::path::{Path, PathBuf};
 
 /// A variant's identity, as the pipeline declares it.
@@ -133,14 +131,8 @@ pub fn write_comparison(
     variants: &[VariantDigest],
     formats: Formats,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir.join("figures"))
-        .with_context(|| format!("cannot create the report directory {}", dir.display()))?;
-    let mut files = Vec::new();
-    let mut put = |name: &str, bytes: &[u8]| -> anyhow::Result<()> {
-        write_atomic(&dir.join(name), bytes)?;
-        files.push(PathBuf::from(name));
-        Ok(())
-    };
+    let mut out = super::Folder::create(dir)?;
+    let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
     let fits: Vec<(&VariantInfo, Fit)> = variants.iter().map(|v| (&v.info, v.fit)).collect();
     let table = comparison_table(&fits);
     if formats.has(Format::Md) {
@@ -176,7 +168,7 @@ pub fn write_comparison(
     if formats.has(Format::Md) {
         put("README.md", readme(plan, variants, &table, &figs, formats).as_bytes())?;
     }
-    Ok(files)
+    Ok(out.files)
 }
 
 type FigRef<'a> = (&'a VariantInfo, SystemKind, String, (u32, u32));
