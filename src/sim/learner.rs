@@ -335,9 +335,9 @@ fn update_dense(
     }
 }
 
-/// Several active features, large table: extend the current activation's traces, then apply and
-/// decay every live trace in one pass, dropping those that vanish. Both passes are branch-free:
-/// which activations are new and which traces die is data-dependent and would mispredict often.
+/// Several active features, large table: extend the current activation's traces (branch-free:
+/// which activations are new is data-dependent), then apply and decay every live trace in one
+/// pass, dropping those that vanish.
 #[inline(never)]
 fn update_sparse(
     q: &mut [f64],
@@ -364,20 +364,29 @@ fn update_sparse(
         slot[k] = dest as u32 + 1;
         len += usize::from(p == 0);
     }
-    // Apply, decay and compact in place; every kept trace's slot is rewritten (it may have moved).
-    let mut kept = 0;
-    for r in 0..len {
-        let (k, e) = (keys[r], values[r]);
-        q[k as usize] += step * e;
+    // Apply and decay; a trace that vanishes is replaced by the last one (not yet visited), so
+    // only moved traces rewrite their slot: most traces stay where they are, and rewriting every
+    // slot was a random store per live trace per step.
+    let mut r = 0;
+    while r < len {
+        let (k, e) = (keys[r] as usize, values[r]);
+        q[k] += step * e;
         let next = rule.decayed(e);
-        keys[kept] = k;
-        values[kept] = next;
-        let stays = next != 0.0;
-        slot[k as usize] = if stays { kept as u32 + 1 } else { 0 };
-        kept += usize::from(stays);
+        if next != 0.0 {
+            values[r] = next;
+            r += 1;
+        } else {
+            slot[k] = 0;
+            len -= 1;
+            if r < len {
+                keys[r] = keys[len];
+                values[r] = values[len];
+                slot[keys[r] as usize] = r as u32 + 1;
+            }
+        }
     }
-    keys.truncate(kept);
-    values.truncate(kept);
+    keys.truncate(len);
+    values.truncate(len);
 }
 
 /// Q(s, ·) with `N` actions: all `N` running sums stay in registers across the activation.
