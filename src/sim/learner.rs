@@ -179,6 +179,26 @@ impl Learner {
         }
     }
 
+    /// Q(s, ·) right after [`update`](Self::update) for `action`, given `before`, Q(s, ·) computed
+    /// just before that update. Under Q(0) (no traces) the update moved only `action`'s parameters,
+    /// so every other action's value is `before`'s, the same sum over the same parameters in the
+    /// same order, and only `action`'s sum is redone (in activation order from 0, as
+    /// [`q_values`](Self::q_values) sums it: bit-identical). With traces, every action may have
+    /// moved and all are recomputed.
+    #[inline(always)]
+    pub fn q_values_after_update(&self, phi: &Activations, action: usize, before: &[f64], out: &mut [f64]) {
+        if !matches!(self.traces, Traces::None) {
+            return self.q_values(phi, out);
+        }
+        out.copy_from_slice(before);
+        let na = self.n_actions;
+        let mut sum = 0.0;
+        for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+            sum += w * self.q[i as usize * na + action];
+        }
+        out[action] = sum;
+    }
+
     /// [`q_values`](Self::q_values) for several active features.
     #[inline(never)]
     fn q_values_many(&self, phi: &Activations, out: &mut [f64]) {
@@ -586,6 +606,35 @@ mod tests {
         assert_eq!(layout(81, 10, 81), "dense", "3⁴ × 10");
         assert_eq!(layout(100, 3, 1), "sparse", "crisp: one feature a step");
         assert!(matches!(Learner::new(1296, 10, 625, &config(0.0, false, 1e-10)).traces, Traces::None));
+    }
+
+    /// The shortcut after a Q(0) update equals a full evaluation, bit for bit, whatever was
+    /// updated (the same state, an overlapping one, a disjoint one, one feature or many).
+    #[test]
+    fn q_values_after_a_q0_update_equal_a_full_evaluation() {
+        for na in [1, 2, 3, 10, 17] {
+            let cfg = config(0.0, false, 0.0);
+            let nf = 40;
+            let mut l = Learner::new(nf, na, 8, &cfg);
+            assert!(matches!(l.traces, Traces::None));
+            let (mut before, mut full, mut fast) = (vec![0.0; na], vec![0.0; na], vec![0.0; na]);
+            for step in 0..500 {
+                let phi = activations(step, nf, 1 + step % 7);
+                let next = activations(step + 1 + step % 3, nf, 1 + (step * 5) % 8);
+                let a = (step * 7) % na;
+                l.q_values(&next, &mut before);
+                l.update(&phi, a, ((step as f64) * 0.61).cos() * 3.0);
+                l.q_values(&next, &mut full);
+                l.q_values_after_update(&next, a, &before, &mut fast);
+                assert_eq!(bits(&fast), bits(&full), "na {na} step {step}");
+            }
+            // With traces the shortcut is never taken.
+            let lam = Learner::new(nf, na, 8, &config(0.9, false, 1e-10));
+            let phi = activations(3, nf, 4);
+            lam.q_values(&phi, &mut full);
+            lam.q_values_after_update(&phi, 0, &vec![f64::NAN; na], &mut fast);
+            assert_eq!(bits(&fast), bits(&full));
+        }
     }
 
     #[test]

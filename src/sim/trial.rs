@@ -191,7 +191,8 @@ fn episodes<E: Environment, R: Representation>(
                 break t.terminal;
             }
             std::mem::swap(&mut phi, &mut phi_next);
-            learner.q_values(&phi, &mut qs);
+            // qs_next is Q(s_{t+1}, ·) from before the update: under Q(0) only action a moved.
+            learner.q_values_after_update(&phi, a, &qs_next, &mut qs);
         };
         lengths.push(len as u32);
         total_steps += len;
