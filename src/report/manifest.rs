@@ -108,14 +108,6 @@ impl Kept {
         }
     }
 
-    /// Files the kept report wrote (empty for a legacy report: nothing is known to be ours).
-    pub fn files(&self) -> &[String] {
-        match self {
-            Kept::Manifest(m) => &m.files,
-            Kept::Legacy { .. } => &[],
-        }
-    }
-
     /// "216 trials, 24 cells" (the cells only when known).
     pub fn describe(&self) -> String {
         match self {

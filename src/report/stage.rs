@@ -106,13 +106,14 @@ impl Target {
         };
         manifest::write(&self.dir, &m)?;
         let Some(kept) = &self.kept else { return Ok(()) };
+        // What the kept report wrote: its manifest says; an earlier layout's are known by name.
         let stale: Vec<String> = match kept {
             Kept::Manifest(k) => k.files.clone(),
-            Kept::Legacy { .. } => Vec::new(),
+            Kept::Legacy { .. } => legacy_files(&self.dir),
         };
         for f in stale.iter().filter(|f| !names.contains(f)) {
             let p = self.dir.join(f);
-            // Only plain files inside the folder, named by our own manifest.
+            // Only plain files inside the folder, named by our own manifest or layout.
             if !f.contains("..") && p.is_file() {
                 std::fs::remove_file(&p)
                     .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
@@ -134,21 +135,6 @@ impl Target {
         }
         Ok(())
     }
-}
-
-/// A legacy folder's files that the new report no longer writes (a per-variant `trials.parquet`,
-/// figures in a format no longer asked for): removed, since the old layout wrote them.
-fn remove_legacy(t: &Target, written: &[PathBuf], out: &mut ReportOutcome) -> anyhow::Result<()> {
-    if !matches!(t.kept, Some(Kept::Legacy { .. })) {
-        return Ok(());
-    }
-    let written: Vec<String> = written.iter().map(|f| f.to_string_lossy().into_owned()).collect();
-    for f in legacy_files(&t.dir).into_iter().filter(|f| !written.contains(f)) {
-        let p = t.dir.join(&f);
-        std::fs::remove_file(&p).map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
-        out.removed.push(p);
-    }
-    Ok(())
 }
 
 /// Write the report of `plan` from the cache: for a pipeline without variants, one folder; with
@@ -224,7 +210,6 @@ pub fn write(
         );
         let files = files?;
         pushed?;
-        remove_legacy(target, &files, &mut out)?;
         target.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, &files, &mut out)?;
         let s = ReportSummary::of(&data, Vec::new());
         out.summary.add(&s);
@@ -256,7 +241,6 @@ pub fn write(
             files.push(PathBuf::from("trials.parquet"));
         }
         files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
-        remove_legacy(top, &files, &mut out)?;
         top.finish(plan, None, formats, &files, &mut out)?;
         out.summary.files.extend(files);
         out.summary.files.push(PathBuf::from(manifest::MANIFEST));

@@ -7,7 +7,6 @@ use super::super::figures::{
 };
 use super::super::stats::{bootstrap_diff_ci, BOOTSTRAP_RESAMPLES};
 use super::{CellDigest, ExpDigest, VariantDigest};
-use crate::cache::Key;
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 use plotters::prelude::*;
@@ -35,12 +34,11 @@ trials on either side are never marked. Grey: the cell has no trials in one of t
 pub fn diff_seed(base: &CellDigest, other: &CellDigest) -> u64 {
     let mut h = blake3::Hasher::new();
     h.update(b"qsweep-bootstrap-diff\0");
-    let keys = |c: &CellDigest| -> Vec<Key> { c.keys.clone() };
-    for k in keys(base) {
+    for k in &base.keys {
         h.update(&k.0);
     }
     h.update(b"\0");
-    for k in keys(other) {
+    for k in &other.keys {
         h.update(&k.0);
     }
     u64::from_le_bytes(h.finalize().as_bytes()[..8].try_into().expect("8 bytes"))
