@@ -9,6 +9,7 @@ pub mod cache;
 pub mod parquet_io;
 pub mod pipeline;
 pub mod plan;
+pub mod race;
 pub mod report;
 pub mod sim;
 pub mod slurm;

@@ -67,6 +67,10 @@ impl Cols {
     pub fn bool<'a, T>(&mut self, name: &'static str, rows: &'a [T], f: impl Fn(&'a T) -> bool) {
         self.push(name, rows.iter().map(|r| Some(f(r))).collect::<BooleanArray>(), false);
     }
+    /// A nullable bool column.
+    pub fn bool_opt<'a, T>(&mut self, name: &'static str, rows: &'a [T], f: impl Fn(&'a T) -> Option<bool>) {
+        self.push(name, rows.iter().map(f).collect::<BooleanArray>(), true);
+    }
     /// A list<uint32> column (the list items are declared nullable, as Arrow's builders make them
     /// and as every cache segment ever written declares them).
     pub fn list_u32<'a, T>(&mut self, name: &'static str, rows: &'a [T], f: impl Fn(&'a T) -> &'a [u32]) {

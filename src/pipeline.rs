@@ -1,6 +1,8 @@
 //! The pipeline as the library runs it, the same for every command: scan the cache's keys (and
 //! move damaged segments aside, [`scan`]), choose the trials to run ([`select`]: shard, cached,
 //! `--force`), execute and store them ([`run`]); the report stage is [`crate::report::write`].
+//! A raced plan ([`crate::race`]) is resolved against the cache first ([`raced`]), and `run`
+//! runs its rounds one after another (one round per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeyScan, Store};
 use crate::exec::shard::{shard_keys, Shard};
@@ -52,6 +54,13 @@ pub fn select<'p>(plan: &'p Plan, scan: &KeyScan, sel: Selection) -> (Vec<Job<'p
     (unique, jobs)
 }
 
+/// `plan` with its races resolved against the cache's outcomes (the plan itself, with no race).
+pub fn raced(plan: &Plan, store: &Store, scan: &KeyScan) -> anyhow::Result<crate::race::Raced> {
+    crate::race::resolve(plan, &scan.keys, &mut |wanted| {
+        Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
+    })
+}
+
 /// What [`run`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunOutcome {
@@ -61,7 +70,10 @@ pub struct RunOutcome {
     pub cached: usize,
 }
 
-/// Run the selected missing trials of `plan` and store them in batches.
+/// Run the selected missing trials of `plan` and store them in batches. A raced plan runs round
+/// after round, each planned from the outcomes of the rounds before, until its races are over;
+/// under a shard, only the shard's part of the first round whose trials are missing (the other
+/// shards' parts of it must be stored before the next round can be planned).
 pub fn run(
     plan: &Plan,
     store: &Store,
@@ -69,10 +81,36 @@ pub fn run(
     sel: Selection,
     opts: &ExecOptions,
 ) -> anyhow::Result<RunOutcome> {
-    let (unique, jobs) = select(plan, scan, sel);
-    let exec = execute(&jobs, opts, |batch| {
+    let flush = |batch: &[crate::cache::TrialRecord]| {
         store.write_segment(batch)?;
         Ok(())
-    })?;
-    Ok(RunOutcome { exec, cached: unique.len() - jobs.len() })
+    };
+    if !plan.has_race() {
+        let (unique, jobs) = select(plan, scan, sel);
+        let exec = execute(&jobs, opts, flush)?;
+        return Ok(RunOutcome { exec, cached: unique.len() - jobs.len() });
+    }
+    let mut total = ExecReport::default();
+    let mut rescanned;
+    let mut scan = scan;
+    // `--force` recomputes each trial once, not once per round.
+    let mut forced: std::collections::HashSet<crate::cache::Key> = std::collections::HashSet::new();
+    loop {
+        let raced = raced(plan, store, scan)?;
+        let (unique, jobs) = select(&raced.plan, scan, Selection { force: false, ..sel });
+        let jobs: Vec<Job> =
+            if sel.force { unique.iter().filter(|t| forced.insert(t.key)).copied().collect() } else { jobs };
+        if jobs.is_empty() {
+            return Ok(RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total });
+        }
+        let exec = execute(&jobs, opts, flush)?;
+        total.executed += exec.executed;
+        total.failed += exec.failed;
+        total.interrupted |= exec.interrupted;
+        if exec.interrupted || sel.shard.is_some() {
+            return Ok(RunOutcome { cached: unique.len() - jobs.len(), exec: total });
+        }
+        rescanned = store.keys()?;
+        scan = &rescanned;
+    }
 }

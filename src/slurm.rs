@@ -1,5 +1,6 @@
 //! Slurm submission scripts: a job array whose task I runs `qsweep run --shard I/N`, plus a report
-//! job that starts once every task has succeeded (`--dependency=afterok`).
+//! job that starts once every task has succeeded (`--dependency=afterok`). A raced pipeline gets
+//! one array per possible round, chained the same way (a round is planned from the ones before).
 //!
 //! The script is plain bash, run once on a login node. It holds both job scripts verbatim, as
 //! quoted here-documents (nothing in them is expanded at submission), and passes every sbatch
@@ -52,6 +53,8 @@ pub struct Submission {
     pub log_dir: PathBuf,
     /// Further sbatch options for both jobs.
     pub sbatch_args: Vec<String>,
+    /// Job arrays to submit one after another: 1, or a race's most rounds.
+    pub rounds: u32,
 }
 
 impl Submission {
@@ -124,6 +127,18 @@ impl Submission {
         );
         sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
         writeln!(s)?;
+        // A race: one array per round, each starting when the one before has succeeded, since a
+        // round's trials are planned from the outcomes of the rounds before. Each task runs its
+        // shard of the first round whose trials are missing (nothing once the race is over).
+        for round in 2..=self.rounds {
+            let mut opts = opts.clone();
+            opts[0] = format!("--job-name={}", quote(&format!("{}-round{round}", self.job_name)));
+            opts.insert(1, "--dependency=afterok:\"$array_job\"".to_string());
+            opts.insert(2, "--kill-on-invalid-dep=yes".to_string());
+            writeln!(s, "# Race round {round} of at most {}.", self.rounds)?;
+            sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
+            writeln!(s)?;
+        }
         let mut opts = vec![
             format!("--job-name={}", quote(&format!("{}-report", self.job_name))),
             "--dependency=afterok:\"$array_job\"".to_string(),
@@ -139,10 +154,18 @@ impl Submission {
         );
         sbatch_call(&mut s, "report_job", &opts, "QSWEEP_REPORT_JOB", &body)?;
         writeln!(s)?;
-        writeln!(
-            s,
-            "echo \"submitted array job $array_job ({n} tasks) and report job $report_job (starts when all succeed)\""
-        )?;
+        if self.rounds > 1 {
+            writeln!(
+                s,
+                "echo \"submitted {} chained array jobs of {n} tasks, one per race round (the last is $array_job), and report job $report_job (starts when all succeed)\"",
+                self.rounds
+            )?;
+        } else {
+            writeln!(
+                s,
+                "echo \"submitted array job $array_job ({n} tasks) and report job $report_job (starts when all succeed)\""
+            )?;
+        }
         writeln!(s, "echo \"watch: squeue -j $array_job,$report_job   logs: \"{logs}")?;
         writeln!(s, "echo \"report: \"{}", path_word(&self.report_dir.join("index.html"))?)?;
         Ok(s)
@@ -268,7 +291,36 @@ mod tests {
             job_name: "qsweep-quick".into(),
             log_dir: "/home/ada/study/slurm-logs".into(),
             sbatch_args: vec![],
+            rounds: 1,
         }
+    }
+
+    #[test]
+    fn a_race_chains_one_array_per_round_before_the_report() {
+        let script = Submission { rounds: 3, ..submission() }.render().unwrap();
+        assert_eq!(script.matches("<<'QSWEEP_SHARD_JOB'").count(), 3, "{script}");
+        for round in [2, 3] {
+            let at = script.find(&format!("--job-name=qsweep-quick-round{round}")).expect("named round");
+            let call = &script[..at];
+            let start = call.rfind("array_job=$(sbatch").unwrap();
+            assert!(
+                script[start..].starts_with("array_job=$(sbatch --parsable \\\n    --job-name"),
+                "{script}"
+            );
+            assert!(script[at..].lines().nth(1).unwrap().contains("--dependency=afterok:\"$array_job\""));
+        }
+        // The report waits for the last round's array.
+        let last = script.rfind("QSWEEP_SHARD_JOB\n)").unwrap();
+        let report = script.find("--job-name=qsweep-quick-report").unwrap();
+        assert!(last < report, "{script}");
+        assert_eq!(
+            Submission { rounds: 1, ..submission() }
+                .render()
+                .unwrap()
+                .matches("<<'QSWEEP_SHARD_JOB'")
+                .count(),
+            1
+        );
     }
 
     #[test]

@@ -52,6 +52,39 @@ pub struct StatusReport {
     pub experiments: Vec<StatusExperiment>,
     /// Cache segments that could not be read (their trials count as missing).
     pub damaged_segments: usize,
+    /// One entry per raced heatmap; only for pipelines with a `race:` (an addition, not a new version).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub race: Option<Vec<StatusRace>>,
+}
+
+/// One raced heatmap of [`StatusReport`] (experiment × algorithm of one variant).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StatusRace {
+    /// The variant's id, for pipelines that declare `variants:`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
+    /// `ball-beam`, `cart-pole` or `mountain-car`.
+    pub system: String,
+    /// Experiment id.
+    pub experiment: String,
+    /// `q0` or `q-lambda`.
+    pub algorithm: String,
+    /// Cells of the heatmap.
+    pub cells: usize,
+    /// Rounds decided (all their trials present).
+    pub rounds_done: u32,
+    /// The most rounds the race can take.
+    pub rounds_max: u32,
+    /// Whether the race is over.
+    pub finished: bool,
+    /// Cells still in the race.
+    pub contenders: usize,
+    /// Trials of the decided rounds and the pending one.
+    pub trials: usize,
+    /// Of those, in the cache.
+    pub cached: usize,
+    /// Trials with `max_seeds` seeds in every cell.
+    pub without_race: usize,
 }
 
 impl StatusReport {

@@ -94,6 +94,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         job_name: a.job_name.unwrap_or_else(|| format!("qsweep-{}", plan.name)),
         log_dir: abs(&a.log_dir)?,
         sbatch_args: a.sbatch_arg,
+        rounds: plan.race_rounds_max(),
         workdir,
     };
     let script = submission.render()?;

@@ -1,7 +1,7 @@
 //! `qsweep status`: what is cached and what is missing, per system and experiment, without running
 //! anything; `--explain` says why missing cells are missing.
 
-use super::json::{StatusExperiment, StatusReport};
+use super::json::{StatusExperiment, StatusRace, StatusReport};
 use super::pipeline_args::PipelineArgs;
 use crate::cache::TrialRecord;
 use clap::Args;
@@ -33,6 +33,34 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         None => crate::cache::store::KeyScan::default(),
     };
     let cached = &scan.keys;
+    // A race's trials so far come from the cached outcomes of its earlier rounds.
+    let raced = match &store {
+        Some(store) if plan.has_race() => Some(crate::pipeline::raced(&plan, store, &scan)?),
+        _ if plan.has_race() => Some(crate::race::resolve(&plan, cached, &mut |_| Ok(Default::default()))?),
+        _ => None,
+    };
+    let plan = raced.as_ref().map_or(plan.clone(), |r| r.plan.clone());
+    let race_rows: Vec<StatusRace> = raced
+        .iter()
+        .flat_map(|r| &r.heats)
+        .map(|h| {
+            let e = &plan.experiments[h.experiment];
+            StatusRace {
+                variant: e.variant.clone(),
+                system: e.system.name().into(),
+                experiment: e.id.clone(),
+                algorithm: h.algorithm.name().into(),
+                cells: h.cells,
+                rounds_done: h.rounds_done,
+                rounds_max: h.rounds_max,
+                finished: h.finished,
+                contenders: h.contenders,
+                trials: h.trials,
+                cached: h.present,
+                without_race: h.without_race,
+            }
+        })
+        .collect();
     let mut rows = Vec::new();
     for e in &plan.experiments {
         let keys: HashSet<_> = e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key)).collect();
@@ -63,6 +91,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             missing: unique.len() - unique_hit,
             experiments,
             damaged_segments: scan.damaged.len(),
+            race: raced.is_some().then_some(race_rows),
         };
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
@@ -97,6 +126,9 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             a.pipeline.cache_dir().display(),
             if store.is_none() { ", does not exist yet" } else { "" }
         );
+        if raced.is_some() {
+            print_race(&race_rows, width);
+        }
         for d in &scan.damaged {
             println!("damaged segment: {d}");
         }
@@ -203,4 +235,47 @@ fn diff(old: &BTreeMap<String, String>, new: &BTreeMap<String, String>, old_vers
         out.push(format!("engine version: {old_version} → {}", crate::cache::ENGINE_VERSION));
     }
     out
+}
+
+/// The race section: per heatmap, rounds done and to come, contenders and trials against
+/// `max_seeds` in every cell.
+fn print_race(rows: &[StatusRace], width: usize) {
+    println!();
+    if width > 0 {
+        print!("{:<width$}", "variant");
+    }
+    println!(
+        "{:<13} {:>4} {:<9} {:>6} {:>7} {:>11} {:>7} {:>7} {:>8}",
+        "race", "exp", "algorithm", "cells", "rounds", "contenders", "trials", "cached", "max-all"
+    );
+    for r in rows {
+        if width > 0 {
+            print!("{:<width$}", r.variant.as_deref().unwrap_or_default());
+        }
+        let rounds = format!("{}/{}{}", r.rounds_done, r.rounds_max, if r.finished { "" } else { "+" });
+        println!(
+            "{:<13} {:>4} {:<9} {:>6} {:>7} {:>11} {:>7} {:>7} {:>8}",
+            r.system,
+            r.experiment,
+            r.algorithm,
+            r.cells,
+            rounds,
+            r.contenders,
+            r.trials,
+            r.cached,
+            r.without_race
+        );
+    }
+    let open = rows.iter().filter(|r| !r.finished).count();
+    let trials: usize = rows.iter().map(|r| r.trials).sum();
+    let all: usize = rows.iter().map(|r| r.without_race).sum();
+    let to_come =
+        rows.iter().filter(|r| !r.finished).map(|r| r.rounds_max - r.rounds_done).max().unwrap_or(0);
+    println!(
+        "race: {} heatmaps, {} finished, {open} still racing (at most {to_come} more rounds); {trials} trials so far, {:.1}% of the {all} that max_seeds in every cell would run",
+        rows.len(),
+        rows.len() - open,
+        100.0 * trials as f64 / all.max(1) as f64
+    );
+    println!("rounds: decided/most possible, + while racing; max-all: trials with max_seeds in every cell");
 }

@@ -11,7 +11,7 @@ use crate::exec::Job;
 use crate::sim::env::SystemKind;
 use crate::sim::repr::ReprKind;
 use crate::sim::{Algorithm, TrialConfig};
-use crate::spec::{Axis, Reference, Target};
+use crate::spec::{Axis, RaceSpec, Reference, Target};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -38,6 +38,9 @@ pub struct Plan {
     pub variant_subset: bool,
     /// Notes for the user found while planning (e.g. a variant that changes no trial).
     pub warnings: Vec<String>,
+    /// Whether some experiment of the whole pipeline (any variant) races: its reports then carry
+    /// the race columns, in every variant's files alike, so they concatenate.
+    pub raced: bool,
 }
 
 /// A variant of a pipeline: the whole pipeline with some fields set differently.
@@ -76,6 +79,9 @@ pub struct Experiment {
     pub fixed: Vec<(Target, u32)>,
     /// Published values per algorithm.
     pub reference: BTreeMap<Algorithm, Reference>,
+    /// Its race, if any: seeds go round by round to the cells that can still be the best
+    /// ([`crate::race`]); the cells' trials then hold every round resolved so far.
+    pub race: Option<RaceSpec>,
     /// Cells: every algorithm × every grid point, algorithm-major, grid in axis order.
     pub cells: Vec<Cell>,
 }
@@ -91,6 +97,9 @@ pub struct Cell {
     pub config: TrialConfig,
     /// One trial per seed.
     pub trials: Vec<PlannedTrial>,
+    /// In a raced experiment, once its race is resolved against the cache: whether the cell is
+    /// still a contender (not significantly worse than the best); `None` without a race.
+    pub contender: Option<bool>,
 }
 
 /// A trial: a seed and its key.
@@ -174,6 +183,7 @@ impl Plan {
             variants: Vec::new(),
             variant_subset: false,
             warnings: Vec::new(),
+            raced: self.raced,
         }
     }
 }

@@ -238,6 +238,7 @@ pub fn plan_variants(
         reference_source: spec.reference_source.clone(),
         seeds: spec.seeds.0.clone(),
         variant_subset: !select.is_empty() && variants.len() < loaded.variants.len(),
+        raced: experiments.iter().any(|e| e.race.is_some()),
         experiments,
         variants,
         warnings,
@@ -397,7 +398,7 @@ fn expand_experiment<M: Resolve>(
                     key: Key::from_canonical(&canonical, seed, crate::cache::ENGINE_VERSION),
                 })
                 .collect();
-            cells.push(Cell { algorithm, coords, config: c, trials });
+            cells.push(Cell { algorithm, coords, config: c, trials, contender: None });
         }
     }
     Ok(Experiment {
@@ -410,6 +411,7 @@ fn expand_experiment<M: Resolve>(
         axes: e.axes.clone(),
         fixed,
         reference: e.reference.clone(),
+        race: e.race.or(spec.race),
         cells,
     })
 }

@@ -35,8 +35,15 @@ static REGISTER: Once = Once::new();
 
 pub(crate) const MISSING: RGBColor = RGBColor(200, 200, 200);
 const BEST: RGBColor = RGBColor(220, 0, 0);
+/// Outline of a race's final contenders (orange, inside the best cell's red).
+const CONTENDER: RGBColor = RGBColor(255, 150, 0);
 pub(crate) const INK: RGBColor = RGBColor(30, 30, 30);
 pub(crate) const SUBTLE: RGBColor = RGBColor(90, 90, 90);
+
+/// Height of the legend band: one line more for a race's contenders.
+fn footer_h(raced: bool) -> u32 {
+    FOOTER_H + if raced { 24 } else { 0 }
+}
 
 /// The algorithms (figure columns) of a system's experiments, in the paper's order.
 pub fn columns<E: AsRef<Experiment>>(exps: &[&E]) -> Vec<Algorithm> {
@@ -49,7 +56,8 @@ pub fn columns<E: AsRef<Experiment>>(exps: &[&E]) -> Vec<Algorithm> {
 /// Pixel size of a system's figure.
 pub fn figure_size<E: AsRef<Experiment>>(exps: &[&E]) -> (u32, u32) {
     let cols = columns(exps).len().max(1) as u32;
-    (cols * PANEL_W, HEADER_H + exps.len().max(1) as u32 * PANEL_H + FOOTER_H)
+    let raced = exps.iter().any(|e| e.as_ref().race.is_some());
+    (cols * PANEL_W, HEADER_H + exps.len().max(1) as u32 * PANEL_H + footer_h(raced))
 }
 
 /// The figure of one system as SVG text and PNG bytes.
@@ -225,7 +233,8 @@ fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str)
             panel(cv, origin, e, alg)?;
         }
     }
-    legend(cv, (h - FOOTER_H) as i32)
+    let raced = exps.iter().any(|e| e.exp.race.is_some());
+    legend(cv, (h - footer_h(raced)) as i32, raced)
 }
 
 /// Sequential colour map (viridis, 9 anchors, linear in between) at t ∈ [0, 1].
@@ -319,7 +328,11 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     }
     let best = e.best_of(alg);
     let seeds = e.cells.iter().map(CellData::planned).max().unwrap_or(0);
-    let mut sub = vec![format!("{seeds} seeds")];
+    let fewest = e.cells.iter().map(CellData::planned).min().unwrap_or(0);
+    let mut sub = vec![match exp.race {
+        Some(_) => format!("raced: {fewest}–{seeds} seeds"),
+        None => format!("{seeds} seeds"),
+    }];
     sub.extend(exp.fixed.iter().map(|(t, v)| format!("{} = {v}", crate::spec::target_name(exp.system, *t))));
     if best.is_some_and(|b| !b.all_converged) {
         sub.push("no cell fully converged".into());
@@ -357,6 +370,9 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
                 HPos::Center,
                 VPos::Center,
             );
+            if cell.is_some_and(|c| c.cell.contender == Some(true)) {
+                cv.rect((a.0 + 4, a.1 + 4), (b.0 - 4, b.1 - 4), CONTENDER.stroke_width(2))?;
+            }
             if idx.is_some() && idx == best.map(|b| b.cell) {
                 best_rect = Some((a, b));
             }
@@ -497,7 +513,7 @@ pub fn nice_ticks(lo: f64, hi: f64) -> (Vec<f64>, usize) {
 }
 
 /// The legend band at `y`.
-fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32) -> Res {
+fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32, raced: bool) -> Res {
     let y = y + 22;
     let x = 20;
     cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
@@ -513,6 +529,13 @@ fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32) -> Res {
     cv.text("no trials yet", (54, y), 13.0, INK, HPos::Left, VPos::Center);
     let note = "values: mean episodes over the cell's trials; one colour scale per panel";
     cv.text(note, (220, y), 13.0, INK, HPos::Left, VPos::Center);
+    if raced {
+        let y = y + 24;
+        cv.rect((20, y - 9), (46, y + 9), viridis(0.6).filled())?;
+        cv.rect((24, y - 5), (42, y + 5), CONTENDER.stroke_width(2))?;
+        let text = "contender: still in the race, not significantly worse than the best";
+        cv.text(text, (54, y), 13.0, INK, HPos::Left, VPos::Center);
+    }
     Ok(())
 }
 

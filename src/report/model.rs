@@ -41,6 +41,12 @@ pub const VAR_COLUMNS: [&str; 4] = ["x", "x_dot", "theta", "theta_dot"];
 pub const BEST_RULE: &str = "Best cell: the lowest mean among the cells where every seed reached the \
 learning goal; if no cell qualifies, the cell with the most successes, then the lowest mean (marked †).";
 
+/// How a race changes the rule and the counts, as stated in the captions of raced reports.
+pub const RACE_RULE: &str = "Raced: seeds went round by round only to the cells not significantly worse \
+than the best (one-sided Welch t-test against the best cell, Holm-corrected over the cells of the heatmap, \
+at the pipeline's confidence); n is the seeds a cell got, the best cell is chosen among the final \
+contenders, and contenders = how many cells are still tied with it.";
+
 /// How non-converged trials enter the statistics, as stated in every caption.
 pub const CENSORING: &str = "Trials that never reached the goal are not dropped: they count at the \
 episode cap (max_episodes), so those means are lower bounds. std is the sample standard deviation \
@@ -138,6 +144,29 @@ impl ExpData<'_> {
         self.best_of(self.cells[i].cell.algorithm).is_some_and(|b| b.cell == i)
     }
 
+    /// The cell of `algorithm` with the reference's configuration (bins or sets per variable and
+    /// action count), when the experiment has a reference that gives one and runs it.
+    pub fn reference_cell(&self, algorithm: Algorithm) -> Option<usize> {
+        let r = self.exp.reference.get(&algorithm)?;
+        let (res, actions) = (r.resolution.as_ref()?, r.actions?);
+        self.cells.iter().position(|c| {
+            c.cell.algorithm == algorithm
+                && &c.cell.config.repr.resolution == res
+                && c.cell.config.actions == actions
+        })
+    }
+
+    /// How many cells of `algorithm` are still in its race (`None` without a race).
+    pub fn contenders(&self, algorithm: Algorithm) -> Option<usize> {
+        self.exp.race?;
+        Some(
+            self.cells
+                .iter()
+                .filter(|c| c.cell.algorithm == algorithm && c.cell.contender == Some(true))
+                .count(),
+        )
+    }
+
     /// The index of the cell with this algorithm and coordinates.
     pub fn find(&self, algorithm: Algorithm, coords: &[f64]) -> Option<usize> {
         self.cells.iter().position(|c| c.cell.algorithm == algorithm && c.cell.coords == coords)
@@ -194,14 +223,17 @@ impl<'a> ReportData<'a> {
                     .algorithms
                     .iter()
                     .map(|&a| {
-                        let candidates =
-                            cells.iter().enumerate().filter(|(_, c)| c.cell.algorithm == a).map(|(i, c)| {
-                                Candidate {
-                                    index: i,
-                                    n: c.trials.len(),
-                                    successes: c.successes,
-                                    mean: c.summary.mean,
-                                }
+                        // In a race only contenders can be the best: a cell that left it was
+                        // significantly worse than a contender, on fewer seeds.
+                        let candidates = cells
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, c)| c.cell.algorithm == a && c.cell.contender != Some(false))
+                            .map(|(i, c)| Candidate {
+                                index: i,
+                                n: c.trials.len(),
+                                successes: c.successes,
+                                mean: c.summary.mean,
                             });
                         (a, best_cell(candidates))
                     })

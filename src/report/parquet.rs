@@ -32,6 +32,7 @@
 //! | `min`, `median`, `max` | float64, null | of `episodes_counted` |
 //! | `iqm` | float64, null | interquartile mean: mean after dropping ⌊n/4⌋ values at each end |
 //! | `ci_lo`, `ci_hi` | float64, null | 95% percentile-bootstrap interval of the mean (2000 resamples, seeded by the cell's trial keys) |
+//! | `contender` | bool, null | only in pipelines with a `race:`: the cell is still in its heatmap's race (not significantly worse than the best); null in experiments without a race. `planned` and `n` are then the seeds the race gave the cell |
 //!
 //! `trials.parquet`, one row per present trial of each cell (a trial shared by two cells, e.g. the
 //! same configuration in two experiments, appears once per cell), then:
@@ -120,6 +121,10 @@ pub fn cells_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::Rec
     cols.f64_opt("iqm", &ids, |r| r.1.summary.iqm);
     cols.f64_opt("ci_lo", &ids, |r| r.1.summary.ci_lo);
     cols.f64_opt("ci_hi", &ids, |r| r.1.summary.ci_hi);
+    // Only raced pipelines have the column, so other pipelines' files keep their bytes.
+    if data.plan.raced {
+        cols.bool_opt("contender", &ids, |r| r.1.cell.contender);
+    }
     cols.into_batch()
 }
 

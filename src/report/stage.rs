@@ -153,6 +153,14 @@ pub fn write(
             dir.display()
         )));
     }
+    // A raced plan is reported as far as its races have run: each cell with the seeds it got.
+    let raced;
+    let plan = if plan.has_race() {
+        raced = crate::pipeline::raced(plan, store, scan)?;
+        &raced.plan
+    } else {
+        plan
+    };
     let formats = opts.formats;
     let subs: Vec<(Option<VariantInfo>, Plan)> = if plan.variants.is_empty() {
         vec![(None, plan.clone())]

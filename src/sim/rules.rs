@@ -33,6 +33,10 @@ pub const FINITE: Real = Real { expect: "a finite number", ok: f64::is_finite };
 /// Pruning and trace cutoffs: a number in [0, 1) (1 would drop everything).
 pub const SUB_UNIT: Real = Real { expect: "a number in [0, 1)", ok: |v| (0.0..1.0).contains(&v) };
 
+/// A race's confidence level: strictly between 0 and 1 (0 drops nothing, 1 nothing ever).
+pub const CONFIDENCE: Real =
+    Real { expect: "a number strictly between 0 and 1, e.g. 0.95", ok: |v| v > 0.0 && v < 1.0 };
+
 /// Caps and counts (`max_episodes`, `max_total_steps`, `within`, `streak`): an integer ≥ 1.
 pub fn at_least_one(v: u64) -> Result<u64, String> {
     if v >= 1 {

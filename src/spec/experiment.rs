@@ -116,6 +116,8 @@ pub struct ExperimentSpec<M: SystemMarker> {
     pub success: Option<M::Success>,
     /// Published results per algorithm.
     pub reference: BTreeMap<Algorithm, Reference>,
+    /// This experiment's race (replaces a pipeline-wide one).
+    pub race: Option<super::RaceSpec>,
     _m: PhantomData<M>,
 }
 
@@ -140,6 +142,8 @@ struct RawExperiment<M: SystemMarker> {
     success: Option<M::Success>,
     #[serde(default)]
     reference: BTreeMap<Algorithm, Reference>,
+    #[serde(default)]
+    race: Option<super::RaceSpec>,
 }
 
 fn both_algorithms() -> Vec<Algorithm> {
@@ -420,6 +424,7 @@ impl<'de, M: SystemMarker> Deserialize<'de> for ExperimentSpec<M> {
             ranges: raw.ranges,
             success: raw.success,
             reference: raw.reference,
+            race: raw.race,
             _m: PhantomData,
         })
     }

@@ -89,6 +89,10 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         )));
     }
     if overrides.is_empty() {
+        if let Err(p) = super::race::check(&spec) {
+            let path: Vec<&str> = p.path.iter().map(String::as_str).collect();
+            return Err(located(Failure::at(&path, &p.message)));
+        }
         return Ok(spec);
     }
     let mut doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| located(Failure::from(e)))?;
@@ -97,13 +101,19 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
     }
     // The overridden values have no line in the file: name the field and the --set argument
     // that put it there (all of them when the error is about a section they only touch).
-    typed(doc).map_err(|e| {
+    let with_sets = |e: Failure| {
         let from: Vec<&Override> =
             overrides.iter().filter(|o| o.path.starts_with(&e.path) || e.path.starts_with(&o.path)).collect();
         let from = if from.is_empty() { overrides.iter().collect() } else { from };
         let sets: Vec<&str> = from.iter().map(|o| o.raw.as_str()).collect();
         user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
-    })
+    };
+    let spec = typed(doc).map_err(with_sets)?;
+    super::race::check(&spec).map_err(|p| {
+        let path: Vec<&str> = p.path.iter().map(String::as_str).collect();
+        with_sets(Failure::at(&path, &p.message))
+    })?;
+    Ok(spec)
 }
 
 /// A typed-parse failure: the dotted path of the field (keys, and sequence indices as decimal

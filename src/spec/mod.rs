@@ -19,12 +19,14 @@
 //!         algorithms: [q0, q-lambda]
 //!         vary: { x == theta: 2..10, x_dot == theta_dot: 2..10 }   # Table I: v(x == θ), v(ẋ == θ̇)
 //!         fixed: { actions: 2 }                                     # Table I: c(Actions)
+//!         race: { confidence: 0.95, batch: 5, max_seeds: 40 }       # optional (or pipeline-wide)
 //! ```
 
 mod experiment;
 mod load;
 pub mod locate;
 mod overrides;
+mod race;
 mod values;
 mod variants;
 
@@ -32,7 +34,10 @@ pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference,
 pub use load::{load, load_str, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
-pub use values::{AtLeastOne, AxisValues, Bounds, Finite, Positive, Seeds, SubUnit, Unit, Values};
+pub use race::{RaceProblem, RaceSpec};
+pub use values::{
+    AtLeastOne, AxisValues, Bounds, Confidence, Finite, Positive, Seeds, SubUnit, Unit, Values,
+};
 pub use variants::{LoadedVariant, VariantSpec};
 
 use crate::sim::config::{TieBreak, TraceKind, Truncation};
@@ -58,6 +63,9 @@ pub struct PipelineSpec {
     pub description: Option<String>,
     /// Seeds per cell.
     pub seeds: Seeds,
+    /// Race seeds into the cells that can still be the best (every experiment; see [`race`]).
+    #[serde(default)]
+    pub race: Option<RaceSpec>,
     /// Where the experiments' `reference:` values come from (shown in reports).
     #[serde(default)]
     pub reference_source: Option<String>,

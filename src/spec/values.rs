@@ -26,6 +26,7 @@ checked_f64!(Unit, "A number in [0, 1] (ε, γ, λ).", rules::UNIT);
 checked_f64!(Positive, "A finite number > 0 (α, width).", rules::POSITIVE);
 checked_f64!(Finite, "Any finite number.", rules::FINITE);
 checked_f64!(SubUnit, "A number in [0, 1) (pruning and trace cutoffs).", rules::SUB_UNIT);
+checked_f64!(Confidence, "A number in (0, 1) (a race's confidence level).", rules::CONFIDENCE);
 
 /// An integer ≥ 1 (caps and counts), checked by `rules::at_least_one`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -127,12 +127,14 @@ pub fn resolve(
             o.apply(&mut d).map_err(user_error)?;
         }
         strip_variants(&mut d);
-        let spec: PipelineSpec = serde_yaml::from_value(d).map_err(|e| {
+        let whole = |msg: String| {
             let pos = locate(text, &["variants".into(), i.to_string()])
                 .map(|(l, c)| format!("{l}:{c}:"))
                 .unwrap_or_default();
-            user_error(format!("{origin}:{pos} variant `{}`: {}", v.id, super::load::message(&e)))
-        })?;
+            user_error(format!("{origin}:{pos} variant `{}`: {msg}", v.id))
+        };
+        let spec: PipelineSpec = serde_yaml::from_value(d).map_err(|e| whole(super::load::message(&e)))?;
+        super::race::check(&spec).map_err(|p| whole(format!("{}: {}", p.path.join("."), p.message)))?;
         out.push(LoadedVariant {
             id: v.id.clone(),
             title: v.title.clone(),

@@ -87,5 +87,6 @@ fn cell_of(rec: &qsweep::cache::TrialRecord) -> qsweep::plan::Cell {
         coords: vec![],
         config: rec.config.clone(),
         trials: vec![],
+        contender: None,
     }
 }

@@ -11,6 +11,7 @@ mod json_formats;
 mod mutations;
 mod no_overwrite;
 mod pipeline;
+mod race;
 mod report_files;
 mod report_guard;
 mod schemas;

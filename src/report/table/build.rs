@@ -3,7 +3,7 @@
 //! experiment.
 
 use super::{Align, Column, Row, Table, Value};
-use crate::report::model::{resolution_columns, ExpData, ReportData, BEST_RULE, CENSORING};
+use crate::report::model::{resolution_columns, ExpData, ReportData, BEST_RULE, CENSORING, RACE_RULE};
 
 fn var_columns(prefix: &str) -> Vec<Column> {
     let vars = [
@@ -40,6 +40,13 @@ pub fn table3(data: &ReportData) -> Table {
                 .fields(&["paper_x", "paper_x_dot", "paper_theta", "paper_theta_dot", "paper_actions"]),
         );
         columns.push(Column::new("Δ mean", "diff_mean", Align::Right).latex("$\\Delta$ mean"));
+    }
+    let raced = data.plan.raced;
+    if raced {
+        columns.push(Column::new("Contenders", "contenders", Align::Right));
+        if reference {
+            columns.push(Column::new("Paper config tied", "reference_config_tied", Align::Left));
+        }
     }
     let mut rows = Vec::new();
     for e in &data.experiments {
@@ -96,6 +103,14 @@ pub fn table3(data: &ReportData) -> Table {
                     None => values.extend([Value::Missing, Value::Missing, Value::Missing]),
                 }
             }
+            if raced {
+                values.push(e.contenders(alg).map_or(Value::Missing, |n| Value::Int(n as u64)));
+                if reference {
+                    // Empty without a reference configuration, or outside a race.
+                    let tied = e.reference_cell(alg).and_then(|i| e.cells[i].cell.contender);
+                    values.push(tied.map_or(Value::Missing, |t| Value::Text(t.to_string())));
+                }
+            }
             rows.push(Row { values, highlight: false });
         }
     }
@@ -110,6 +125,14 @@ pub fn table3(data: &ReportData) -> Table {
     caption.push_str(CENSORING);
     if reference {
         caption.push_str(" Paper: the published value and configuration; Δ mean = ours − paper.");
+    }
+    if raced {
+        caption.push(' ');
+        caption.push_str(RACE_RULE);
+        if reference {
+            caption
+                .push_str(" Paper config tied: whether the paper's configuration is among the contenders.");
+        }
     }
     if data.trials_present < data.trials_planned {
         caption.push_str(&format!(
@@ -137,6 +160,9 @@ pub fn cell_table(e: &ExpData) -> Table {
         Column::new("Min", "min", Align::Right),
         Column::new("Max", "max", Align::Right),
     ]);
+    if exp.race.is_some() {
+        columns.push(Column::new("Contender", "contender", Align::Left));
+    }
     let num =
         |v: Option<f64>| v.map_or(Value::Missing, |value| Value::Num { value, decimals: 2, signed: false });
     let rows = e
@@ -169,6 +195,13 @@ pub fn cell_table(e: &ExpData) -> Table {
             });
             values.push(num(s.min));
             values.push(num(s.max));
+            if exp.race.is_some() {
+                values.push(match c.cell.contender {
+                    Some(true) => Value::Text("yes".into()),
+                    Some(false) => Value::Text("no".into()),
+                    None => Value::Missing,
+                });
+            }
             Row { values, highlight: e.is_best(i) }
         })
         .collect();
@@ -188,6 +221,10 @@ pub fn cell_table(e: &ExpData) -> Table {
         caption.push_str(&format!("; fixed: {}", fixed.join(", ")));
     }
     caption.push_str(". Highlighted: the best cell of each algorithm (Table III). ");
+    if exp.race.is_some() {
+        caption.push_str(RACE_RULE);
+        caption.push(' ');
+    }
     caption.push_str(CENSORING);
     Table { title: format!("{} Exp. {}", exp.system.title(), exp.id), caption, columns, rows }
 }
