@@ -3,7 +3,7 @@
 # pipelines/quick.yaml with the script `qsweep slurm --array 4` prints (a 4-task job array plus
 # a report job that waits for it), and check that the cache and the report equal a single-machine
 # run's: every trial stored exactly once, the same rows, the same Table III. Then submit again and
-# check that every task finds its shard cached.
+# check that every task finds its shard cached. Then a raced pipeline's chained round arrays.
 #
 # Needs root: it installs slurm-wlm with apt-get if slurmctld is missing, and runs the daemons
 # (no systemd: they are started directly and stopped by their PID files, even on failure).
@@ -187,4 +187,25 @@ grep "JobId=$report_job " <<<"$jobs" | grep -q 'JobState=CANCELLED' ||
     fail "the report job was not cancelled after the tasks failed: $(grep "JobId=$report_job " <<<"$jobs")"
 [ ! -e report-absurd ] || fail "a report was written although the tasks failed"
 log "failed tasks: report job $report_job cancelled, no report written"
+# A raced pipeline: one array per possible round, chained with afterok, then the report; the
+# result must equal a single-machine run's, round decisions included.
+race=$repo/tests/fixtures/pipelines/race.yaml
+"$QSWEEP" slurm "$race" --array 2 --time 30 --cpus-per-task 1 --cache "$tmp/work/cache-race" \
+    --out "$tmp/work/report-race" >submit-race.sh
+[ "$(grep -c "<<'QSWEEP_SHARD_JOB'" submit-race.sh)" = 3 ] || fail "expected 3 round arrays in submit-race.sh"
+bash submit-race.sh | tee submit-race.out
+report_job=$(sed -n 's/^submitted .* report job \([0-9]*\) .*/\1/p' submit-race.out)
+[ -n "$report_job" ] || fail "could not read the report job id from submit-race.sh's output"
+for i in $(seq 1800); do
+    [ -z "$(squeue -h -o %i)" ] && break
+    [ "$i" = 1800 ] && fail "race jobs still queued after 15 min: $(squeue)"
+    sleep 0.5
+done
+scontrol -o show job "$report_job" | grep -q 'JobState=COMPLETED .*ExitCode=0:0' ||
+    fail "the race's report job did not complete: $(scontrol -o show job "$report_job")"
+"$QSWEEP" run "$race" --quiet --cache "$tmp/work/cache-race-single" --out "$tmp/work/report-race-single"
+for f in table3.csv cells.parquet; do
+    cmp "report-race/$f" "report-race-single/$f" || fail "race report file $f differs from the single-machine run's"
+done
+log "race: 3 chained round arrays and the report equal the single-machine run's"
 log "PASS"

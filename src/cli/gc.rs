@@ -26,12 +26,16 @@ pub struct GcArgs {
 pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     let dir = cache_dir(a.cache.as_ref());
     require_cache(&dir)?;
+    let store = Store::open(&dir)?;
     let mut keep: Option<HashSet<_>> = None;
     for p in &a.pipelines {
-        let planned = plan(&load(p, &[])?, None)?;
+        let mut planned = plan(&load(p, &[])?, None)?;
+        if planned.has_race() {
+            // A race's later rounds are planned from the cache: keep every round it has run.
+            planned = crate::pipeline::raced(&planned, &store, &store.keys()?)?.plan;
+        }
         keep.get_or_insert_with(HashSet::new).extend(planned.trials().map(|(_, _, t)| t.key));
     }
-    let store = Store::open(&dir)?;
     let r = store.gc(keep.as_ref(), a.dry_run)?;
     for s in &r.skipped {
         eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");

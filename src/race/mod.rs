@@ -122,11 +122,7 @@ struct Heat {
 /// Resolve every race of `plan`: replay its rounds from the outcomes of the trials in `present`
 /// (`read` fetches the outcomes of some of them), as far as each round's trials are all present,
 /// and plan the next round's. Without a race the plan comes back as it is.
-pub fn resolve(
-    plan: &Plan,
-    present: &HashSet<Key>,
-    read: &mut ReadOutcomes,
-) -> anyhow::Result<Raced> {
+pub fn resolve(plan: &Plan, present: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
     let mut out = plan.clone();
     let mut heats: Vec<Heat> = Vec::new();
     for (ei, e) in out.experiments.iter_mut().enumerate() {

@@ -176,3 +176,15 @@ fn paper_race_races_the_trials_of_paper_yaml_gym_v0_reset() {
     }
     assert_eq!(cells, 1944);
 }
+
+/// `gc PIPELINE` keeps the rows its plan references: for a race, every round it has run, which
+/// only the cache can tell (the plan alone has round 0).
+#[test]
+fn gc_keeps_the_later_rounds_of_a_race() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("race.yaml");
+    assert_eq!(executed(&sb.run_json(&p, &[])), 31);
+    let said = stdout(&mut sb.qsweep(&["gc", p.to_str().unwrap()]));
+    assert!(said.contains("31 rows kept, 0 removed"), "{said}");
+    assert_eq!(executed(&sb.run_json(&p, &[])), 0);
+}
