@@ -156,6 +156,20 @@ pub fn plan_variants(
             )));
         }
     }
+    let generated = loaded.variants.iter().filter(|v| v.generated).count();
+    if max_trials.is_some() && generated > crate::spec::grid::DEFAULT_MAX_READINGS {
+        // The position is read again from the file: the typed pipeline does not keep it.
+        let pos = std::fs::read_to_string(&loaded.path)
+            .ok()
+            .and_then(|t| crate::spec::locate(&t, &["variant_grid".to_string()]))
+            .map(|(l, c)| format!("{l}:{c}:"))
+            .unwrap_or_default();
+        return Err(user_error(format!(
+            "{origin}:{pos} variant_grid: {generated} readings, more than the confirmation limit of {}; \
+             rerun with --yes if this is intended, or add `sample: N` to try a random N of them",
+            crate::spec::grid::DEFAULT_MAX_READINGS
+        )));
+    }
     let chosen: Vec<&LoadedVariant> =
         loaded.variants.iter().filter(|v| select.is_empty() || select.contains(&v.id)).collect();
     if let Some(limit) = max_trials {
@@ -228,6 +242,7 @@ pub fn plan_variants(
                 description: v.description.clone(),
                 set: v.set.clone(),
                 seeds: v.spec.seeds.0.clone(),
+                generated: v.generated,
             });
         }
     }
@@ -239,6 +254,8 @@ pub fn plan_variants(
         seeds: spec.seeds.0.clone(),
         variant_subset: !select.is_empty() && variants.len() < loaded.variants.len(),
         raced: experiments.iter().any(|e| e.race.is_some()),
+        exploratory: spec.exploratory.clone(),
+        readings: loaded.variants.len(),
         experiments,
         variants,
         warnings,

@@ -174,16 +174,22 @@ pub fn write(
     };
     let with_comparison = !plan.variants.is_empty() && !plan.variant_subset;
 
+    // A grid's generated readings get no folder of their own in a full report (only the chosen
+    // one does, written after the comparison has chosen it); `--variant` writes any on demand.
+    let deferred = |info: &Option<VariantInfo>| {
+        with_comparison
+            && info.as_ref().is_some_and(|v| plan.variants.iter().any(|p| p.id == v.id && p.generated))
+    };
     // The guard first, over every folder this report replaces: nothing is written on a refusal.
     let mut targets = Vec::new();
     for (info, sub) in &subs {
         let d = info.as_ref().map_or_else(|| dir.clone(), |v| dir.join(&v.id));
-        targets.push(Target::new(d, sub, &scan.keys, opts.force)?);
+        targets.push(if deferred(info) { None } else { Some(Target::new(d, sub, &scan.keys, opts.force)?) });
     }
     let top =
         if with_comparison { Some(Target::new(dir.clone(), plan, &scan.keys, opts.force)?) } else { None };
     if !opts.force {
-        for t in targets.iter().chain(&top) {
+        for t in targets.iter().flatten().chain(&top) {
             if let Some(kept) = &t.kept {
                 manifest::guard(&t.dir, kept, &t.counts, store.dir()).map_err(|e| anyhow::anyhow!(e))?;
             }
@@ -209,33 +215,46 @@ pub fn write(
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
         let data = ReportData::build(sub, &outcomes);
         // The folder's files and this variant's rows of the combined trials.parquet at once.
-        let (files, pushed) = rayon::join(
-            || write_folder(&data, &target.dir, formats, info.is_none()),
+        let (written, pushed) = rayon::join(
+            || target.as_ref().map(|t| write_folder(&data, &t.dir, formats, info.is_none())).transpose(),
             || match &mut trials {
                 Some(sink) if info.is_some() => sink.push(&data),
                 _ => Ok(()),
             },
         );
-        let files = files?;
         pushed?;
-        target.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, &files, &mut out)?;
-        let s = ReportSummary::of(&data, Vec::new());
-        out.summary.add(&s);
-        match info {
-            Some(v) => {
-                out.summary.files.extend(files.into_iter().map(|f| Path::new(&v.id).join(f)));
-                if with_comparison {
-                    if formats.has(Format::Cells) {
-                        cells.push(parquet::cells_batch(&data)?);
-                    }
-                    digests.push(VariantDigest::of(v.clone(), sub, &data));
-                }
-            }
-            None => out.summary.files.extend(files),
+        if let (Some(t), Some(files)) = (target, written?) {
+            t.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, &files, &mut out)?;
+            let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
+            out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
+            out.summary.files.push(prefix.join(manifest::MANIFEST));
         }
-        out.summary
-            .files
-            .push(target.dir.strip_prefix(dir).unwrap_or(Path::new("")).join(manifest::MANIFEST));
+        out.summary.add(&ReportSummary::of(&data, Vec::new()));
+        if let (Some(v), true) = (info, with_comparison) {
+            if formats.has(Format::Cells) {
+                cells.push(parquet::cells_batch(&data)?);
+            }
+            digests.push(VariantDigest::of(v.clone(), sub, &data));
+        }
+    }
+
+    // The chosen reading of a grid gets its folder once the comparison has chosen it.
+    let chosen = compare::explore::chosen(plan, &digests).cloned();
+    if let Some((info, sub)) =
+        subs.iter().find(|(i, _)| deferred(i) && i.as_ref().map(|v| &v.id) == chosen.as_ref().map(|c| &c.id))
+    {
+        let id = &info.as_ref().expect("a deferred folder is a variant's").id;
+        let t = Target::new(dir.join(id), sub, &scan.keys, opts.force)?;
+        if let (false, Some(kept)) = (opts.force, &t.kept) {
+            manifest::guard(&t.dir, kept, &t.counts, store.dir()).map_err(|e| anyhow::anyhow!(e))?;
+        }
+        let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
+        let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
+        let data = ReportData::build(sub, &outcomes);
+        let files = write_folder(&data, &t.dir, formats, false)?;
+        t.finish(sub, Some(id), formats, &files, &mut out)?;
+        out.summary.files.extend(files.into_iter().map(|f| Path::new(id).join(f)));
+        out.summary.files.push(Path::new(id).join(manifest::MANIFEST));
     }
 
     if let Some(top) = &top {

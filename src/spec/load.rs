@@ -89,7 +89,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         )));
     }
     if overrides.is_empty() {
-        if let Err(p) = super::race::check(&spec) {
+        if let Err(p) = super::check_whole(&spec) {
             let path: Vec<&str> = p.path.iter().map(String::as_str).collect();
             return Err(located(Failure::at(&path, &p.message)));
         }
@@ -109,7 +109,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
     };
     let spec = typed(doc).map_err(with_sets)?;
-    super::race::check(&spec).map_err(|p| {
+    super::check_whole(&spec).map_err(|p| {
         let path: Vec<&str> = p.path.iter().map(String::as_str).collect();
         with_sets(Failure::at(&path, &p.message))
     })?;

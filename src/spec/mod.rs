@@ -23,6 +23,8 @@
 //! ```
 
 mod experiment;
+pub mod explore;
+pub mod grid;
 mod load;
 pub mod locate;
 mod overrides;
@@ -34,7 +36,7 @@ pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference,
 pub use load::{load, load_str, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
-pub use race::{RaceProblem, RaceSpec};
+pub use race::{Problem, RaceSpec};
 pub use values::{
     AtLeastOne, AxisValues, Bounds, Confidence, Finite, Positive, Seeds, SubUnit, Unit, Values,
 };
@@ -77,6 +79,18 @@ pub struct PipelineSpec {
     /// Alternative readings or settings of the whole pipeline (see [`variants`]).
     #[serde(default, deserialize_with = "opt_variants")]
     pub variants: Option<Vec<VariantSpec>>,
+    /// Variants generated as a product of value lists (see [`grid`]).
+    #[serde(default)]
+    pub variant_grid: Option<grid::VariantGrid>,
+    /// An exploratory search: the Table III rows that choose the best reading (see [`explore`]).
+    #[serde(default)]
+    pub exploratory: Option<explore::Exploratory>,
+}
+
+/// The rules that need the whole pipeline: races and the exploratory block.
+pub(crate) fn check_whole(spec: &PipelineSpec) -> Result<(), Problem> {
+    race::check(spec)?;
+    explore::check(spec)
 }
 
 fn opt_variants<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<VariantSpec>>, D::Error> {

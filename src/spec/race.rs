@@ -35,9 +35,10 @@ fn batch<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
         .map_err(|_| de::Error::custom(format!("{v} is too large; expected at most {}", u32::MAX)))
 }
 
-/// A race rule broken by a whole pipeline: the field's dotted path and what to do.
+/// A rule broken by a whole pipeline (a race, an exploratory block): the field's dotted path and
+/// what to do.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RaceProblem {
+pub struct Problem {
     /// Path of the offending field, e.g. `["race", "max_seeds"]`.
     pub path: Vec<String>,
     /// What is wrong and the fix.
@@ -48,7 +49,7 @@ pub struct RaceProblem {
 /// seeds (a test needs a spread) and no more than `max_seeds`, the extended seed numbers fit, and
 /// every raced experiment has one goal measure (its cells count episodes at one cap, so
 /// `max_episodes` is not one of its axes).
-pub fn check(spec: &PipelineSpec) -> Result<(), RaceProblem> {
+pub fn check(spec: &PipelineSpec) -> Result<(), Problem> {
     let seeds = &spec.seeds.0;
     let top = ["race".to_string()];
     if let Some(r) = &spec.race {
@@ -64,7 +65,7 @@ fn check_system<M: SystemMarker>(
     spec: &PipelineSpec,
     sys: Option<&SystemSpec<M>>,
     name: &str,
-) -> Result<(), RaceProblem> {
+) -> Result<(), Problem> {
     let Some(sys) = sys else { return Ok(()) };
     for (i, e) in sys.experiments.iter().enumerate() {
         let at = |tail: &[&str]| -> Vec<String> {
@@ -80,7 +81,7 @@ fn check_system<M: SystemMarker>(
         let raced = e.race.is_some() || spec.race.is_some();
         let capped = e.axes.iter().find(|a| a.targets.contains(&Target::Setting("max_episodes")));
         if let (true, Some(axis)) = (raced, capped) {
-            return Err(RaceProblem {
+            return Err(Problem {
                 path: at(&["vary", &axis.label]),
                 message: format!(
                     "a race needs one goal measure per heatmap, but experiment {} varies max_episodes, so its \
@@ -94,11 +95,11 @@ fn check_system<M: SystemMarker>(
     Ok(())
 }
 
-fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<(), RaceProblem> {
+fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<(), Problem> {
     let path = |field: &str| at.iter().cloned().chain([field.to_string()]).collect::<Vec<_>>();
     let n = seeds.len();
     if n < 2 {
-        return Err(RaceProblem {
+        return Err(Problem {
             path: vec!["seeds".into()],
             message: format!(
                 "a race starts from at least 2 seeds per cell (a test needs a spread), but `seeds` gives {n}; \
@@ -107,7 +108,7 @@ fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<(), RaceProbl
         });
     }
     if (r.max_seeds as usize) < n {
-        return Err(RaceProblem {
+        return Err(Problem {
             path: path("max_seeds"),
             message: format!(
                 "max_seeds {} is below the {n} seeds of the first round; set max_seeds ≥ {n} (or fewer `seeds`)",
@@ -117,7 +118,7 @@ fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<(), RaceProbl
     }
     let last = seeds.iter().max().copied().unwrap_or(0);
     if last.checked_add(u64::from(r.max_seeds)).is_none() {
-        return Err(RaceProblem {
+        return Err(Problem {
             path: vec!["seeds".into()],
             message: format!(
                 "a race numbers its extra seeds after the largest first-round seed ({last}), which leaves no room; \

@@ -5,6 +5,7 @@ mod bench;
 mod cache;
 mod error_locations;
 mod exit_codes;
+mod explore;
 mod feasible;
 mod helpers;
 mod json_formats;

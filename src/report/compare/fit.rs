@@ -6,6 +6,8 @@
 use super::super::model::{resolution_columns, ReportData};
 use super::super::table::{Align, Column, Row, Table, Value};
 use super::VariantInfo;
+use crate::sim::env::SystemKind;
+use crate::sim::Algorithm;
 
 /// Seeds behind each reference value (the paper's ten runs), for the standard error.
 pub const REFERENCE_N: f64 = 10.0;
@@ -67,48 +69,104 @@ pub fn verdict(ours: f64, ours_std: Option<f64>, n: usize, ref_mean: f64, ref_st
     }
 }
 
+/// One Table III row scored against its reference: what [`Fit`] tallies, kept per row so a fit can
+/// be taken over some rows (an exploratory search's fit rows) and judged on the others.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowFit {
+    /// The system.
+    pub system: SystemKind,
+    /// The experiment id.
+    pub experiment: String,
+    /// The algorithm.
+    pub algorithm: Algorithm,
+    /// Our best cell's mean.
+    pub mean: f64,
+    /// Its std (none for a single trial).
+    pub std: Option<f64>,
+    /// Its trials.
+    pub n: usize,
+    /// The reference mean.
+    pub ref_mean: f64,
+    /// The reference std.
+    pub ref_std: f64,
+    /// The row's verdict ([`verdict`]).
+    pub verdict: Verdict,
+    /// Our best cell has the reference's bins or sets per variable and action count.
+    pub config_match: bool,
+    /// Algorithms of the row's experiment (the order measure needs all of them).
+    pub exp_algorithms: usize,
+}
+
+/// Every Table III row of `data` that has a reference value and a best cell, in report order.
+pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
+    let mut out = Vec::new();
+    for e in &data.experiments {
+        let system = e.exp.system;
+        for &alg in &e.exp.algorithms {
+            let Some(r) = e.exp.reference.get(&alg) else { continue };
+            let Some(c) = e.best_of(alg).map(|b| &e.cells[b.cell]) else { continue };
+            let Some(mean) = c.summary.mean else { continue };
+            let cfg = &c.cell.config;
+            let ours: Vec<u32> = resolution_columns(system, &cfg.repr.resolution)
+                .into_iter()
+                .flatten()
+                .chain([cfg.actions])
+                .collect();
+            let theirs: Vec<u32> = r
+                .resolution
+                .as_ref()
+                .map_or([None; 4], |res| resolution_columns(system, res))
+                .into_iter()
+                .flatten()
+                .chain(r.actions)
+                .collect();
+            out.push(RowFit {
+                system,
+                experiment: e.exp.id.clone(),
+                algorithm: alg,
+                mean,
+                std: c.summary.std,
+                n: c.trials.len(),
+                ref_mean: r.mean,
+                ref_std: r.std,
+                verdict: verdict(mean, c.summary.std, c.trials.len(), r.mean, r.std),
+                config_match: ours == theirs,
+                exp_algorithms: e.exp.algorithms.len(),
+            });
+        }
+    }
+    out
+}
+
 impl Fit {
     /// Score a variant's report data.
     pub fn of(data: &ReportData) -> Self {
+        Self::from_rows(&rows_of(data))
+    }
+
+    /// Tally some scored rows (in report order). The order measure counts an experiment only when
+    /// the rows hold every one of its algorithms.
+    pub fn from_rows<'a>(rows: impl IntoIterator<Item = &'a RowFit>) -> Self {
+        let rows: Vec<&RowFit> = rows.into_iter().collect();
         let mut f = Self::default();
         let mut logs = Vec::new();
-        for e in &data.experiments {
-            let system = e.exp.system;
-            let mut ranked = Vec::new();
-            for &alg in &e.exp.algorithms {
-                let Some(r) = e.exp.reference.get(&alg) else { continue };
-                let Some(c) = e.best_of(alg).map(|b| &e.cells[b.cell]) else { continue };
-                let Some(mean) = c.summary.mean else { continue };
-                f.rows += 1;
-                match verdict(mean, c.summary.std, c.trials.len(), r.mean, r.std) {
-                    Verdict::Replicates => f.replicating += 1,
-                    Verdict::Within2x => f.within_2x += 1,
-                    Verdict::DoesNotReplicate => {}
-                }
-                let cfg = &c.cell.config;
-                let ours: Vec<u32> = resolution_columns(system, &cfg.repr.resolution)
-                    .into_iter()
-                    .flatten()
-                    .chain([cfg.actions])
-                    .collect();
-                let theirs: Vec<u32> = r
-                    .resolution
-                    .as_ref()
-                    .map_or([None; 4], |res| resolution_columns(system, res))
-                    .into_iter()
-                    .flatten()
-                    .chain(r.actions)
-                    .collect();
-                f.config_match += usize::from(ours == theirs);
-                if mean > 0.0 && r.mean > 0.0 {
-                    logs.push((mean / r.mean).ln());
-                }
-                ranked.push((mean, r.mean));
+        for r in &rows {
+            f.rows += 1;
+            match r.verdict {
+                Verdict::Replicates => f.replicating += 1,
+                Verdict::Within2x => f.within_2x += 1,
+                Verdict::DoesNotReplicate => {}
             }
-            if ranked.len() >= 2 && ranked.len() == e.exp.algorithms.len() {
+            f.config_match += usize::from(r.config_match);
+            if r.mean > 0.0 && r.ref_mean > 0.0 {
+                logs.push((r.mean / r.ref_mean).ln());
+            }
+        }
+        for group in rows.chunk_by(|a, b| a.system == b.system && a.experiment == b.experiment) {
+            if group.len() >= 2 && group.len() == group[0].exp_algorithms {
                 f.order_experiments += 1;
                 f.order_match +=
-                    usize::from(rank(ranked.iter().map(|r| r.0)) == rank(ranked.iter().map(|r| r.1)));
+                    usize::from(rank(group.iter().map(|r| r.mean)) == rank(group.iter().map(|r| r.ref_mean)));
             }
         }
         if !logs.is_empty() {

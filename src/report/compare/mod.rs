@@ -10,10 +10,13 @@
 //!   the table and the difference figures.
 
 pub mod diff;
+pub mod explore;
 pub mod fit;
 
 pub use diff::{all_diffs, diff_figure, diff_label, diff_seed, diverging, matching, CellDiff, DIFF_RULE};
-pub use fit::{comparison_table, fit_order, verdict, Fit, Verdict, FIT_ORDER, REFERENCE_N, VERDICT_RULE};
+pub use fit::{
+    comparison_table, fit_order, rows_of, verdict, Fit, RowFit, Verdict, FIT_ORDER, REFERENCE_N, VERDICT_RULE,
+};
 
 use super::formats::{Format, Formats};
 use super::model::ReportData;
@@ -77,6 +80,8 @@ pub struct VariantDigest<'p> {
     pub info: VariantInfo,
     /// Its fit to the reference values.
     pub fit: Fit,
+    /// Its Table III rows scored one by one (what `fit` tallies).
+    pub rows: Vec<RowFit>,
     /// Planned (cell, seed) trials.
     pub trials_planned: usize,
     /// Of those, present.
@@ -108,9 +113,11 @@ impl<'p> VariantDigest<'p> {
                     .collect(),
             })
             .collect();
+        let rows = rows_of(data);
         Self {
             info,
-            fit: Fit::of(data),
+            fit: Fit::from_rows(&rows),
+            rows,
             trials_planned: data.trials_planned,
             trials_present: data.trials_present,
             exps,
@@ -133,18 +140,33 @@ pub fn write_comparison(
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = super::Folder::create(dir)?;
     let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
-    let fits: Vec<(&VariantInfo, Fit)> = variants.iter().map(|v| (&v.info, v.fit)).collect();
-    let table = comparison_table(&fits);
+    let table = match &plan.exploratory {
+        Some(x) => explore::search_table(plan, x, variants),
+        None => {
+            let fits: Vec<(&VariantInfo, Fit)> = variants.iter().map(|v| (&v.info, v.fit)).collect();
+            comparison_table(&fits)
+        }
+    };
     if formats.has(Format::Md) {
         put("variants.md", render(&table, &Markdown).as_bytes())?;
     }
     if formats.has(Format::Csv) {
         put("variants.csv", render(&table, &Csv).as_bytes())?;
     }
+    let held_out = plan.exploratory.as_ref().and_then(|x| explore::held_out_table(plan, x, variants));
+    if let Some(t) = &held_out {
+        if formats.has(Format::Md) {
+            put("held_out.md", render(t, &Markdown).as_bytes())?;
+        }
+        if formats.has(Format::Csv) {
+            put("held_out.csv", render(t, &Csv).as_bytes())?;
+        }
+    }
     let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
     let mut figs = Vec::new();
     if let Some(base) = variants.first() {
-        for v in &variants[1..] {
+        // A generated reading has its own folder and difference figures only when chosen.
+        for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
             let diffs = if svg || png { all_diffs(base, v) } else { Vec::new() };
             for system in v.systems() {
                 let stem = format!("figures/diff-{}-{}", v.info.id, system.name());
@@ -163,36 +185,70 @@ pub fn write_comparison(
         }
     }
     if formats.has(Format::Html) {
-        put("index.html", page(plan, variants, &table, &figs, formats).as_bytes())?;
+        put("index.html", page(plan, variants, &table, held_out.as_ref(), &figs, formats).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        put("README.md", readme(plan, variants, &table, &figs, formats).as_bytes())?;
+        put("README.md", readme(plan, variants, &table, held_out.as_ref(), &figs, formats).as_bytes())?;
     }
     Ok(out.files)
+}
+
+/// Whether the report writes the folder of variant `id` (and its difference figures): every
+/// listed variant, and of the grid's generated ones only the chosen reading, so a grid of many
+/// readings does not write (or commit) a full report each; the rest are written on demand with
+/// `qsweep report PIPELINE --variant ID`.
+pub fn has_folder(plan: &Plan, variants: &[VariantDigest], id: &str) -> bool {
+    let generated = plan.variants.iter().any(|v| v.id == id && v.generated);
+    !generated || explore::chosen(plan, variants).is_some_and(|c| c.id == id)
+}
+
+/// The heading of the comparison pages: `qsweep variants: NAME`, labelled when exploratory.
+fn heading(plan: &Plan) -> String {
+    match plan.exploratory {
+        Some(_) => format!("qsweep variants: {} ({})", plan.name, explore::LABEL),
+        None => format!("qsweep variants: {}", plan.name),
+    }
 }
 
 type FigRef<'a> = (&'a VariantInfo, SystemKind, String, (u32, u32));
 
 /// The comparison page.
-fn page(plan: &Plan, variants: &[VariantDigest], table: &Table, figs: &[FigRef], formats: Formats) -> String {
-    let name = plan.name.as_str();
+fn page(
+    plan: &Plan,
+    variants: &[VariantDigest],
+    table: &Table,
+    held_out: Option<&Table>,
+    figs: &[FigRef],
+    formats: Formats,
+) -> String {
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
-    h.push_str(&format!("<title>qsweep variants: {}</title>\n", esc(name)));
+    h.push_str(&format!("<title>{}</title>\n", esc(&heading(plan))));
     h.push_str(&format!("<style>\n{}</style>\n</head>\n<body>\n", super::html::STYLE));
-    h.push_str(&format!("<h1>qsweep variants: {}</h1>\n", esc(name)));
+    h.push_str(&format!("<h1>{}</h1>\n", esc(&heading(plan))));
     if let Some(d) = plan.description.as_deref() {
         h.push_str(&format!("<p>{}</p>\n", esc(d)));
     }
     h.push_str("<p>Each variant is the whole pipeline with some settings changed; each has its own full report:</p>\n<ul>\n");
     for v in variants {
         let title = v.info.title.as_deref().map(|t| format!(": {}", esc(t))).unwrap_or_default();
-        h.push_str(&format!(
-            "<li><a href=\"{0}/index.html\"><code>{0}</code></a>{title} ({1} of {2} planned trials present)</li>\n",
-            esc(&v.info.id),
-            v.trials_present,
-            v.trials_planned
-        ));
+        if has_folder(plan, variants, &v.info.id) {
+            h.push_str(&format!(
+                "<li><a href=\"{0}/index.html\"><code>{0}</code></a>{title} ({1} of {2} planned trials present)</li>\n",
+                esc(&v.info.id),
+                v.trials_present,
+                v.trials_planned
+            ));
+        } else {
+            h.push_str(&format!(
+                "<li><code>{0}</code>{title} ({1} of {2} planned trials present; its report on demand: \
+                 <code>qsweep report {3} --variant '{0}'</code>)</li>\n",
+                esc(&v.info.id),
+                v.trials_present,
+                v.trials_planned,
+                esc(&plan.source.display().to_string())
+            ));
+        }
     }
     h.push_str("</ul>\n<p>Data: <a href=\"variants.csv\">variants.csv</a> · <a href=\"variants.md\">variants.md</a> · \
                 <a href=\"cells.parquet\">cells.parquet</a> (every variant's cells, with a <code>variant</code> column)</p>\n");
@@ -205,8 +261,16 @@ fn page(plan: &Plan, variants: &[VariantDigest], table: &Table, figs: &[FigRef],
     bare.caption.clear();
     h.push_str(&render(&bare, &Html));
     h.push_str("</div>\n");
+    if let Some(t) = held_out {
+        h.push_str("<h2 id=\"held-out\">Held-out rows</h2>\n");
+        h.push_str(&format!("<p class=\"caption\">{}</p>\n<div class=\"scroll fit\">\n", esc(&t.caption)));
+        let mut bare = t.clone();
+        bare.caption.clear();
+        h.push_str(&render(&bare, &Html));
+        h.push_str("</div>\n");
+    }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
-        for v in &variants[1..] {
+        for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
             h.push_str(&format!(
                 "<h2 id=\"diff-{0}\">{0} against {1}</h2>\n",
                 esc(&v.info.id),
@@ -234,10 +298,11 @@ fn readme(
     plan: &Plan,
     variants: &[VariantDigest],
     table: &Table,
+    held_out: Option<&Table>,
     figs: &[FigRef],
     formats: Formats,
 ) -> String {
-    let mut m = format!("# qsweep variants: {}\n\n", plan.name);
+    let mut m = format!("# {}\n\n", heading(plan));
     if let Some(d) = plan.description.as_deref() {
         m.push_str(&format!("{}\n\n", d.trim()));
     }
@@ -246,15 +311,29 @@ fn readme(
     );
     for v in variants {
         let title = v.info.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
-        m.push_str(&format!(
-            "- [`{0}`]({0}/README.md){title} ({1} of {2} planned trials present)\n",
-            v.info.id, v.trials_present, v.trials_planned
-        ));
+        if has_folder(plan, variants, &v.info.id) {
+            m.push_str(&format!(
+                "- [`{0}`]({0}/README.md){title} ({1} of {2} planned trials present)\n",
+                v.info.id, v.trials_present, v.trials_planned
+            ));
+        } else {
+            m.push_str(&format!(
+                "- `{0}`{title} ({1} of {2} planned trials present; report on demand: `qsweep report {3} --variant '{0}'`)\n",
+                v.info.id,
+                v.trials_present,
+                v.trials_planned,
+                plan.source.display()
+            ));
+        }
     }
     m.push_str("\n## Fit to the reference values\n\n");
     m.push_str(&render(table, &Markdown));
+    if let Some(t) = held_out {
+        m.push_str("\n## Held-out rows\n\n");
+        m.push_str(&render(t, &Markdown));
+    }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
-        for v in &variants[1..] {
+        for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
             m.push_str(&format!("\n## {} against {}\n\n", v.info.id, base.info.id));
             for (_, system, stem, _) in figs.iter().filter(|f| f.0.id == v.info.id) {
                 m.push_str(&format!(
