@@ -142,6 +142,11 @@ impl Plan {
 }
 
 impl Plan {
+    /// Whether the pipeline generates readings with `variant_grid:`.
+    pub fn has_grid(&self) -> bool {
+        self.variants.iter().any(|v| v.generated)
+    }
+
     /// The variant a report of this plan shows: its only variant, when it has exactly one (the
     /// plan of one variant, [`Plan::only_variant`]).
     pub fn report_variant(&self) -> Option<&Variant> {

@@ -7,7 +7,8 @@
 //! Shapes are drawn with plotters into SVG and into an RGB buffer encoded as PNG. Text is collected
 //! while drawing and then written as SVG `<text>` or rasterised into the PNG by [`super::glyphs`]
 //! from an embedded DejaVu Sans subset (`assets/fonts`), so no system font library is involved
-//! and the PNG is identical on every machine.
+//! and the PNG is identical on every machine. In SVG a hatched cell is one rectangle filled with a
+//! `<pattern>` of the same diagonal lines ([`hatch_patterns`]), which keeps committed figures small.
 
 use super::glyphs::{self, TextCmd};
 use super::model::{CellData, ExpData, ReportData};
@@ -115,16 +116,19 @@ pub(crate) fn paint_as(
         }
     });
     Ok(Drawn {
-        svg: if svg { Some(super::svg::compact(&paint_svg(picture, size)?)) } else { None },
+        svg: if svg { Some(paint_svg(picture, size)?) } else { None },
         png: if png { Some(paint_png(picture, size)?) } else { None },
     })
 }
 
 fn paint_svg(picture: &impl Picture, (w, h): (u32, u32)) -> Result<String, String> {
     let mut svg = String::new();
-    {
-        let mut canvas =
-            Canvas { root: SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(), texts: Vec::new() };
+    let hatches = {
+        let mut canvas = Canvas {
+            root: SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(),
+            texts: Vec::new(),
+            hatch_marks: Some(Vec::new()),
+        };
         picture.draw(&mut canvas)?;
         for t in std::mem::take(&mut canvas.texts) {
             let mut font = (FONT, t.size).into_font();
@@ -135,8 +139,9 @@ fn paint_svg(picture: &impl Picture, (w, h): (u32, u32)) -> Result<String, Strin
             canvas.root.draw(&Text::new(t.text, t.at, style)).map_err(|e| e.to_string())?;
         }
         canvas.root.present().map_err(|e| e.to_string())?;
-    }
-    Ok(svg)
+        canvas.hatch_marks.unwrap_or_default()
+    };
+    Ok(hatch_patterns(&super::svg::compact(&svg), &hatches))
 }
 
 fn paint_png(picture: &impl Picture, (w, h): (u32, u32)) -> Result<Vec<u8>, String> {
@@ -145,6 +150,7 @@ fn paint_png(picture: &impl Picture, (w, h): (u32, u32)) -> Result<Vec<u8>, Stri
         let mut canvas = Canvas {
             root: BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area(),
             texts: Vec::new(),
+            hatch_marks: None,
         };
         picture.draw(&mut canvas)?;
         canvas.root.present().map_err(|e| e.to_string())?;
@@ -176,6 +182,46 @@ pub(crate) struct Canvas<DB: DrawingBackend> {
     pub(crate) root: DrawingArea<DB, Shift>,
     /// Text to write after the shapes.
     pub(crate) texts: Vec<TextCmd>,
+    /// In SVG: the hatch colours used so far. A hatched area is then one rectangle filled with a
+    /// marker colour that [`hatch_patterns`] turns into a pattern fill (one element instead of a
+    /// dozen lines); in PNG (`None`) the lines are drawn.
+    pub(crate) hatch_marks: Option<Vec<RGBColor>>,
+}
+
+/// The marker fill of hatch colour `k` (an otherwise unused near-black).
+fn hatch_marker(k: usize) -> RGBColor {
+    RGBColor(1, 2, k as u8)
+}
+
+/// Replace the marker fills of [`Canvas::hatch`] in compacted SVG text by pattern fills: the same
+/// diagonal lines every 7 px at 45 % opacity, defined once per colour after the root element.
+pub(crate) fn hatch_patterns(svg: &str, colors: &[RGBColor]) -> String {
+    if colors.is_empty() {
+        return svg.to_string();
+    }
+    let hex = |c: &RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+    let mut defs = String::from("<defs>");
+    for (k, c) in colors.iter().enumerate() {
+        defs.push_str(&format!(
+            "<pattern id=\"hatch{k}\" width=\"7\" height=\"7\" patternUnits=\"userSpaceOnUse\"><path d=\"M-1,1 L1,-1 M0,7 L7,0 M6,8 L8,6\" stroke=\"{}\" stroke-opacity=\"0.45\" stroke-width=\"1\"/></pattern>",
+            hex(c)
+        ));
+    }
+    defs.push_str("</defs>\n");
+    let mut out = String::with_capacity(svg.len() + defs.len());
+    for (i, line) in svg.lines().enumerate() {
+        let mut l = line.to_string();
+        for k in 0..colors.len() {
+            l = l
+                .replace(&format!("fill=\"{}\"", hex(&hatch_marker(k))), &format!("fill=\"url(#hatch{k})\""));
+        }
+        out.push_str(&l);
+        out.push('\n');
+        if i == 0 {
+            out.push_str(&defs);
+        }
+    }
+    out
 }
 
 impl<DB: DrawingBackend> Canvas<DB> {
@@ -204,7 +250,14 @@ impl<DB: DrawingBackend> Canvas<DB> {
     }
 
     /// Diagonal hatching clipped to a rectangle.
-    pub(crate) fn hatch(&self, (x0, y0): (i32, i32), (x1, y1): (i32, i32), color: RGBColor) -> Res {
+    pub(crate) fn hatch(&mut self, (x0, y0): (i32, i32), (x1, y1): (i32, i32), color: RGBColor) -> Res {
+        if let Some(colors) = &mut self.hatch_marks {
+            let k = colors.iter().position(|c| *c == color).unwrap_or_else(|| {
+                colors.push(color);
+                colors.len() - 1
+            });
+            return self.rect((x0, y0), (x1, y1), hatch_marker(k).filled());
+        }
         let style = color.mix(0.45).stroke_width(1);
         let mut k = 4;
         while k < (x1 - x0) + (y1 - y0) {

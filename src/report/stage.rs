@@ -174,12 +174,9 @@ pub fn write(
     };
     let with_comparison = !plan.variants.is_empty() && !plan.variant_subset;
 
-    // A grid's generated readings get no folder of their own in a full report (only the chosen
-    // one does, written after the comparison has chosen it); `--variant` writes any on demand.
-    let deferred = |info: &Option<VariantInfo>| {
-        with_comparison
-            && info.as_ref().is_some_and(|v| plan.variants.iter().any(|p| p.id == v.id && p.generated))
-    };
+    // In a full report of a pipeline with a grid, only the chosen reading gets a folder, written
+    // after the comparison has chosen it (compare::has_folder); `--variant` writes any on demand.
+    let deferred = |info: &Option<VariantInfo>| with_comparison && info.is_some() && plan.has_grid();
     // The guard first, over every folder this report replaces: nothing is written on a refusal.
     let mut targets = Vec::new();
     for (info, sub) in &subs {

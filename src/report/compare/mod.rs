@@ -194,12 +194,11 @@ pub fn write_comparison(
 }
 
 /// Whether the report writes the folder of variant `id` (and its difference figures): every
-/// listed variant, and of the grid's generated ones only the chosen reading, so a grid of many
-/// readings does not write (or commit) a full report each; the rest are written on demand with
-/// `qsweep report PIPELINE --variant ID`.
+/// variant of a pipeline without a grid; with a `variant_grid:`, only the chosen reading, so a
+/// grid of many readings does not write (or commit) a full report each; the rest are written on
+/// demand with `qsweep report PIPELINE --variant ID`.
 pub fn has_folder(plan: &Plan, variants: &[VariantDigest], id: &str) -> bool {
-    let generated = plan.variants.iter().any(|v| v.id == id && v.generated);
-    !generated || explore::chosen(plan, variants).is_some_and(|c| c.id == id)
+    !plan.has_grid() || explore::chosen(plan, variants).is_some_and(|c| c.id == id)
 }
 
 /// The heading of the comparison pages: `qsweep variants: NAME`, labelled when exploratory.
