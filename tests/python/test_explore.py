@@ -1,7 +1,9 @@
 """An exploratory search's comparison, recomputed in Python.
 
-The report is the one `qsweep run tests/fixtures/pipelines/grid.yaml` writes (a 2 x 3 variant
-grid beside `as-written`, one fit row, three held-out rows), made here into a temporary folder;
+Two reports: the one `qsweep run tests/fixtures/pipelines/grid.yaml` writes (a 2 x 3 variant grid
+beside `as-written`, one fit row, three held-out rows), and the committed
+`pipelines/explore-ball-beam.yaml` search re-reported from the committed cache, both into
+temporary folders;
 set `$QSWEEP_EXPLORE_REPORT_DIR` and `$QSWEEP_EXPLORE_PIPELINE` to check another, e.g.
 `reports/explore-ball-beam` and `pipelines/explore-ball-beam.yaml`.
 
@@ -28,13 +30,25 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 FIXTURE = REPO_ROOT / "tests" / "fixtures" / "pipelines" / "grid.yaml"
 
 
-@pytest.fixture(scope="module")
-def search(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+@pytest.fixture(scope="module", params=["fixture", "explore-ball-beam"])
+def search(request, qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     given = os.environ.get("QSWEEP_EXPLORE_REPORT_DIR")
     if given:
         pipeline = Path(os.environ["QSWEEP_EXPLORE_PIPELINE"])
         d = Path(given)
         return (d if d.is_absolute() else REPO_ROOT / d), (pipeline if pipeline.is_absolute() else REPO_ROOT / pipeline)
+    if request.param == "explore-ball-beam":
+        # The committed search, re-reported from the committed cache (runs nothing).
+        pipeline = REPO_ROOT / "pipelines" / "explore-ball-beam.yaml"
+        tmp = tmp_path_factory.mktemp("explore-ball-beam")
+        out = subprocess.run(
+            [str(qsweep_bin), "report", str(pipeline), "--cache", str(REPO_ROOT / "cache"),
+             "--out", str(tmp / "report"), "--formats", "csv,cells"],
+            capture_output=True, text=True, timeout=600,
+        )
+        assert out.returncode == 0, out.stderr
+        assert "42120 of 42120 planned trials present" in out.stdout, out.stdout
+        return tmp / "report", pipeline
     tmp = tmp_path_factory.mktemp("explore")
     out = subprocess.run(
         [str(qsweep_bin), "run", str(FIXTURE), "--json", "--cache", str(tmp / "cache"),

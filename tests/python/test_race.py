@@ -1,7 +1,8 @@
 """A raced report, read and re-derived in Python.
 
-The report is the one `qsweep run tests/fixtures/pipelines/race.yaml` writes (3 seeds, then 2 more
-per round up to 7), made here into a temporary folder. Set `$QSWEEP_RACE_REPORT_DIR` (with
+Two reports: the one `qsweep run tests/fixtures/pipelines/race.yaml` writes (3 seeds, then 2 more
+per round up to 7), and the committed `pipelines/paper-race.yaml` race re-reported from the
+committed cache, both into temporary folders. Set `$QSWEEP_RACE_REPORT_DIR` (with
 `$QSWEEP_RACE`, e.g. `5,5,40,0.95` for seeds, batch, max_seeds, confidence) to check another
 report, e.g. `reports/paper-race`.
 
@@ -33,13 +34,25 @@ HEATMAP = ["variant", "system", "experiment", "algorithm"]
 CELL = ["axis1_value", "axis2_value"]
 
 
-@pytest.fixture(scope="module")
-def race(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, tuple[int, int, int, float]]:
+@pytest.fixture(scope="module", params=["fixture", "paper-race"])
+def race(request, qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, tuple[int, int, int, float]]:
     given = os.environ.get("QSWEEP_RACE_REPORT_DIR")
     if given:
         d = Path(given)
         seeds, batch, most, conf = os.environ.get("QSWEEP_RACE", "5,5,40,0.95").split(",")
         return (d if d.is_absolute() else REPO_ROOT / d), (int(seeds), int(batch), int(most), float(conf))
+    if request.param == "paper-race":
+        # The committed race, re-reported from the committed cache (runs nothing): every
+        # decision of pipelines/paper-race.yaml replayed independently.
+        tmp = tmp_path_factory.mktemp("paper-race")
+        out = subprocess.run(
+            [str(qsweep_bin), "report", str(REPO_ROOT / "pipelines" / "paper-race.yaml"),
+             "--cache", str(REPO_ROOT / "cache"), "--out", str(tmp / "report"), "--formats", "csv,cells,trials"],
+            capture_output=True, text=True, timeout=600,
+        )
+        assert out.returncode == 0, out.stderr
+        assert "26365 of 26365 planned trials present" in out.stdout, out.stdout
+        return tmp / "report", (5, 5, 40, 0.95)
     tmp = tmp_path_factory.mktemp("race")
     pipeline = REPO_ROOT / "tests" / "fixtures" / "pipelines" / "race.yaml"
     out = subprocess.run(
