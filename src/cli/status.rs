@@ -96,11 +96,13 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let width = plan.variants.iter().map(|v| v.id.len()).max().map_or(0, |w| w.max(7) + 1);
+        // Experiment ids are usually numbers; a longer id widens its column.
+        let ew = plan.experiments.iter().map(|e| e.id.len()).max().unwrap_or(0).max(4);
         if width > 0 {
             print!("{:<width$}", "variant");
         }
         println!(
-            "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",
+            "{:<13} {:>ew$} {:<6} {:>6} {:>7} {:>7} {:>8}",
             "system", "exp", "repr", "cells", "trials", "cached", "missing"
         );
         for (e, n, hit) in &rows {
@@ -108,7 +110,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
                 print!("{:<width$}", e.variant.as_deref().unwrap_or_default());
             }
             println!(
-                "{:<13} {:>4} {:<6} {:>6} {:>7} {:>7} {:>8}",
+                "{:<13} {:>ew$} {:<6} {:>6} {:>7} {:>7} {:>8}",
                 e.system.name(),
                 e.id,
                 e.repr.name(),
@@ -127,7 +129,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             if store.is_none() { ", does not exist yet" } else { "" }
         );
         if raced.is_some() {
-            print_race(&race_rows, width);
+            print_race(&race_rows, width, ew);
         }
         for d in &scan.damaged {
             println!("damaged segment: {d}");
@@ -239,13 +241,13 @@ fn diff(old: &BTreeMap<String, String>, new: &BTreeMap<String, String>, old_vers
 
 /// The race section: per heatmap, rounds done and to come, contenders and trials against
 /// `max_seeds` in every cell.
-fn print_race(rows: &[StatusRace], width: usize) {
+fn print_race(rows: &[StatusRace], width: usize, ew: usize) {
     println!();
     if width > 0 {
         print!("{:<width$}", "variant");
     }
     println!(
-        "{:<13} {:>4} {:<9} {:>6} {:>7} {:>11} {:>7} {:>7} {:>8}",
+        "{:<13} {:>ew$} {:<9} {:>6} {:>7} {:>11} {:>7} {:>7} {:>8}",
         "race", "exp", "algorithm", "cells", "rounds", "contenders", "trials", "cached", "max-all"
     );
     for r in rows {
@@ -254,7 +256,7 @@ fn print_race(rows: &[StatusRace], width: usize) {
         }
         let rounds = format!("{}/{}{}", r.rounds_done, r.rounds_max, if r.finished { "" } else { "+" });
         println!(
-            "{:<13} {:>4} {:<9} {:>6} {:>7} {:>11} {:>7} {:>7} {:>8}",
+            "{:<13} {:>ew$} {:<9} {:>6} {:>7} {:>11} {:>7} {:>7} {:>8}",
             r.system,
             r.experiment,
             r.algorithm,
