@@ -97,6 +97,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         rounds: plan.race_rounds_max(),
         workdir,
     };
+    let submission_rounds = submission.rounds;
     let script = submission.render()?;
     print!("{script}");
 
@@ -124,6 +125,12 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         unique.len(),
         a.array
     );
+    if submission_rounds > 1 {
+        eprintln!(
+            "race: up to {submission_rounds} rounds, one job array each, chained with afterok; the counts above \
+             are the first round's (each later round is planned from the outcomes of the rounds before)"
+        );
+    }
     if a.array as usize > unique.len() {
         eprintln!(
             "warning: {} tasks for {} trials: {} tasks will have nothing to run",
