@@ -5,7 +5,7 @@
 //! runs its rounds one after another (one round per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeyScan, Store};
-use crate::exec::shard::{shard_keys, Shard};
+use crate::exec::shard::{key_owner, shard_keys, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
 use crate::plan::Plan;
 use std::path::PathBuf;
@@ -72,8 +72,9 @@ pub struct RunOutcome {
 
 /// Run the selected missing trials of `plan` and store them in batches. A raced plan runs round
 /// after round, each planned from the outcomes of the rounds before, until its races are over;
-/// under a shard, only the shard's part of the first round whose trials are missing (the other
-/// shards' parts of it must be stored before the next round can be planned).
+/// under a shard, only the shard's own trials (by key, [`key_owner`]) of the rounds the cache lets
+/// it plan, then it stops (the other shards' parts must be stored before the next round can be
+/// planned).
 pub fn run(
     plan: &Plan,
     store: &Store,
@@ -97,7 +98,14 @@ pub fn run(
     let mut forced: std::collections::HashSet<crate::cache::Key> = std::collections::HashSet::new();
     loop {
         let raced = raced(plan, store, scan)?;
-        let (unique, jobs) = select(&raced.plan, scan, Selection { force: false, ..sel });
+        // Shards of a race own their trials by key (exec::shard::key_owner): the plan grows as
+        // rounds are decided, so a split of the whole plan would move trials between tasks.
+        let (unique, jobs) = select(&raced.plan, scan, Selection { force: false, shard: None });
+        let mine = |t: &Job| sel.shard.is_none_or(|s| key_owner(&t.key, s.count) == s.index);
+        let (unique, jobs): (Vec<Job>, Vec<Job>) = (
+            unique.into_iter().filter(|t| mine(t)).collect(),
+            jobs.into_iter().filter(|t| mine(t)).collect(),
+        );
         let jobs: Vec<Job> =
             if sel.force { unique.iter().filter(|t| forced.insert(t.key)).copied().collect() } else { jobs };
         if jobs.is_empty() {

@@ -1,6 +1,7 @@
 //! Slurm submission scripts: a job array whose task I runs `qsweep run --shard I/N`, plus a report
 //! job that starts once every task has succeeded (`--dependency=afterok`). A raced pipeline gets
-//! one array per possible round, chained the same way (a round is planned from the ones before).
+//! one array per possible round, each after the one before (`afterany`: a round is planned from
+//! the ones before, whatever they left missing).
 //!
 //! The script is plain bash, run once on a login node. It holds both job scripts verbatim, as
 //! quoted here-documents (nothing in them is expanded at submission), and passes every sbatch
@@ -133,7 +134,9 @@ impl Submission {
         for round in 2..=self.rounds {
             let mut opts = opts.clone();
             opts[0] = format!("--job-name={}", quote(&format!("{}-round{round}", self.job_name)));
-            opts.insert(1, "--dependency=afterok:\"$array_job\"".to_string());
+            // afterany: a failed round array (a diverged trial exits 1) must not cancel the rounds
+            // after it; they plan from what is stored and run whatever is missing.
+            opts.insert(1, "--dependency=afterany:\"$array_job\"".to_string());
             opts.insert(2, "--kill-on-invalid-dep=yes".to_string());
             writeln!(s, "# Race round {round} of at most {}.", self.rounds)?;
             sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
@@ -307,7 +310,7 @@ mod tests {
                 script[start..].starts_with("array_job=$(sbatch --parsable \\\n    --job-name"),
                 "{script}"
             );
-            assert!(script[at..].lines().nth(1).unwrap().contains("--dependency=afterok:\"$array_job\""));
+            assert!(script[at..].lines().nth(1).unwrap().contains("--dependency=afterany:\"$array_job\""));
         }
         // The report waits for the last round's array.
         let last = script.rfind("QSWEEP_SHARD_JOB\n)").unwrap();

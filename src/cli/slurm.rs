@@ -105,7 +105,12 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     let cache_dir = a.pipeline.cache_dir();
     let cached: HashSet<_> =
         if cache_dir.is_dir() { a.pipeline.store()?.keys()?.keys } else { HashSet::new() };
-    let owner = assign(&unique, a.array);
+    // A race's shards own trials by key (the plan grows round by round); others are cost-balanced.
+    let owner: Vec<u32> = if plan.has_race() {
+        unique.iter().map(|t| crate::exec::shard::key_owner(&t.key, a.array)).collect()
+    } else {
+        assign(&unique, a.array)
+    };
     let mut per_shard = vec![(0usize, 0usize); a.array as usize];
     for (t, s) in unique.iter().zip(owner) {
         let entry = &mut per_shard[s as usize - 1];

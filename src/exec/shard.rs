@@ -39,6 +39,14 @@ pub fn shard_keys(trials: &[Job], shard: Shard) -> HashSet<Key> {
     trials.iter().zip(owner).filter(|&(_, s)| s == shard.index).map(|(t, _)| t.key).collect()
 }
 
+/// The shard (1..=count) that owns a trial by its key alone: a fixed owner whatever else the
+/// plan holds. A race's plan grows as its rounds are decided, so a cost-balanced split of it
+/// would move trials between shards that started at different times; this one never does.
+pub fn key_owner(key: &Key, count: u32) -> u32 {
+    let h = u64::from_le_bytes(key.0[..8].try_into().expect("8 bytes"));
+    (h % u64::from(count.max(1))) as u32 + 1
+}
+
 /// The shard (1..=count) of each trial, in the order given.
 pub fn assign(trials: &[Job], count: u32) -> Vec<u32> {
     let mut order: Vec<(f64, Key, usize)> =
