@@ -253,7 +253,13 @@ pub fn plan_variants(
         reference_source: spec.reference_source.clone(),
         seeds: spec.seeds.0.clone(),
         variant_subset: !select.is_empty() && variants.len() < loaded.variants.len(),
-        raced: experiments.iter().any(|e| e.race.is_some()),
+        // Over every variant, selected or not, so a variant's folder has the same columns however
+        // it was reported.
+        raced: if loaded.variants.is_empty() {
+            spec_races(spec)
+        } else {
+            loaded.variants.iter().any(|v| spec_races(&v.spec))
+        },
         exploratory: spec.exploratory.clone(),
         readings: loaded.variants.len(),
         experiments,
@@ -294,20 +300,40 @@ fn too_many(origin: &str, n: u128, limit: usize) -> anyhow::Error {
     ))
 }
 
-/// Trials the spec expands to (cells × seeds), without building anything.
+/// Whether some experiment of `spec` races.
+fn spec_races(spec: &PipelineSpec) -> bool {
+    fn any<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> bool {
+        s.iter().flat_map(|s| &s.experiments).any(|e| e.race.is_some())
+    }
+    let s = &spec.systems;
+    spec.race.is_some() || any(&s.ball_beam) || any(&s.cart_pole) || any(&s.mountain_car)
+}
+
+/// Trials the spec expands to (cells × seeds; a raced experiment counted at `max_seeds`, the most
+/// its race can run), without building anything.
 fn planned_trials(spec: &PipelineSpec) -> u128 {
-    fn system<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> u128 {
+    let seeds = spec.seeds.0.len() as u128;
+    let system = |experiments: Vec<(u128, Option<crate::spec::RaceSpec>)>| -> u128 {
+        experiments
+            .into_iter()
+            .map(|(cells, race)| {
+                cells * race.or(spec.race).map_or(seeds, |r| seeds.max(u128::from(r.max_seeds)))
+            })
+            .sum()
+    };
+    fn cells<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> Vec<(u128, Option<crate::spec::RaceSpec>)> {
         s.iter()
             .flat_map(|s| &s.experiments)
             .map(|e| {
-                e.axes.iter().map(|a| a.values.len() as u128).product::<u128>() * e.algorithms.len() as u128
+                let n = e.axes.iter().map(|a| a.values.len() as u128).product::<u128>()
+                    * e.algorithms.len() as u128;
+                (n, e.race)
             })
-            .sum()
+            .collect()
     }
-    let cells = system(&spec.systems.ball_beam)
-        + system(&spec.systems.cart_pole)
-        + system(&spec.systems.mountain_car);
-    cells * spec.seeds.0.len() as u128
+    system(cells(&spec.systems.ball_beam))
+        + system(cells(&spec.systems.cart_pole))
+        + system(cells(&spec.systems.mountain_car))
 }
 
 fn expand<M: Resolve>(

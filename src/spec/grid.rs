@@ -23,6 +23,10 @@ use std::fmt;
 /// Generated variants above this many need `--yes`.
 pub const DEFAULT_MAX_READINGS: usize = 256;
 
+/// No grid generates more readings than this, `--yes` or not (each is a whole pipeline to plan):
+/// a larger product needs `sample:`.
+pub const MAX_READINGS: usize = 10_000;
+
 /// A `variant_grid:` section, checked: at least one path, every list non-empty.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VariantGrid {
@@ -110,6 +114,31 @@ impl<'de> Deserialize<'de> for VariantGrid {
                         "no paths; give at least one, e.g. defaults.q_init: [-1, 0, 1]",
                     ));
                 }
+                let product = g.axes.iter().try_fold(1usize, |n, (_, v)| n.checked_mul(v.len()));
+                let readings = product.map(|p| g.sample.map_or(p, |s| s.min(p)));
+                if readings.is_none_or(|r| r > MAX_READINGS) {
+                    let size = product.map_or_else(|| "more than 2^64".to_string(), |p| p.to_string());
+                    return Err(de::Error::custom(format!(
+                        "the grid has {size} combinations; at most {MAX_READINGS} readings can be generated, \
+                         so add `sample: N` (N ≤ {MAX_READINGS}) or shorten the lists"
+                    )));
+                }
+                // Two values of one path that read alike would give two variants one id.
+                for (path, values) in &g.axes {
+                    let ids: Vec<String> = values.iter().map(|v| id_value(v, false)).collect();
+                    for (i, id) in ids.iter().enumerate() {
+                        if let Some(j) = ids[..i].iter().position(|o| o == id) {
+                            return Err(super::load::at_field(
+                                &[path],
+                                format!(
+                                    "the values {} and {} give the same variant id `{id}`; keep one",
+                                    shown(&values[j]),
+                                    shown(&values[i])
+                                ),
+                            ));
+                        }
+                    }
+                }
                 Ok(g)
             }
         }
@@ -118,9 +147,9 @@ impl<'de> Deserialize<'de> for VariantGrid {
 }
 
 impl VariantGrid {
-    /// Combinations in the full product.
+    /// Combinations in the full product (checked not to overflow while parsing).
     pub fn product_size(&self) -> usize {
-        self.axes.iter().map(|(_, v)| v.len()).fold(1usize, usize::saturating_mul)
+        self.axes.iter().map(|(_, v)| v.len()).product()
     }
 
     /// The grid's combinations: the whole product in order (first path slowest), or the seeded
@@ -130,14 +159,17 @@ impl VariantGrid {
         let chosen: Vec<usize> = match self.sample {
             Some(n) if n < total => {
                 // A partial Fisher–Yates shuffle of the indices, from a ChaCha stream: the same
-                // subset on every machine.
+                // subset on every machine. The index array is virtual (only moved slots are
+                // stored), so a sample of a huge product costs memory for the sample alone.
                 let mut rng = TrialRng::new(self.seed);
-                let mut idx: Vec<usize> = (0..total).collect();
+                let mut moved: std::collections::HashMap<usize, usize> = std::collections::HashMap::new();
+                let mut out = Vec::with_capacity(n);
                 for i in 0..n {
                     let j = i + rng.below(total - i);
-                    idx.swap(i, j);
+                    let (at_i, at_j) = (*moved.get(&i).unwrap_or(&i), *moved.get(&j).unwrap_or(&j));
+                    moved.insert(j, at_i);
+                    out.push(at_j);
                 }
-                let mut out = idx[..n].to_vec();
                 out.sort_unstable();
                 out
             }
@@ -296,6 +328,16 @@ mod tests {
         assert!(err("defaults.q_init: 3\n").contains("give a list of values"));
         assert!(err("defaults.q_init: [1, 1]\n").contains("listed twice"));
         assert!(err("sample: 0\ndefaults.q_init: [1]\n").contains("0 is not allowed"));
+        assert!(err("defaults.q_init: [1, 1.0]\n").contains("give the same variant id `1`"));
+        let lists = |paths: usize, values: usize| -> String {
+            let v: Vec<String> = (0..values).map(|k| k.to_string()).collect();
+            (0..paths).map(|i| format!("p.v{i}: [{}]\n", v.join(", "))).collect()
+        };
+        assert!(err(&lists(16, 16)).contains("more than 2^64 combinations"));
+        assert!(err(&lists(10, 10)).contains("10000000000 combinations"));
+        // A sample of a product far too large to list is drawn without listing it.
+        let g = grid(&format!("{}sample: 12\nseed: 1\n", lists(10, 10)));
+        assert_eq!(g.combinations().len(), 12);
         assert!(err("{}\n").contains("no paths"));
     }
 }

@@ -214,3 +214,43 @@ fn shards_started_at_different_times_finish_a_race_in_its_number_of_rounds() {
     assert_eq!(status["missing"], 0);
     assert_eq!(executed(&sb.run_json(&p, &more)), 0);
 }
+
+/// The confirmation limit counts a race at `max_seeds` (the most it can run), not its first round.
+#[test]
+fn a_race_that_could_run_huge_needs_yes() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("race.yaml");
+    let ps = p.to_str().unwrap();
+    let err =
+        crate::helpers::fails_with(&mut sb.qsweep(&["status", ps, "--set", "race.max_seeds=300000"]), 2);
+    assert!(err.contains("the plan has 1500000 trials"), "{err}");
+    stdout(&mut sb.qsweep(&["status", ps, "--set", "race.max_seeds=300000", "--yes"]));
+}
+
+/// A race set by one variant: every variant's files carry the race columns (null where the
+/// variant does not race), whether reported together or alone with `--variant`, so the combined
+/// files concatenate and a folder reads the same however it was written.
+#[test]
+fn a_race_in_one_variant_gives_every_variant_the_race_columns() {
+    let sb = Sandbox::new();
+    let text = std::fs::read_to_string(crate::helpers::repo().join("tests/fixtures/pipelines/race.yaml"))
+        .unwrap()
+        .replace("race: {", "# race: {");
+    let text = format!(
+        "{text}variants:\n  - id: plain\n  - id: raced\n    set: {{ race: {{ confidence: 0.95, batch: 2, max_seeds: 7 }} }}\n"
+    );
+    let p = sb.write("v.yaml", &text);
+    let ps = p.to_str().unwrap();
+    sb.run_json(&p, &[]);
+    stdout(&mut sb.qsweep(&["report", ps, "--out", "all"]));
+    stdout(&mut sb.qsweep(&["report", ps, "--out", "one", "--variant", "plain"]));
+    for f in ["all/cells.parquet", "all/plain/cells.parquet", "one/plain/cells.parquet"] {
+        let file = std::fs::File::open(sb.path(f)).unwrap();
+        let schema = ParquetRecordBatchReaderBuilder::try_new(file).unwrap().schema().clone();
+        assert!(schema.index_of("contender").is_ok(), "{f}");
+    }
+    assert_eq!(
+        std::fs::read(sb.path("all/plain/cells.parquet")).unwrap(),
+        std::fs::read(sb.path("one/plain/cells.parquet")).unwrap()
+    );
+}
