@@ -132,7 +132,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     );
     if submission_rounds > 1 {
         eprintln!(
-            "race: up to {submission_rounds} rounds, one job array each, chained with afterok; the counts above \
+            "race: up to {submission_rounds} rounds, one job array each, each after the one before (afterany); the counts above \
              are the first round's (each later round is planned from the outcomes of the rounds before)"
         );
     }
