@@ -252,21 +252,10 @@ fn page(
     h.push_str("</ul>\n<p>Data: <a href=\"variants.csv\">variants.csv</a> · <a href=\"variants.md\">variants.md</a> · \
                 <a href=\"cells.parquet\">cells.parquet</a> (every variant's cells, with a <code>variant</code> column)</p>\n");
     h.push_str("<h2 id=\"fit\">Fit to the reference values</h2>\n");
-    // The caption is a paragraph of its own: inside the table it would widen the table to its
-    // own unwrapped length.
-    // Its text columns wrap (`.fit`): variant titles are long, and the table must fit the page.
-    h.push_str(&format!("<p class=\"caption\">{}</p>\n<div class=\"scroll fit\">\n", esc(&table.caption)));
-    let mut bare = table.clone();
-    bare.caption.clear();
-    h.push_str(&render(&bare, &Html));
-    h.push_str("</div>\n");
+    h.push_str(&captioned(table));
     if let Some(t) = held_out {
         h.push_str("<h2 id=\"held-out\">Held-out rows</h2>\n");
-        h.push_str(&format!("<p class=\"caption\">{}</p>\n<div class=\"scroll fit\">\n", esc(&t.caption)));
-        let mut bare = t.clone();
-        bare.caption.clear();
-        h.push_str(&render(&bare, &Html));
-        h.push_str("</div>\n");
+        h.push_str(&captioned(t));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
         for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
@@ -289,6 +278,19 @@ fn page(
     }
     h.push_str("</body>\n</html>\n");
     h
+}
+
+/// A comparison table as HTML. The caption is a paragraph of its own: inside the table it would
+/// widen the table to its own unwrapped length. Its text columns wrap (`.fit`): variant titles
+/// are long, and the table must fit the page.
+fn captioned(table: &Table) -> String {
+    let mut bare = table.clone();
+    bare.caption.clear();
+    format!(
+        "<p class=\"caption\">{}</p>\n<div class=\"scroll fit\">\n{}</div>\n",
+        esc(&table.caption),
+        render(&bare, &Html)
+    )
 }
 
 /// The comparison as Markdown, for repository web pages (which show `README.md` and SVG images,
