@@ -85,14 +85,24 @@ impl Target {
         Ok(Self { counts: Counts::of(plan, present), kept, dir })
     }
 
-    /// Write the manifest, remove the kept report's files that were not written again, and say
-    /// what changed.
+    /// Refuse (unless `force`) to replace a kept report that holds more than this one would.
+    fn guard(&self, force: bool, cache: &Path) -> anyhow::Result<()> {
+        match (&self.kept, force) {
+            (Some(kept), false) => {
+                manifest::guard(&self.dir, kept, &self.counts, cache).map_err(|e| anyhow::anyhow!(e))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Write the manifest, remove the kept report's files that were not written again, say what
+    /// changed, and list the folder's files (under the variant's id) in the outcome's summary.
     fn finish(
         &self,
         plan: &Plan,
         variant: Option<&str>,
         formats: Formats,
-        files: &[PathBuf],
+        files: Vec<PathBuf>,
         out: &mut ReportOutcome,
     ) -> anyhow::Result<()> {
         let names: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
@@ -105,6 +115,9 @@ impl Target {
             files: names.clone(),
         };
         manifest::write(&self.dir, &m)?;
+        let prefix = variant.map_or_else(PathBuf::new, PathBuf::from);
+        out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
+        out.summary.files.push(prefix.join(manifest::MANIFEST));
         let Some(kept) = &self.kept else { return Ok(()) };
         // What the kept report wrote: its manifest says; an earlier layout's are known by name.
         let stale: Vec<String> = match kept {
@@ -185,12 +198,8 @@ pub fn write(
     }
     let top =
         if with_comparison { Some(Target::new(dir.clone(), plan, &scan.keys, opts.force)?) } else { None };
-    if !opts.force {
-        for t in targets.iter().flatten().chain(&top) {
-            if let Some(kept) = &t.kept {
-                manifest::guard(&t.dir, kept, &t.counts, store.dir()).map_err(|e| anyhow::anyhow!(e))?;
-            }
-        }
+    for t in targets.iter().flatten().chain(&top) {
+        t.guard(opts.force, store.dir())?;
     }
 
     let mut out = ReportOutcome {
@@ -221,10 +230,7 @@ pub fn write(
         );
         pushed?;
         if let (Some(t), Some(files)) = (target, written?) {
-            t.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, &files, &mut out)?;
-            let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
-            out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
-            out.summary.files.push(prefix.join(manifest::MANIFEST));
+            t.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, files, &mut out)?;
         }
         out.summary.add(&ReportSummary::of(&data, Vec::new()));
         if let (Some(v), true) = (info, with_comparison) {
@@ -242,16 +248,12 @@ pub fn write(
     {
         let id = &info.as_ref().expect("a deferred folder is a variant's").id;
         let t = Target::new(dir.join(id), sub, &scan.keys, opts.force)?;
-        if let (false, Some(kept)) = (opts.force, &t.kept) {
-            manifest::guard(&t.dir, kept, &t.counts, store.dir()).map_err(|e| anyhow::anyhow!(e))?;
-        }
+        t.guard(opts.force, store.dir())?;
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
         let data = ReportData::build(sub, &outcomes);
         let files = write_folder(&data, &t.dir, formats, false)?;
-        t.finish(sub, Some(id), formats, &files, &mut out)?;
-        out.summary.files.extend(files.into_iter().map(|f| Path::new(id).join(f)));
-        out.summary.files.push(Path::new(id).join(manifest::MANIFEST));
+        t.finish(sub, Some(id), formats, files, &mut out)?;
     }
 
     if let Some(top) = &top {
@@ -265,9 +267,7 @@ pub fn write(
             files.push(PathBuf::from("trials.parquet"));
         }
         files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
-        top.finish(plan, None, formats, &files, &mut out)?;
-        out.summary.files.extend(files);
-        out.summary.files.push(PathBuf::from(manifest::MANIFEST));
+        top.finish(plan, None, formats, files, &mut out)?;
     }
     Ok(out)
 }
