@@ -23,7 +23,7 @@
 //!   instead of an active list; large ones keep the active list, so a step costs O(active traces).
 
 use super::config::{LearnerConfig, TraceKind};
-use super::repr::Activations;
+use super::repr::{Activations, OneHot};
 
 /// Dense traces when the table has at most this many parameters (features × actions) per feature a
 /// single state can activate, and at most [`DENSE_MAX_PARAMS`] in all: then most traces are live in
@@ -121,17 +121,6 @@ impl SparseTraces {
         self.values.clear();
     }
 
-    /// Drop the trace at list position `r`; the last one moves into its place.
-    #[inline]
-    fn remove(&mut self, r: usize) {
-        self.slot[self.keys[r] as usize] = 0;
-        self.keys.swap_remove(r);
-        self.values.swap_remove(r);
-        if let Some(&moved) = self.keys.get(r) {
-            self.slot[moved as usize] = r as u32 + 1;
-        }
-    }
-
     #[inline]
     fn push(&mut self, k: usize, e: f64) {
         self.keys.push(k as u32);
@@ -167,36 +156,31 @@ impl Learner {
     /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action): for
     /// each action, `0 + w₀q₀ + w₁q₁ + …` in activation order.
     #[inline(always)]
-    pub fn q_values(&self, phi: &Activations, out: &mut [f64]) {
-        if let ([i], [w]) = (&phi.index[..], &phi.weight[..]) {
-            // One feature (every crisp state): small enough to inline into the trial loop.
-            let na = self.n_actions;
-            for (o, &v) in out.iter_mut().zip(&self.q[*i as usize * na..][..na]) {
-                *o = 0.0 + w * v;
-            }
-        } else {
-            self.q_values_many(phi, out);
-        }
+    pub fn q_values<F: Features>(&self, phi: &F, out: &mut [f64]) {
+        phi.q_values(self, out);
     }
 
-    /// Q(s, ·) right after [`update`](Self::update) for `action`, given `before`, Q(s, ·) computed
-    /// just before that update. Under Q(0) (no traces) the update moved only `action`'s parameters,
-    /// so every other action's value is `before`'s, the same sum over the same parameters in the
-    /// same order, and only `action`'s sum is redone (in activation order from 0, as
+    /// Bring `qs`, Q(s, ·) computed just before [`update`](Self::update) for `action`, up to date
+    /// after it. Under Q(0) (no traces) the update moved only `action`'s parameters, so every other
+    /// action's value is already right, the same sum over the same parameters in the same order,
+    /// and only `action`'s sum is redone (in activation order from 0, as
     /// [`q_values`](Self::q_values) sums it: bit-identical). With traces, every action may have
     /// moved and all are recomputed.
     #[inline(always)]
-    pub fn q_values_after_update(&self, phi: &Activations, action: usize, before: &[f64], out: &mut [f64]) {
-        if !matches!(self.traces, Traces::None) {
-            return self.q_values(phi, out);
+    pub fn refresh_after_update<F: Features>(&self, phi: &F, action: usize, qs: &mut [f64]) {
+        if matches!(self.traces, Traces::None) {
+            qs[action] = phi.q_value(self, action);
+        } else {
+            phi.q_values(self, qs);
         }
-        out.copy_from_slice(before);
-        let na = self.n_actions;
-        let mut sum = 0.0;
-        for (&i, &w) in phi.index.iter().zip(&phi.weight) {
-            sum += w * self.q[i as usize * na + action];
-        }
-        out[action] = sum;
+    }
+
+    /// One learning step for the pair (s_t, a_t) with TD error δ_t: decay every trace by γλ, add the
+    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21). (The decay was
+    /// done at the end of the previous step; this step's traces are decayed for the next.)
+    #[inline(always)]
+    pub fn update<F: Features>(&mut self, phi: &F, action: usize, delta: f64) {
+        phi.update(self, action, delta);
     }
 
     /// [`q_values`](Self::q_values) for several active features.
@@ -221,23 +205,6 @@ impl Learner {
             Traces::None => {}
             Traces::Dense(e) => e.fill(0.0),
             Traces::Sparse(t) => t.clear(),
-        }
-    }
-
-    /// One learning step for the pair (s_t, a_t) with TD error δ_t: decay every trace by γλ, add the
-    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21). (The decay was
-    /// done at the end of the previous step; this step's traces are decayed for the next.)
-    #[inline(always)]
-    pub fn update(&mut self, phi: &Activations, action: usize, delta: f64) {
-        let step = self.alpha * delta;
-        let (q, na, rule) = (&mut self.q[..], self.n_actions, self.rule);
-        match &mut self.traces {
-            Traces::None => update_q0(q, na, rule, phi, action, step),
-            Traces::Dense(e) => update_dense(q, e, na, rule, phi, action, step),
-            Traces::Sparse(t) => match (&phi.index[..], &phi.weight[..]) {
-                ([i], [w]) => update_single(q, t, rule, *i as usize * na + action, *w, step),
-                _ => update_sparse(q, t, na, rule, phi, action, step),
-            },
         }
     }
 
@@ -272,37 +239,143 @@ impl Learner {
     }
 }
 
+/// A state's activations in the form the learner evaluates and updates: the general sparse list
+/// ([`Activations`], fuzzy rule bases) or a crisp table's single row ([`OneHot`], weight 1). Both
+/// compute exactly what the list form computes for the same activations.
+pub trait Features {
+    /// Q(s, ·) into `out`, summed in activation order from 0.
+    fn q_values(&self, l: &Learner, out: &mut [f64]);
+    /// Q(s, action) alone, summed as [`q_values`](Self::q_values) sums it.
+    fn q_value(&self, l: &Learner, action: usize) -> f64;
+    /// One learning step (see [`Learner::update`]).
+    fn update(&self, l: &mut Learner, action: usize, delta: f64);
+}
+
+impl Features for Activations {
+    #[inline(always)]
+    fn q_values(&self, l: &Learner, out: &mut [f64]) {
+        if let ([i], [w]) = (&self.index[..], &self.weight[..]) {
+            // One feature: small enough to inline into the trial loop.
+            let na = l.n_actions;
+            for (o, &v) in out.iter_mut().zip(&l.q[*i as usize * na..][..na]) {
+                *o = 0.0 + w * v;
+            }
+        } else {
+            l.q_values_many(self, out);
+        }
+    }
+
+    #[inline(always)]
+    fn q_value(&self, l: &Learner, action: usize) -> f64 {
+        let na = l.n_actions;
+        let mut sum = 0.0;
+        for (&i, &w) in self.index.iter().zip(&self.weight) {
+            sum += w * l.q[i as usize * na + action];
+        }
+        sum
+    }
+
+    #[inline(always)]
+    fn update(&self, l: &mut Learner, action: usize, delta: f64) {
+        let step = l.alpha * delta;
+        let (q, na, rule) = (&mut l.q[..], l.n_actions, l.rule);
+        let (index, weight) = (&self.index[..], &self.weight[..]);
+        match &mut l.traces {
+            Traces::None => update_q0(q, na, rule, index, weight, action, step),
+            Traces::Dense(e) => update_dense(q, e, na, rule, index, weight, action, step),
+            Traces::Sparse(t) => match (index, weight) {
+                ([i], [w]) => update_single(q, t, rule, *i as usize * na + action, *w, step),
+                _ => update_sparse(q, t, na, rule, index, weight, action, step),
+            },
+        }
+    }
+}
+
+/// The list form's one-feature case with the weight fixed at 1: `0 + 1·q = 0 + q` and a trace
+/// extended by 1, the same operations on the same values.
+impl Features for OneHot {
+    #[inline(always)]
+    fn q_values(&self, l: &Learner, out: &mut [f64]) {
+        let na = l.n_actions;
+        for (o, &v) in out.iter_mut().zip(&l.q[self.0 as usize * na..][..na]) {
+            *o = 0.0 + v;
+        }
+    }
+
+    #[inline(always)]
+    fn q_value(&self, l: &Learner, action: usize) -> f64 {
+        0.0 + l.q[self.0 as usize * l.n_actions + action]
+    }
+
+    #[inline(always)]
+    fn update(&self, l: &mut Learner, action: usize, delta: f64) {
+        let step = l.alpha * delta;
+        let (q, na, rule) = (&mut l.q[..], l.n_actions, l.rule);
+        let k = self.0 as usize * na + action;
+        match &mut l.traces {
+            Traces::None => q[k] += step * rule.extend(0.0, 1.0),
+            Traces::Dense(e) => update_dense(q, e, na, rule, &[self.0], &[1.0], action, step),
+            Traces::Sparse(t) => update_single(q, t, rule, k, 1.0, step),
+        }
+    }
+}
+
 /// γλ = 0: every trace from the previous step is gone, so the traces are exactly the current
 /// activation (0 extended by w) and only those parameters move.
 #[inline(always)]
-fn update_q0(q: &mut [f64], na: usize, rule: TraceRule, phi: &Activations, action: usize, step: f64) {
-    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
-        q[i as usize * na + action] += step * rule.extend(0.0, w);
+fn update_q0(
+    q: &mut [f64],
+    na: usize,
+    rule: TraceRule,
+    index: &[u32],
+    weight: &[f64],
+    action: usize,
+    step: f64,
+) {
+    // The trace rule is fixed per trial: one loop per rule instead of a branch per feature.
+    if rule.replacing {
+        for (&i, &w) in index.iter().zip(weight) {
+            q[i as usize * na + action] += step * 0.0f64.max(w);
+        }
+    } else {
+        for (&i, &w) in index.iter().zip(weight) {
+            q[i as usize * na + action] += step * (0.0 + w);
+        }
     }
 }
 
 /// One active feature (crisp tables), sparse traces: extend, apply and decay in a single pass over
-/// the live traces.
+/// the live traces. A trace that vanishes is replaced by the last one (not yet visited), as in
+/// [`update_sparse`].
 #[inline(always)]
 fn update_single(q: &mut [f64], t: &mut SparseTraces, rule: TraceRule, target: usize, w: f64, step: f64) {
+    let SparseTraces { keys, values, slot } = t;
     let mut found = false;
+    let mut len = keys.len();
     let mut r = 0;
-    while r < t.keys.len() {
-        let k = t.keys[r] as usize;
-        let mut e = t.values[r];
+    while r < len {
+        let (k, mut e) = (keys[r] as usize, values[r]);
         if k == target {
             e = rule.extend(e, w);
             found = true;
         }
         q[k] += step * e;
         let next = rule.decayed(e);
-        if next == 0.0 {
-            t.remove(r);
-        } else {
-            t.values[r] = next;
+        if next != 0.0 {
+            values[r] = next;
             r += 1;
+        } else {
+            slot[k] = 0;
+            len -= 1;
+            if r < len {
+                keys[r] = keys[len];
+                values[r] = values[len];
+                slot[keys[r] as usize] = r as u32 + 1;
+            }
         }
     }
+    keys.truncate(len);
+    values.truncate(len);
     if !found {
         let e = rule.extend(0.0, w);
         q[target] += step * e;
@@ -322,11 +395,12 @@ fn update_dense(
     trace: &mut [f64],
     na: usize,
     rule: TraceRule,
-    phi: &Activations,
+    index: &[u32],
+    weight: &[f64],
     action: usize,
     step: f64,
 ) {
-    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+    for (&i, &w) in index.iter().zip(weight) {
         let k = i as usize * na + action;
         trace[k] = rule.extend(trace[k], w);
     }
@@ -340,7 +414,7 @@ fn update_dense(
             *e = rule.decayed(*e);
         }
     } else {
-        for &i in &phi.index {
+        for &i in index {
             let k = i as usize * na + action;
             if trace[k] == 0.0 {
                 q[k] += step * trace[k];
@@ -364,7 +438,8 @@ fn update_sparse(
     t: &mut SparseTraces,
     na: usize,
     rule: TraceRule,
-    phi: &Activations,
+    index: &[u32],
+    weight: &[f64],
     action: usize,
     step: f64,
 ) {
@@ -372,10 +447,10 @@ fn update_sparse(
     // Extend: a parameter without a live trace gets the next free position, whose value the
     // resize set to 0, so extending it gives extend(0, w) exactly as for a new trace.
     let live = keys.len();
-    keys.resize(live + phi.len(), 0);
-    values.resize(live + phi.len(), 0.0);
+    keys.resize(live + index.len(), 0);
+    values.resize(live + index.len(), 0.0);
     let mut len = live;
-    for (&i, &w) in phi.index.iter().zip(&phi.weight) {
+    for (&i, &w) in index.iter().zip(weight) {
         let k = i as usize * na + action;
         let p = slot[k] as usize;
         let dest = if p == 0 { len } else { p - 1 };
@@ -617,22 +692,23 @@ mod tests {
             let nf = 40;
             let mut l = Learner::new(nf, na, 8, &cfg);
             assert!(matches!(l.traces, Traces::None));
-            let (mut before, mut full, mut fast) = (vec![0.0; na], vec![0.0; na], vec![0.0; na]);
+            let (mut full, mut fast) = (vec![0.0; na], vec![0.0; na]);
             for step in 0..500 {
                 let phi = activations(step, nf, 1 + step % 7);
                 let next = activations(step + 1 + step % 3, nf, 1 + (step * 5) % 8);
                 let a = (step * 7) % na;
-                l.q_values(&next, &mut before);
+                l.q_values(&next, &mut fast);
                 l.update(&phi, a, ((step as f64) * 0.61).cos() * 3.0);
                 l.q_values(&next, &mut full);
-                l.q_values_after_update(&next, a, &before, &mut fast);
+                l.refresh_after_update(&next, a, &mut fast);
                 assert_eq!(bits(&fast), bits(&full), "na {na} step {step}");
             }
             // With traces the shortcut is never taken.
             let lam = Learner::new(nf, na, 8, &config(0.9, false, 1e-10));
             let phi = activations(3, nf, 4);
             lam.q_values(&phi, &mut full);
-            lam.q_values_after_update(&phi, 0, &vec![f64::NAN; na], &mut fast);
+            fast.fill(f64::NAN);
+            lam.refresh_after_update(&phi, 0, &mut fast);
             assert_eq!(bits(&fast), bits(&full));
         }
     }

@@ -5,8 +5,8 @@
 use super::actions::action_set;
 use super::config::{Success, TieBreak, TrialConfig, Truncation};
 use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, TaskKind};
-use super::learner::Learner;
-use super::repr::{Activations, Crisp, Fuzzy, ReprKind, Representation};
+use super::learner::{Features, Learner};
+use super::repr::{Crisp, Encode, Fuzzy, ReprKind};
 use super::rng::TrialRng;
 use serde::{Deserialize, Serialize};
 
@@ -99,7 +99,10 @@ fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize,
     (a, true)
 }
 
-fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, env: E, repr: R) -> Outcome {
+fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R) -> Outcome
+where
+    R::Active: Features,
+{
     let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner);
     episodes(cfg, seed, env, repr, &mut learner)
 }
@@ -108,6 +111,7 @@ fn run<E: Environment, R: Representation>(cfg: &TrialConfig, seed: u64, env: E, 
 #[cfg(test)]
 pub(crate) fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
     fn go<E: Environment>(cfg: &TrialConfig, seed: u64, env: E) -> (Outcome, Vec<f64>) {
+        use super::repr::Representation;
         let r = &cfg.repr;
         assert_eq!(r.kind, ReprKind::Crisp);
         let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
@@ -122,20 +126,23 @@ pub(crate) fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
     }
 }
 
-fn episodes<E: Environment, R: Representation>(
+fn episodes<E: Environment, R: Encode>(
     cfg: &TrialConfig,
     seed: u64,
     mut env: E,
     repr: R,
     learner: &mut Learner,
-) -> Outcome {
+) -> Outcome
+where
+    R::Active: Features,
+{
     let l = &cfg.learner;
     let actions = action_set(cfg.env.action_max(), cfg.actions);
     let na = actions.len();
     let gym_start = cfg.start == StartKind::Gym;
     let cut_is_terminal = cfg.limits.truncation == Truncation::Terminal;
     let mut rng = TrialRng::new(seed);
-    let (mut phi, mut phi_next) = (Activations::default(), Activations::default());
+    let (mut phi, mut phi_next) = (R::Active::default(), R::Active::default());
     let (mut qs, mut qs_next) = (vec![0.0; na], vec![0.0; na]);
     let cap = cfg.limits.episode_cap();
     let mut lengths = Vec::new();
@@ -159,7 +166,7 @@ fn episodes<E: Environment, R: Representation>(
             env.reset();
         }
         learner.clear_traces();
-        repr.activate(env.state(), &mut phi);
+        repr.encode(env.state(), &mut phi);
         learner.q_values(&phi, &mut qs);
         let mut len = 0u64;
         let terminal = loop {
@@ -174,7 +181,7 @@ fn episodes<E: Environment, R: Representation>(
             let target = if t.terminal || (cut_is_terminal && len >= cap) {
                 t.reward
             } else {
-                repr.activate(s, &mut phi_next);
+                repr.encode(s, &mut phi_next);
                 learner.q_values(&phi_next, &mut qs_next);
                 t.reward + l.gamma * qs_next.iter().copied().fold(f64::NEG_INFINITY, f64::max)
             };
@@ -192,7 +199,8 @@ fn episodes<E: Environment, R: Representation>(
             }
             std::mem::swap(&mut phi, &mut phi_next);
             // qs_next is Q(s_{t+1}, ·) from before the update: under Q(0) only action a moved.
-            learner.q_values_after_update(&phi, a, &qs_next, &mut qs);
+            std::mem::swap(&mut qs, &mut qs_next);
+            learner.refresh_after_update(&phi, a, &mut qs);
         };
         lengths.push(len as u32);
         total_steps += len;

@@ -8,7 +8,7 @@
 //! they are computed. Values outside `[lo, hi]` are clamped to the range first (the fuzzy analogue of
 //! the crisp edge bin), and sets whose membership is below `prune` are skipped (`prune = 0` is exact).
 
-use super::{strides, Activations, Representation};
+use super::{strides, Activations, Encode, Representation};
 
 /// Most fuzzy sets a single variable may have.
 pub const MAX_SETS: usize = 64;
@@ -162,6 +162,15 @@ impl Representation for Fuzzy {
         } else {
             self.activate_with::<MAX_SETS>(state, out);
         }
+    }
+}
+
+impl Encode for Fuzzy {
+    type Active = Activations;
+
+    #[inline(always)]
+    fn encode(&self, state: &[f64], out: &mut Activations) {
+        self.activate(state, out);
     }
 }
 

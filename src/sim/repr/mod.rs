@@ -58,6 +58,11 @@ impl Activations {
     }
 }
 
+/// The one feature (table row) a crisp state activates, with weight exactly 1: the trial loop's
+/// form of a crisp activation, so a step does no list bookkeeping for a single entry.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OneHot(pub u32);
+
 /// A map from states to sparse feature activations over a fixed number of features.
 pub trait Representation {
     /// Total number of features (bins or rules).
@@ -66,6 +71,16 @@ pub trait Representation {
     fn max_active(&self) -> usize;
     /// Write the activations of `state` (its first `dim` entries) into `out`.
     fn activate(&self, state: &[f64], out: &mut Activations);
+}
+
+/// The form of a state's activations the trial loop works with, and how it is computed:
+/// [`OneHot`] for crisp tables, [`Activations`] for fuzzy rule bases. Both denote the same sparse
+/// activations as [`Representation::activate`].
+pub trait Encode: Representation {
+    /// The activation type the learner consumes.
+    type Active: Default;
+    /// Write the activations of `state` into `out`.
+    fn encode(&self, state: &[f64], out: &mut Self::Active);
 }
 
 /// Row-major strides for a grid with `counts` cells per variable.
