@@ -18,7 +18,8 @@
 //! - Q(s, ·) keeps all actions' running sums in registers ([`q_values`](Learner::q_values));
 //! - Q(0) touches only the current activation's parameters, with no trace bookkeeping;
 //! - applying the update and decaying the traces for the next step is one pass, not two;
-//! - a single active feature (every crisp step) extends, applies and decays in that same pass;
+//! - a single active feature (every crisp step) extends, applies and decays in that same pass, and
+//!   crisp steps hand the learner a [`OneHot`] row instead of a one-entry list ([`Features`]);
 //! - small tables where most traces are live anyway sweep the dense trace array (vectorisable)
 //!   instead of an active list; large ones keep the active list, so a step costs O(active traces).
 
@@ -281,11 +282,11 @@ impl Features for Activations {
         let (q, na, rule) = (&mut l.q[..], l.n_actions, l.rule);
         let (index, weight) = (&self.index[..], &self.weight[..]);
         match &mut l.traces {
-            Traces::None => update_q0(q, na, rule, index, weight, action, step),
-            Traces::Dense(e) => update_dense(q, e, na, rule, index, weight, action, step),
+            Traces::None => update_q0(q, na, rule, (index, weight), action, step),
+            Traces::Dense(e) => update_dense(q, e, na, rule, (index, weight), action, step),
             Traces::Sparse(t) => match (index, weight) {
                 ([i], [w]) => update_single(q, t, rule, *i as usize * na + action, *w, step),
-                _ => update_sparse(q, t, na, rule, index, weight, action, step),
+                _ => update_sparse(q, t, na, rule, (index, weight), action, step),
             },
         }
     }
@@ -314,7 +315,7 @@ impl Features for OneHot {
         let k = self.0 as usize * na + action;
         match &mut l.traces {
             Traces::None => q[k] += step * rule.extend(0.0, 1.0),
-            Traces::Dense(e) => update_dense(q, e, na, rule, &[self.0], &[1.0], action, step),
+            Traces::Dense(e) => update_dense(q, e, na, rule, (&[self.0], &[1.0]), action, step),
             Traces::Sparse(t) => update_single(q, t, rule, k, 1.0, step),
         }
     }
@@ -327,8 +328,7 @@ fn update_q0(
     q: &mut [f64],
     na: usize,
     rule: TraceRule,
-    index: &[u32],
-    weight: &[f64],
+    (index, weight): (&[u32], &[f64]),
     action: usize,
     step: f64,
 ) {
@@ -395,8 +395,7 @@ fn update_dense(
     trace: &mut [f64],
     na: usize,
     rule: TraceRule,
-    index: &[u32],
-    weight: &[f64],
+    (index, weight): (&[u32], &[f64]),
     action: usize,
     step: f64,
 ) {
@@ -438,8 +437,7 @@ fn update_sparse(
     t: &mut SparseTraces,
     na: usize,
     rule: TraceRule,
-    index: &[u32],
-    weight: &[f64],
+    (index, weight): (&[u32], &[f64]),
     action: usize,
     step: f64,
 ) {
@@ -685,6 +683,41 @@ mod tests {
 
     /// The shortcut after a Q(0) update equals a full evaluation, bit for bit, whatever was
     /// updated (the same state, an overlapping one, a disjoint one, one feature or many).
+    /// The crisp path: a one-hot row must compute exactly what the one-entry list of weight 1 computes,
+    /// under every trace layout a crisp table can get (none, sparse) and both trace kinds.
+    #[test]
+    fn one_hot_rows_match_one_entry_lists_bit_for_bit() {
+        for (lambda, replacing) in [(0.0, false), (0.9, false), (0.9, true), (0.5, true)] {
+            for na in [1, 2, 3, 10] {
+                let cfg = config(lambda, replacing, 1e-10);
+                let nf = 25;
+                let (mut list, mut hot) = (Learner::new(nf, na, 1, &cfg), Learner::new(nf, na, 1, &cfg));
+                let (mut ql, mut qh) = (vec![0.0; na], vec![0.0; na]);
+                for step in 0..600 {
+                    let f = ((step * 7919) % nf) as u32;
+                    let one = Activations { index: vec![f], weight: vec![1.0] };
+                    let a = (step * 3) % na;
+                    let delta = ((step as f64) * 0.37).sin() * 2.0;
+                    list.q_values(&one, &mut ql);
+                    hot.q_values(&OneHot(f), &mut qh);
+                    assert_eq!(bits(&ql), bits(&qh), "λ {lambda} na {na} step {step}");
+                    assert_eq!(one.q_value(&list, a).to_bits(), OneHot(f).q_value(&hot, a).to_bits());
+                    list.update(&one, a, delta);
+                    hot.update(&OneHot(f), a, delta);
+                    list.refresh_after_update(&one, a, &mut ql);
+                    hot.refresh_after_update(&OneHot(f), a, &mut qh);
+                    assert_eq!(bits(&ql), bits(&qh), "λ {lambda} na {na} step {step}");
+                    assert_eq!(bits(&list.q), bits(&hot.q), "λ {lambda} na {na} step {step}");
+                    assert_eq!(list.dense_traces(), hot.dense_traces(), "λ {lambda} na {na} step {step}");
+                    if step % 41 == 0 {
+                        list.clear_traces();
+                        hot.clear_traces();
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn q_values_after_a_q0_update_equal_a_full_evaluation() {
         for na in [1, 2, 3, 10, 17] {
