@@ -215,6 +215,23 @@ mod tests {
     }
 
     #[test]
+    fn the_one_hot_encoding_is_the_activation_list_of_weight_one() {
+        for binning in [Binning::Midpoint, Binning::Digitize] {
+            let c = Crisp::with_binning(&[4, 3], &[[-2.0, 2.0], [-1.0, 1.0]], binning);
+            let values = [f64::NAN, f64::NEG_INFINITY, -9.0, -2.0, -0.5, 0.0, 1e-12, 0.9, 2.0, 9.0];
+            let mut list = Activations::default();
+            let mut hot = OneHot::default();
+            for &x in &values {
+                for &v in &values {
+                    c.activate(&[x, v], &mut list);
+                    c.encode(&[x, v], &mut hot);
+                    assert_eq!((list.index.as_slice(), list.weight.as_slice()), (&[hot.0][..], &[1.0][..]));
+                }
+            }
+        }
+    }
+
+    #[test]
     fn fig4_cell_is_one_state_of_six() {
         // Fig. 4a: x ∈ [−1, 1] in 2 bins, ẋ ∈ [−1, 1] in 3 bins; x ∈ [0,1], ẋ ∈ [−1/3,1/3] is one cell.
         let c = Crisp::new(&[2, 3], &[[-1.0, 1.0], [-1.0, 1.0]]);
