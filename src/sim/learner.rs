@@ -314,7 +314,7 @@ impl Features for OneHot {
         let (q, na, rule) = (&mut l.q[..], l.n_actions, l.rule);
         let k = self.0 as usize * na + action;
         match &mut l.traces {
-            Traces::None => q[k] += step * rule.extend(0.0, 1.0),
+            Traces::None => update_q0(q, na, rule, (&[self.0], &[1.0]), action, step),
             Traces::Dense(e) => update_dense(q, e, na, rule, (&[self.0], &[1.0]), action, step),
             Traces::Sparse(t) => update_single(q, t, rule, k, 1.0, step),
         }
@@ -332,15 +332,8 @@ fn update_q0(
     action: usize,
     step: f64,
 ) {
-    // The trace rule is fixed per trial: one loop per rule instead of a branch per feature.
-    if rule.replacing {
-        for (&i, &w) in index.iter().zip(weight) {
-            q[i as usize * na + action] += step * 0.0f64.max(w);
-        }
-    } else {
-        for (&i, &w) in index.iter().zip(weight) {
-            q[i as usize * na + action] += step * (0.0 + w);
-        }
+    for (&i, &w) in index.iter().zip(weight) {
+        q[i as usize * na + action] += step * rule.extend(0.0, w);
     }
 }
 
@@ -681,8 +674,6 @@ mod tests {
         assert!(matches!(Learner::new(1296, 10, 625, &config(0.0, false, 1e-10)).traces, Traces::None));
     }
 
-    /// The shortcut after a Q(0) update equals a full evaluation, bit for bit, whatever was
-    /// updated (the same state, an overlapping one, a disjoint one, one feature or many).
     /// The crisp path: a one-hot row must compute exactly what the one-entry list of weight 1 computes,
     /// under every trace layout a crisp table can get (none, sparse) and both trace kinds.
     #[test]
@@ -718,6 +709,8 @@ mod tests {
         }
     }
 
+    /// The shortcut after a Q(0) update equals a full evaluation, bit for bit, whatever was
+    /// updated (the same state, an overlapping one, a disjoint one, one feature or many).
     #[test]
     fn q_values_after_a_q0_update_equal_a_full_evaluation() {
         for na in [1, 2, 3, 10, 17] {

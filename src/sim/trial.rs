@@ -5,7 +5,7 @@
 use super::actions::action_set;
 use super::config::{Success, TieBreak, TrialConfig, Truncation};
 use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, TaskKind};
-use super::learner::{Features, Learner};
+use super::learner::Learner;
 use super::repr::{Crisp, Encode, Fuzzy, ReprKind};
 use super::rng::TrialRng;
 use serde::{Deserialize, Serialize};
@@ -99,10 +99,7 @@ fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize,
     (a, true)
 }
 
-fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R) -> Outcome
-where
-    R::Active: Features,
-{
+fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R) -> Outcome {
     let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner);
     episodes(cfg, seed, env, repr, &mut learner)
 }
@@ -132,10 +129,7 @@ fn episodes<E: Environment, R: Encode>(
     mut env: E,
     repr: R,
     learner: &mut Learner,
-) -> Outcome
-where
-    R::Active: Features,
-{
+) -> Outcome {
     let l = &cfg.learner;
     let actions = action_set(cfg.env.action_max(), cfg.actions);
     let na = actions.len();

@@ -52,8 +52,6 @@ pub struct Crisp {
     scale: Vec<f64>,
     bins: Vec<u32>,
     strides: Vec<u32>,
-    /// `bins − 1` per variable: the top bin, precomputed for the per-step lookup.
-    top: Vec<u32>,
     n_features: usize,
     /// `digitize` only: the inner edges per variable, ascending (empty for `midpoint`).
     edges: Option<Vec<Vec<f64>>>,
@@ -77,8 +75,7 @@ impl Crisp {
                 Some(ranges.iter().zip(bins).map(|(r, &n)| linspace(r[0], r[1], n)[1..].to_vec()).collect())
             }
         };
-        let top = bins.iter().map(|&b| b - 1).collect();
-        Self { lo, scale, bins: bins.to_vec(), strides: strides(bins), top, n_features, edges }
+        Self { lo, scale, bins: bins.to_vec(), strides: strides(bins), n_features, edges }
     }
 
     /// The upper edges of bins 0..n−2 of one variable (bin k is `[edge k−1, edge k)`).
@@ -102,7 +99,7 @@ impl Crisp {
         // truncates, which is floor; and floor(t) ≥ 0 exactly when t ≥ 0. So this is bin =
         // floor(t) without a call to `floor` (a library call on baseline x86-64, which lacks SSE4.1).
         if t >= 0.0 {
-            (t as u32).min(self.top[var])
+            (t as u32).min(self.bins[var] - 1)
         } else {
             0
         }

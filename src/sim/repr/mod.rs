@@ -78,7 +78,7 @@ pub trait Representation {
 /// activations as [`Representation::activate`].
 pub trait Encode: Representation {
     /// The activation type the learner consumes.
-    type Active: Default;
+    type Active: Default + crate::sim::learner::Features;
     /// Write the activations of `state` into `out`.
     fn encode(&self, state: &[f64], out: &mut Self::Active);
 }
