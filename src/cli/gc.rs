@@ -28,11 +28,16 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     require_cache(&dir)?;
     let store = Store::open(&dir)?;
     let mut keep: Option<HashSet<_>> = None;
+    let mut scan = None;
     for p in &a.pipelines {
         let mut planned = plan(&load(p, &[])?, None)?;
         if planned.has_race() {
             // A race's later rounds are planned from the cache: keep every round it has run.
-            planned = crate::pipeline::raced(&planned, &store, &store.keys()?)?.plan;
+            if scan.is_none() {
+                scan = Some(store.keys()?);
+            }
+            let scan = scan.as_ref().expect("scanned just above");
+            planned = crate::pipeline::raced(&planned, &store, scan)?.plan;
         }
         keep.get_or_insert_with(HashSet::new).extend(planned.trials().map(|(_, _, t)| t.key));
     }

@@ -97,7 +97,6 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         rounds: plan.race_rounds_max(),
         workdir,
     };
-    let submission_rounds = submission.rounds;
     let script = submission.render()?;
     print!("{script}");
 
@@ -130,10 +129,11 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         unique.len(),
         a.array
     );
-    if submission_rounds > 1 {
+    if submission.rounds > 1 {
         eprintln!(
-            "race: up to {submission_rounds} rounds, one job array each, each after the one before (afterany); the counts above \
-             are the first round's (each later round is planned from the outcomes of the rounds before)"
+            "race: up to {} rounds, one job array each, each after the one before (afterany); the counts above \
+             are the first round's (each later round is planned from the outcomes of the rounds before)",
+            submission.rounds
         );
     }
     if a.array as usize > unique.len() {

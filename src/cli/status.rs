@@ -39,7 +39,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         _ if plan.has_race() => Some(crate::race::resolve(&plan, cached, &mut |_| Ok(Default::default()))?),
         _ => None,
     };
-    let plan = raced.as_ref().map_or(plan.clone(), |r| r.plan.clone());
+    let plan = raced.as_ref().map_or(&plan, |r| &r.plan);
     let race_rows: Vec<StatusRace> = raced
         .iter()
         .flat_map(|r| &r.heats)
@@ -140,7 +140,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             Some(store) => store.read_all()?,
             None => Vec::new(),
         };
-        explain(&plan, &records, cached);
+        explain(plan, &records, cached);
     }
     Ok(crate::error::exit::OK)
 }

@@ -72,13 +72,6 @@ pub struct Raced {
     pub heats: Vec<HeatRace>,
 }
 
-impl Raced {
-    /// Whether every race is over.
-    pub fn finished(&self) -> bool {
-        self.heats.iter().all(|h| h.finished)
-    }
-}
-
 impl Plan {
     /// Whether some experiment races.
     pub fn has_race(&self) -> bool {

@@ -208,12 +208,14 @@ pub(crate) fn hatch_patterns(svg: &str, colors: &[RGBColor]) -> String {
         ));
     }
     defs.push_str("</defs>\n");
+    let subs: Vec<(String, String)> = (0..colors.len())
+        .map(|k| (format!("fill=\"{}\"", hex(&hatch_marker(k))), format!("fill=\"url(#hatch{k})\"")))
+        .collect();
     let mut out = String::with_capacity(svg.len() + defs.len());
     for (i, line) in svg.lines().enumerate() {
         let mut l = line.to_string();
-        for k in 0..colors.len() {
-            l = l
-                .replace(&format!("fill=\"{}\"", hex(&hatch_marker(k))), &format!("fill=\"url(#hatch{k})\""));
+        for (from, to) in &subs {
+            l = l.replace(from, to);
         }
         out.push_str(&l);
         out.push('\n');

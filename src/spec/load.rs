@@ -90,8 +90,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
     }
     if overrides.is_empty() {
         if let Err(p) = super::check_whole(&spec) {
-            let path: Vec<&str> = p.path.iter().map(String::as_str).collect();
-            return Err(located(Failure::at(&path, &p.message)));
+            return Err(located(p.into()));
         }
         return Ok(spec);
     }
@@ -109,10 +108,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
     };
     let spec = typed(doc).map_err(with_sets)?;
-    super::check_whole(&spec).map_err(|p| {
-        let path: Vec<&str> = p.path.iter().map(String::as_str).collect();
-        with_sets(Failure::at(&path, &p.message))
-    })?;
+    super::check_whole(&spec).map_err(|p| with_sets(p.into()))?;
     Ok(spec)
 }
 
@@ -139,6 +135,13 @@ impl Failure {
             0 => improve(&self.msg),
             n => format!("{}: {}", self.path[..n].join("."), improve(&self.msg)),
         }
+    }
+}
+
+impl From<super::race::Problem> for Failure {
+    /// A whole-pipeline check's problem, at its field's path.
+    fn from(p: super::race::Problem) -> Self {
+        Self { shown: p.path.len(), path: p.path, msg: p.message, yaml_at: None }
     }
 }
 

@@ -109,8 +109,7 @@ pub fn search_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) ->
 
 /// The held-out rows of the chosen reading beside the as-written reading's.
 pub fn held_out_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) -> Option<Table> {
-    let chosen = chosen(plan, variants)?;
-    let chosen = variants.iter().find(|v| v.info.id == chosen.id)?;
+    let chosen = &variants[*order(plan, variants).first()?];
     let written = as_written(plan).and_then(|id| variants.iter().find(|v| v.info.id == id));
     let mut columns = vec![
         Column::new("System", "system", Align::Left),

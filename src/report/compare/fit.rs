@@ -139,11 +139,6 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
 }
 
 impl Fit {
-    /// Score a variant's report data.
-    pub fn of(data: &ReportData) -> Self {
-        Self::from_rows(&rows_of(data))
-    }
-
     /// Tally some scored rows (in report order). The order measure counts an experiment only when
     /// the rows hold every one of its algorithms.
     pub fn from_rows<'a>(rows: impl IntoIterator<Item = &'a RowFit>) -> Self {

@@ -164,9 +164,10 @@ pub fn write_comparison(
     }
     let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
     let mut figs = Vec::new();
+    let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     if let Some(base) = variants.first() {
         // A generated reading has its own folder and difference figures only when chosen.
-        for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
+        for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
             let diffs = if svg || png { all_diffs(base, v) } else { Vec::new() };
             for system in v.systems() {
                 let stem = format!("figures/diff-{}-{}", v.info.id, system.name());
@@ -197,8 +198,9 @@ pub fn write_comparison(
 /// variant of a pipeline without a grid; with a `variant_grid:`, only the chosen reading, so a
 /// grid of many readings does not write (or commit) a full report each; the rest are written on
 /// demand with `qsweep report PIPELINE --variant ID`.
-pub fn has_folder(plan: &Plan, variants: &[VariantDigest], id: &str) -> bool {
-    !plan.has_grid() || explore::chosen(plan, variants).is_some_and(|c| c.id == id)
+/// `chosen` is [`explore::chosen`]'s id, worked out once per page rather than once per variant.
+pub fn has_folder(plan: &Plan, chosen: Option<&str>, id: &str) -> bool {
+    !plan.has_grid() || chosen == Some(id)
 }
 
 /// The heading of the comparison pages: `qsweep variants: NAME`, labelled when exploratory.
@@ -220,6 +222,7 @@ fn page(
     figs: &[FigRef],
     formats: Formats,
 ) -> String {
+    let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     h.push_str(&format!("<title>{}</title>\n", esc(&heading(plan))));
@@ -231,7 +234,7 @@ fn page(
     h.push_str("<p>Each variant is the whole pipeline with some settings changed; each has its own full report:</p>\n<ul>\n");
     for v in variants {
         let title = v.info.title.as_deref().map(|t| format!(": {}", esc(t))).unwrap_or_default();
-        if has_folder(plan, variants, &v.info.id) {
+        if has_folder(plan, chosen, &v.info.id) {
             h.push_str(&format!(
                 "<li><a href=\"{0}/index.html\"><code>{0}</code></a>{title} ({1} of {2} planned trials present)</li>\n",
                 esc(&v.info.id),
@@ -258,7 +261,7 @@ fn page(
         h.push_str(&captioned(t));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
-        for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
+        for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
             h.push_str(&format!(
                 "<h2 id=\"diff-{0}\">{0} against {1}</h2>\n",
                 esc(&v.info.id),
@@ -303,6 +306,7 @@ fn readme(
     figs: &[FigRef],
     formats: Formats,
 ) -> String {
+    let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     let mut m = format!("# {}\n\n", heading(plan));
     if let Some(d) = plan.description.as_deref() {
         m.push_str(&format!("{}\n\n", d.trim()));
@@ -312,7 +316,7 @@ fn readme(
     );
     for v in variants {
         let title = v.info.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
-        if has_folder(plan, variants, &v.info.id) {
+        if has_folder(plan, chosen, &v.info.id) {
             m.push_str(&format!(
                 "- [`{0}`]({0}/README.md){title} ({1} of {2} planned trials present)\n",
                 v.info.id, v.trials_present, v.trials_planned
@@ -334,7 +338,7 @@ fn readme(
         m.push_str(&render(t, &Markdown));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
-        for v in variants[1..].iter().filter(|v| has_folder(plan, variants, &v.info.id)) {
+        for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
             m.push_str(&format!("\n## {} against {}\n\n", v.info.id, base.info.id));
             for (_, system, stem, _) in figs.iter().filter(|f| f.0.id == v.info.id) {
                 m.push_str(&format!(
@@ -413,7 +417,7 @@ systems:
         out
     }
 
-    /// The fit recomputed from the trials, independently of [`Fit::of`]: (rows, replicating,
+    /// The fit recomputed from the trials, independently of [`Fit::from_rows`]: (rows, replicating,
     /// within 2×, config matches, order matches, experiments ordered, geometric mean).
     fn by_hand(d: &ReportData) -> (usize, usize, usize, usize, usize, usize, f64) {
         let (mut rows, mut rep, mut w2, mut cfg, mut ord, mut ord_n, mut logs) = (0, 0, 0, 0, 0, 0, vec![]);
