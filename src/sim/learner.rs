@@ -57,10 +57,23 @@ pub struct Learner {
 struct TraceRule {
     decay: f64,
     cutoff: f64,
+    /// The least trace that stays live, for [`keeps`](Self::keeps): the cutoff, or the least
+    /// positive f64 when the cutoff is 0 (a trace is dropped below the cutoff and at exactly 0).
+    floor: f64,
     replacing: bool,
 }
 
 impl TraceRule {
+    fn of(cfg: &LearnerConfig) -> Self {
+        let cutoff = cfg.trace_cutoff;
+        Self {
+            decay: cfg.gamma * cfg.lambda,
+            cutoff,
+            floor: if cutoff > 0.0 { cutoff } else { f64::from_bits(1) },
+            replacing: cfg.traces == TraceKind::Replacing,
+        }
+    }
+
     /// `e · γλ`, dropped to exactly 0 below the cutoff. (The original test `e < cutoff || e == 0`
     /// is the same for traces, which are never negative or NaN: with cutoff 0, a zero stays 0.)
     #[inline(always)]
@@ -71,6 +84,15 @@ impl TraceRule {
         } else {
             e
         }
+    }
+
+    /// Whether a trace decayed to `x = e · γλ` stays live, i.e. `decayed(e) != 0`, in one
+    /// comparison: traces are never negative, so `x < cutoff || x == 0` is `x < floor` (and a NaN
+    /// stays live in both).
+    #[inline(always)]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // deliberately true for NaN, as the literal rule is
+    fn keeps(self, x: f64) -> bool {
+        !(x < self.floor)
     }
 
     /// The trace after adding activation `w` to a (decayed) trace `e`: eq. (20), or replacing.
@@ -99,34 +121,49 @@ enum Traces {
 /// and decayed in list order, which never matters: every trace and parameter update is per entry.
 #[derive(Debug, Clone)]
 struct SparseTraces {
-    /// Parameter index of each live trace (every non-zero trace, plus any entry extended by a zero
-    /// weight this step, exactly the entries a list-based update touches).
-    keys: Vec<u32>,
-    /// The trace of `keys[r]`.
-    values: Vec<f64>,
-    /// Per parameter: 1 + its position in `keys`, or 0 when it has no live trace.
+    /// (parameter index, trace) of every live trace: every non-zero trace, plus any entry extended
+    /// by a zero weight this step, exactly the entries a list-based update touches. One list of
+    /// pairs, not two lists, so the pass over it checks one bound.
+    live: Vec<(u32, f64)>,
+    /// Per parameter: 1 + its position in `live`, or 0 when it has no live trace.
     slot: Vec<u32>,
 }
 
 impl SparseTraces {
     fn new(n: usize) -> Self {
-        Self { keys: Vec::new(), values: Vec::new(), slot: vec![0; n] }
+        Self { live: Vec::new(), slot: vec![0; n] }
     }
 
     #[inline]
     fn clear(&mut self) {
-        for &k in &self.keys {
+        for &(k, _) in &self.live {
             self.slot[k as usize] = 0;
         }
-        self.keys.clear();
-        self.values.clear();
+        self.live.clear();
     }
 
-    #[inline]
-    fn push(&mut self, k: usize, e: f64) {
-        self.keys.push(k as u32);
-        self.values.push(e);
-        self.slot[k] = self.keys.len() as u32;
+    /// Apply `step · e` to every live trace's parameter and decay the trace for the next step,
+    /// dropping those that vanish. A vanishing trace is replaced by the last one (not yet visited),
+    /// so only moved traces rewrite their slot: most traces stay where they are, and rewriting
+    /// every slot was a random store per live trace per step.
+    #[inline(always)]
+    fn apply_and_decay(&mut self, q: &mut [f64], rule: TraceRule, step: f64) {
+        let Self { live, slot } = self;
+        let mut r = 0;
+        while let Some(&(k, e)) = live.get(r) {
+            q[k as usize] += step * e;
+            let next = e * rule.decay;
+            if rule.keeps(next) {
+                live[r].1 = next;
+                r += 1;
+            } else {
+                slot[k as usize] = 0;
+                live.swap_remove(r);
+                if let Some(&(moved, _)) = live.get(r) {
+                    slot[moved as usize] = r as u32 + 1;
+                }
+            }
+        }
     }
 }
 
@@ -139,11 +176,7 @@ impl Learner {
         if std::env::var_os("QSWEEP_DEBUG_LAYOUT").is_some() {
             eprintln!("layout nf={n_features} na={n_actions} max_active={max_active} n={n}");
         }
-        let rule = TraceRule {
-            decay: cfg.gamma * cfg.lambda,
-            cutoff: cfg.trace_cutoff,
-            replacing: cfg.traces == TraceKind::Replacing,
-        };
+        let rule = TraceRule::of(cfg);
         let traces = if rule.decay == 0.0 {
             Traces::None
         } else if max_active > 1 && n <= DENSE_MAX_PARAMS && n <= DENSE_TRACE_RATIO * max_active {
@@ -219,7 +252,7 @@ impl Learner {
         match &self.traces {
             Traces::None => 0,
             Traces::Dense(e) => e.iter().filter(|&&e| e != 0.0).count(),
-            Traces::Sparse(t) => t.values.iter().filter(|&&e| e != 0.0).count(),
+            Traces::Sparse(t) => t.live.iter().filter(|&&(_, e)| e != 0.0).count(),
         }
     }
 
@@ -231,7 +264,7 @@ impl Learner {
             Traces::Dense(e) => e.clone(),
             Traces::Sparse(t) => {
                 let mut e = vec![0.0; self.q.len()];
-                for (&k, &v) in t.keys.iter().zip(&t.values) {
+                for &(k, v) in &t.live {
                     e[k as usize] = v;
                 }
                 e
@@ -337,46 +370,18 @@ fn update_q0(
     }
 }
 
-/// One active feature (crisp tables), sparse traces: extend, apply and decay in a single pass over
-/// the live traces. A trace that vanishes is replaced by the last one (not yet visited), as in
-/// [`update_sparse`].
+/// One active feature (crisp tables), sparse traces: extend the target's trace (found through the
+/// slot map, or a new entry), then apply and decay every live trace.
 #[inline(always)]
 fn update_single(q: &mut [f64], t: &mut SparseTraces, rule: TraceRule, target: usize, w: f64, step: f64) {
-    let SparseTraces { keys, values, slot } = t;
-    let mut found = false;
-    let mut len = keys.len();
-    let mut r = 0;
-    while r < len {
-        let (k, mut e) = (keys[r] as usize, values[r]);
-        if k == target {
-            e = rule.extend(e, w);
-            found = true;
+    match t.slot[target] as usize {
+        0 => {
+            t.live.push((target as u32, rule.extend(0.0, w)));
+            t.slot[target] = t.live.len() as u32;
         }
-        q[k] += step * e;
-        let next = rule.decayed(e);
-        if next != 0.0 {
-            values[r] = next;
-            r += 1;
-        } else {
-            slot[k] = 0;
-            len -= 1;
-            if r < len {
-                keys[r] = keys[len];
-                values[r] = values[len];
-                slot[keys[r] as usize] = r as u32 + 1;
-            }
-        }
+        p => t.live[p - 1].1 = rule.extend(t.live[p - 1].1, w),
     }
-    keys.truncate(len);
-    values.truncate(len);
-    if !found {
-        let e = rule.extend(0.0, w);
-        q[target] += step * e;
-        let next = rule.decayed(e);
-        if next != 0.0 {
-            t.push(target, next);
-        }
-    }
+    t.apply_and_decay(q, rule, step);
 }
 
 /// Several active features, small table: sweep every trace. Parameters without a live trace have
@@ -434,45 +439,21 @@ fn update_sparse(
     action: usize,
     step: f64,
 ) {
-    let SparseTraces { keys, values, slot } = t;
-    // Extend: a parameter without a live trace gets the next free position, whose value the
+    // Extend: a parameter without a live trace gets the next free position, whose trace the
     // resize set to 0, so extending it gives extend(0, w) exactly as for a new trace.
-    let live = keys.len();
-    keys.resize(live + index.len(), 0);
-    values.resize(live + index.len(), 0.0);
-    let mut len = live;
+    let SparseTraces { live, slot } = t;
+    let mut len = live.len();
+    live.resize(len + index.len(), (0, 0.0));
     for (&i, &w) in index.iter().zip(weight) {
         let k = i as usize * na + action;
         let p = slot[k] as usize;
         let dest = if p == 0 { len } else { p - 1 };
-        keys[dest] = k as u32;
-        values[dest] = rule.extend(values[dest], w);
+        live[dest] = (k as u32, rule.extend(live[dest].1, w));
         slot[k] = dest as u32 + 1;
         len += usize::from(p == 0);
     }
-    // Apply and decay; a trace that vanishes is replaced by the last one (not yet visited), so
-    // only moved traces rewrite their slot: most traces stay where they are, and rewriting every
-    // slot was a random store per live trace per step.
-    let mut r = 0;
-    while r < len {
-        let (k, e) = (keys[r] as usize, values[r]);
-        q[k] += step * e;
-        let next = rule.decayed(e);
-        if next != 0.0 {
-            values[r] = next;
-            r += 1;
-        } else {
-            slot[k] = 0;
-            len -= 1;
-            if r < len {
-                keys[r] = keys[len];
-                values[r] = values[len];
-                slot[keys[r] as usize] = r as u32 + 1;
-            }
-        }
-    }
-    keys.truncate(len);
-    values.truncate(len);
+    live.truncate(len);
+    t.apply_and_decay(q, rule, step);
 }
 
 /// Q(s, ·) with `N` actions: all `N` running sums stay in registers across the activation.
@@ -647,6 +628,35 @@ mod tests {
                     dense.clear_traces();
                     sparse.clear_traces();
                     oracle.clear_traces();
+                }
+            }
+        }
+    }
+
+    /// The sparse passes drop a trace when `keeps(e · γλ)` is false; that must be exactly when the
+    /// literal rule decays it to 0, at the cutoff, at underflow (cutoff 0) and for odd values.
+    #[test]
+    fn keeps_is_the_literal_decay_is_non_zero() {
+        let tiny = f64::from_bits(1);
+        for cutoff in [0.0, 1e-10, 1e-3, 0.5, tiny, 2.0 * tiny] {
+            for decay in [0.95 * 0.6, 0.5, 1e-300, 1.0] {
+                let mut cfg = config(decay, false, cutoff);
+                cfg.gamma = 1.0;
+                let rule = TraceRule::of(&cfg);
+                let mut values = vec![0.0, tiny, 2.0 * tiny, 3.0 * tiny, f64::MIN_POSITIVE, 1e-300, 1.0, 7.5];
+                values.extend([f64::INFINITY, f64::NAN, f64::MAX]);
+                for c in [cutoff, cutoff / decay] {
+                    let c = if c.is_finite() { c } else { 1.0 };
+                    let (up, down) =
+                        (f64::from_bits(c.to_bits() + 1), f64::from_bits(c.to_bits().max(1) - 1));
+                    values.extend([c, up, down, c * 0.999, c * 1.001]);
+                }
+                for e in values {
+                    assert_eq!(
+                        rule.keeps(e * rule.decay),
+                        rule.decayed(e) != 0.0,
+                        "e {e:e} cutoff {cutoff:e} decay {decay}"
+                    );
                 }
             }
         }
