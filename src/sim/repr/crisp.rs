@@ -48,13 +48,45 @@ impl Binning {
 /// Crisp bins per state variable.
 #[derive(Debug, Clone)]
 pub struct Crisp {
-    lo: Vec<f64>,
-    scale: Vec<f64>,
-    bins: Vec<u32>,
-    strides: Vec<u32>,
+    /// One per state variable, together so that a step reads each variable's bin rule from one
+    /// place (no bounds check per field).
+    axes: Vec<Axis>,
+    binning: Binning,
     n_features: usize,
-    /// `digitize` only: the inner edges per variable, ascending (empty for `midpoint`).
-    edges: Option<Vec<Vec<f64>>>,
+}
+
+/// One state variable's bins.
+#[derive(Debug, Clone)]
+struct Axis {
+    lo: f64,
+    /// `n / (hi − lo)`: bins per unit.
+    scale: f64,
+    /// The top bin, `n − 1`.
+    top: u32,
+    /// Row-major stride of this variable's bin in the feature index.
+    stride: u32,
+    /// `digitize` only: the inner edges, ascending (empty for `midpoint`).
+    edges: Vec<f64>,
+}
+
+impl Axis {
+    #[inline(always)]
+    fn bin(&self, value: f64, binning: Binning) -> u32 {
+        if binning == Binning::Digitize {
+            // np.digitize(x, linspace)[right=False] − 1, clipped at 0: the number of inner edges
+            // ≤ x. A NaN compares false everywhere and lands in bin 0.
+            return self.edges.partition_point(|&e| e <= value) as u32;
+        }
+        let t = (value - self.lo) * self.scale;
+        // Negative, NaN and too-large values land in the edge bins. For t ≥ 0 the saturating cast
+        // truncates, which is floor; and floor(t) ≥ 0 exactly when t ≥ 0. So this is bin =
+        // floor(t) without a call to `floor` (a library call on baseline x86-64, which lacks SSE4.1).
+        if t >= 0.0 {
+            (t as u32).min(self.top)
+        } else {
+            0
+        }
+    }
 }
 
 impl Crisp {
@@ -66,51 +98,46 @@ impl Crisp {
     /// Bins per variable over the given `[lo, hi]` ranges (lo < hi, bins ≥ 1), placed by `binning`.
     pub fn with_binning(bins: &[u32], ranges: &[[f64; 2]], binning: Binning) -> Self {
         assert_eq!(bins.len(), ranges.len());
-        let lo = ranges.iter().map(|r| r[0]).collect();
-        let scale = ranges.iter().zip(bins).map(|(r, &n)| f64::from(n) / (r[1] - r[0])).collect();
+        let axes = ranges
+            .iter()
+            .zip(bins)
+            .zip(strides(bins))
+            .map(|((r, &n), stride)| Axis {
+                lo: r[0],
+                scale: f64::from(n) / (r[1] - r[0]),
+                top: n - 1,
+                stride,
+                edges: match binning {
+                    Binning::Midpoint => Vec::new(),
+                    Binning::Digitize => linspace(r[0], r[1], n)[1..].to_vec(),
+                },
+            })
+            .collect();
         let n_features = bins.iter().map(|&b| b as usize).product();
-        let edges = match binning {
-            Binning::Midpoint => None,
-            Binning::Digitize => {
-                Some(ranges.iter().zip(bins).map(|(r, &n)| linspace(r[0], r[1], n)[1..].to_vec()).collect())
-            }
-        };
-        Self { lo, scale, bins: bins.to_vec(), strides: strides(bins), n_features, edges }
+        Self { axes, binning, n_features }
     }
 
     /// The upper edges of bins 0..n−2 of one variable (bin k is `[edge k−1, edge k)`).
     pub fn edges(&self, var: usize) -> Vec<f64> {
-        match &self.edges {
-            Some(e) => e[var].clone(),
-            None => (1..self.bins[var]).map(|k| self.lo[var] + f64::from(k) / self.scale[var]).collect(),
+        let a = &self.axes[var];
+        match self.binning {
+            Binning::Digitize => a.edges.clone(),
+            Binning::Midpoint => (1..=a.top).map(|k| a.lo + f64::from(k) / a.scale).collect(),
         }
     }
 
     /// Bin of one variable's value.
     #[inline(always)]
     pub fn bin(&self, var: usize, value: f64) -> u32 {
-        if let Some(edges) = &self.edges {
-            // np.digitize(x, linspace)[right=False] − 1, clipped at 0: the number of inner edges
-            // ≤ x. A NaN compares false everywhere and lands in bin 0.
-            return edges[var].partition_point(|&e| e <= value) as u32;
-        }
-        let t = (value - self.lo[var]) * self.scale[var];
-        // Negative, NaN and too-large values land in the edge bins. For t ≥ 0 the saturating cast
-        // truncates, which is floor; and floor(t) ≥ 0 exactly when t ≥ 0. So this is bin =
-        // floor(t) without a call to `floor` (a library call on baseline x86-64, which lacks SSE4.1).
-        if t >= 0.0 {
-            (t as u32).min(self.bins[var] - 1)
-        } else {
-            0
-        }
+        self.axes[var].bin(value, self.binning)
     }
 
     /// The one feature (table row) `state` activates.
     #[inline(always)]
     pub fn feature(&self, state: &[f64]) -> u32 {
         let mut index = 0;
-        for (j, &v) in state[..self.bins.len()].iter().enumerate() {
-            index += self.strides[j] * self.bin(j, v);
+        for (a, &v) in self.axes.iter().zip(state) {
+            index += a.stride * a.bin(v, self.binning);
         }
         index
     }
