@@ -5,7 +5,7 @@
 //! runs its rounds one after another (one round per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeyScan, Store};
-use crate::exec::shard::{key_owner, shard_keys, Shard};
+use crate::exec::shard::{assign, key_owner, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
 use crate::plan::Plan;
 use std::path::PathBuf;
@@ -40,16 +40,29 @@ pub struct Selection {
     pub force: bool,
 }
 
+/// The shard (1..=count) that owns each of `trials`, the distinct trials of `plan` or, for a race,
+/// of one of its rounds. A race's trials are owned by key alone ([`key_owner`]): its plan grows
+/// as rounds are decided, so a split of the whole plan would move trials between tasks started at
+/// different times. Any other plan is split cost-balanced over all its trials ([`assign`]), which
+/// does not depend on what the cache holds either.
+pub fn shard_owners(plan: &Plan, trials: &[Job], count: u32) -> Vec<u32> {
+    if plan.has_race() {
+        trials.iter().map(|t| key_owner(&t.key, count)).collect()
+    } else {
+        assign(trials, count)
+    }
+}
+
+/// `trials` (of `plan`, see [`shard_owners`]) that `shard` owns; all of them without a shard.
+fn in_shard<'p>(plan: &Plan, trials: Vec<Job<'p>>, shard: Option<Shard>) -> Vec<Job<'p>> {
+    let Some(shard) = shard else { return trials };
+    let owners = shard_owners(plan, &trials, shard.count);
+    trials.into_iter().zip(owners).filter(|&(_, s)| s == shard.index).map(|(t, _)| t).collect()
+}
+
 /// The plan's distinct trials that `sel` keeps (its shard), and of those the ones to run.
 pub fn select<'p>(plan: &'p Plan, scan: &KeyScan, sel: Selection) -> (Vec<Job<'p>>, Vec<Job<'p>>) {
-    let unique = plan.unique_trials();
-    let unique = match sel.shard {
-        Some(shard) => {
-            let mine = shard_keys(&unique, shard);
-            unique.into_iter().filter(|t| mine.contains(&t.key)).collect()
-        }
-        None => unique,
-    };
+    let unique = in_shard(plan, plan.unique_trials(), sel.shard);
     let jobs = unique.iter().filter(|t| sel.force || !scan.keys.contains(&t.key)).copied().collect();
     (unique, jobs)
 }
@@ -98,14 +111,9 @@ pub fn run(
     let mut forced: std::collections::HashSet<crate::cache::Key> = std::collections::HashSet::new();
     loop {
         let raced = raced(plan, store, scan)?;
-        // Shards of a race own their trials by key (exec::shard::key_owner): the plan grows as
-        // rounds are decided, so a split of the whole plan would move trials between tasks.
-        let (unique, jobs) = select(&raced.plan, scan, Selection { force: false, shard: None });
-        let mine = |t: &Job| sel.shard.is_none_or(|s| key_owner(&t.key, s.count) == s.index);
-        let (unique, jobs): (Vec<Job>, Vec<Job>) = (
-            unique.into_iter().filter(|t| mine(t)).collect(),
-            jobs.into_iter().filter(|t| mine(t)).collect(),
-        );
+        // This round's trials, of this task's shard (owned by key: see shard_owners).
+        let unique = in_shard(plan, raced.plan.unique_trials(), sel.shard);
+        let jobs: Vec<Job> = unique.iter().filter(|t| !scan.keys.contains(&t.key)).copied().collect();
         let jobs: Vec<Job> =
             if sel.force { unique.iter().filter(|t| forced.insert(t.key)).copied().collect() } else { jobs };
         if jobs.is_empty() {

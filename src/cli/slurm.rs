@@ -2,7 +2,6 @@
 //! a report job that waits for it.
 
 use super::pipeline_args::PipelineArgs;
-use crate::exec::shard::assign;
 use crate::slurm::{memory, plain_text, sbatch_option, time_limit, Submission};
 use clap::Args;
 use std::collections::HashSet;
@@ -104,12 +103,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     let cache_dir = a.pipeline.cache_dir();
     let cached: HashSet<_> =
         if cache_dir.is_dir() { a.pipeline.store()?.keys()?.keys } else { HashSet::new() };
-    // A race's shards own trials by key (the plan grows round by round); others are cost-balanced.
-    let owner: Vec<u32> = if plan.has_race() {
-        unique.iter().map(|t| crate::exec::shard::key_owner(&t.key, a.array)).collect()
-    } else {
-        assign(&unique, a.array)
-    };
+    let owner = crate::pipeline::shard_owners(&plan, &unique, a.array);
     let mut per_shard = vec![(0usize, 0usize); a.array as usize];
     for (t, s) in unique.iter().zip(owner) {
         let entry = &mut per_shard[s as usize - 1];

@@ -8,7 +8,7 @@
 use super::{estimated_cost, Job};
 use crate::cache::Key;
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashSet};
+use std::collections::BinaryHeap;
 
 /// Shard `I` of `N` (1-based, as `sbatch --array=1-N` numbers tasks).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -31,12 +31,6 @@ impl std::str::FromStr for Shard {
         }
         Ok(Self { index, count })
     }
-}
-
-/// The keys of the trials that belong to `shard`, out of every distinct trial of a plan.
-pub fn shard_keys(trials: &[Job], shard: Shard) -> HashSet<Key> {
-    let owner = assign(trials, shard.count);
-    trials.iter().zip(owner).filter(|&(_, s)| s == shard.index).map(|(t, _)| t.key).collect()
 }
 
 /// The shard (1..=count) that owns a trial by its key alone: a fixed owner whatever else the
@@ -70,6 +64,7 @@ mod tests {
     use crate::sim::env::SystemKind;
     use crate::sim::repr::ReprKind;
     use crate::sim::{Algorithm, TrialConfig};
+    use std::collections::HashSet;
 
     #[test]
     fn shards_are_disjoint_cover_everything_and_balance_cost() {
@@ -90,7 +85,10 @@ mod tests {
             .flat_map(|c| (0..5).map(move |seed| Job { config: c, seed, key: Key::of(c, seed) }))
             .collect();
         let n = 4;
-        let parts: Vec<_> = (1..=n).map(|i| shard_keys(&trials, Shard { index: i, count: n })).collect();
+        let shard_keys = |i: u32| -> HashSet<Key> {
+            trials.iter().zip(assign(&trials, n)).filter(|&(_, s)| s == i).map(|(t, _)| t.key).collect()
+        };
+        let parts: Vec<_> = (1..=n).map(shard_keys).collect();
         let total: usize = parts.iter().map(HashSet::len).sum();
         assert_eq!(total, trials.len());
         let union: HashSet<_> = parts.iter().flatten().copied().collect();
@@ -101,7 +99,7 @@ mod tests {
         let costs: Vec<f64> = parts.iter().map(cost).collect();
         let (lo, hi) = costs.iter().fold((f64::MAX, 0.0f64), |(l, h), &c| (l.min(c), h.max(c)));
         assert!(hi <= lo * 1.5, "unbalanced: {costs:?}");
-        assert_eq!(parts[1], shard_keys(&trials, Shard { index: 2, count: n }), "deterministic");
+        assert_eq!(parts[1], shard_keys(2), "deterministic");
     }
 
     #[test]
