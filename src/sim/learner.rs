@@ -64,6 +64,7 @@ struct TraceRule {
 }
 
 impl TraceRule {
+    /// The rule of a learner configuration (γλ, the cutoff, the trace kind).
     fn of(cfg: &LearnerConfig) -> Self {
         let cutoff = cfg.trace_cutoff;
         Self {
