@@ -113,9 +113,11 @@ pub fn run(
         let raced = raced(plan, store, scan)?;
         // This round's trials, of this task's shard (owned by key: see shard_owners).
         let unique = in_shard(plan, raced.plan.unique_trials(), sel.shard);
-        let jobs: Vec<Job> = unique.iter().filter(|t| !scan.keys.contains(&t.key)).copied().collect();
-        let jobs: Vec<Job> =
-            if sel.force { unique.iter().filter(|t| forced.insert(t.key)).copied().collect() } else { jobs };
+        let jobs: Vec<Job> = if sel.force {
+            unique.iter().filter(|t| forced.insert(t.key)).copied().collect()
+        } else {
+            unique.iter().filter(|t| !scan.keys.contains(&t.key)).copied().collect()
+        };
         if jobs.is_empty() {
             return Ok(RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total });
         }
