@@ -1,28 +1,35 @@
-//! Checks of the production trial loop against a literal, dense implementation of the paper's
+//! Checks of the production learner against a literal, dense implementation of the paper's
 //! equations: Q(s,a) = Σ wᵢ qᵢᵃ (18), δ (4)/(14), traces e ← γλe (+w for the taken action) (7)/(20),
-//! q ← q + αδe (6)/(21), and eq. (5)/(19) for Q(0). Same random stream, same tie-breaking.
+//! q ← q + αδe (6)/(21), and eq. (5)/(19) for Q(0). The literal loop drives a trajectory (its own
+//! ε-greedy choices from the trial's random stream); at every step the production learner, fed the
+//! same activations and actions and its own TD errors, must hold the same Q table up to rounding.
+//! (Whole trials cannot be compared bit for bit any more: the engine's scaled traces and split sums
+//! round differently, and a chaotic system amplifies a last-bit difference into another trajectory.)
 
 use super::actions::action_set;
 use super::config::{Algorithm, Success, TieBreak, TrialConfig};
 use super::env::{BallBeam, CartPole, EnvParams, Environment, SystemKind};
+use super::learner::Learner;
 use super::repr::{Activations, Crisp, Fuzzy, ReprKind, Representation};
 use super::rng::TrialRng;
 use super::run_trial;
 
-/// Episode lengths and whether the goal was reached, by the literal dense algorithm.
-fn dense_reference(cfg: &TrialConfig, seed: u64) -> (Vec<u32>, bool) {
-    fn go<E: Environment>(
-        cfg: &TrialConfig,
-        seed: u64,
-        mut env: E,
-        repr: &dyn Representation,
-    ) -> (Vec<u32>, bool) {
+/// Equal up to rounding accumulated over a trial: within 10⁻⁹ relative (absolute below 1).
+fn close(ours: f64, literal: f64) -> bool {
+    (ours - literal).abs() <= 1e-9 * literal.abs().max(1.0)
+}
+
+/// Run the literal dense algorithm for `cfg` and `seed`, checking the production learner against
+/// it at every step; returns the steps checked.
+fn check_against_dense_equations(cfg: &TrialConfig, seed: u64) -> u64 {
+    fn go<E: Environment>(cfg: &TrialConfig, seed: u64, mut env: E, repr: &dyn Representation) -> u64 {
         let l = &cfg.learner;
         let acts = action_set(cfg.env.action_max(), cfg.actions);
         let na = acts.len();
         let nf = repr.n_features();
         let mut q = vec![vec![l.q_init; na]; nf];
         let mut e = vec![vec![0.0f64; na]; nf];
+        let mut ours = Learner::new(nf, na, repr.max_active(), l);
         let mut rng = TrialRng::new(seed);
         let qv = |q: &Vec<Vec<f64>>, phi: &Activations| -> Vec<f64> {
             let mut out = vec![0.0; na];
@@ -33,15 +40,21 @@ fn dense_reference(cfg: &TrialConfig, seed: u64) -> (Vec<u32>, bool) {
             }
             out
         };
-        let mut lengths = Vec::new();
+        let mut checked = 0;
         for _ in 0..cfg.limits.max_episodes {
             env.reset();
             e.iter_mut().for_each(|r| r.fill(0.0));
+            ours.clear_traces();
             let mut phi = Activations::default();
             repr.activate(env.state(), &mut phi);
             let mut len = 0u64;
             let failed = loop {
                 let qs = qv(&q, &phi);
+                let mut our_qs = vec![0.0; na];
+                ours.q_values(&phi, &mut our_qs);
+                for (o, l) in our_qs.iter().zip(&qs) {
+                    assert!(close(*o, *l), "step {checked}: Q(s, ·) {our_qs:?} vs {qs:?}");
+                }
                 let best = qs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
                 let ties: Vec<usize> = (0..na).filter(|&a| qs[a] == best).collect();
                 let a = if rng.unit() < l.epsilon {
@@ -54,13 +67,17 @@ fn dense_reference(cfg: &TrialConfig, seed: u64) -> (Vec<u32>, bool) {
                 let t = env.step(acts[a]);
                 len += 1;
                 let mut phi2 = Activations::default();
-                let target = if t.terminal {
-                    t.reward
+                let (target, our_target) = if t.terminal {
+                    (t.reward, t.reward)
                 } else {
                     repr.activate(env.state(), &mut phi2);
-                    t.reward + l.gamma * qv(&q, &phi2).iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                    let mut next = vec![0.0; na];
+                    ours.q_values(&phi2, &mut next);
+                    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    (t.reward + l.gamma * max(&qv(&q, &phi2)), t.reward + l.gamma * max(&next))
                 };
                 let delta = target - qs[a];
+                ours.update(&phi, a, our_target - our_qs[a]);
                 match l.algorithm {
                     Algorithm::Q0 => {
                         // Eq. (5)/(19): only the taken action's active parameters move.
@@ -86,17 +103,21 @@ fn dense_reference(cfg: &TrialConfig, seed: u64) -> (Vec<u32>, bool) {
                         }
                     }
                 }
+                for (k, v) in ours.params().iter().enumerate() {
+                    let literal = q[k / na][k % na];
+                    assert!(close(*v, literal), "step {checked}: q[{k}] {v:e} vs {literal:e}");
+                }
+                checked += 1;
                 if t.terminal || len >= cfg.limits.episode_cap() {
                     break t.terminal;
                 }
                 phi = phi2;
             };
-            lengths.push(len as u32);
             if !failed {
-                return (lengths, true);
+                break;
             }
         }
-        (lengths, false)
+        checked
     }
     let r = &cfg.repr;
     let repr: Box<dyn Representation> = match r.kind {
@@ -120,19 +141,13 @@ fn small(system: SystemKind, repr: ReprKind, algorithm: Algorithm, res: u32, act
 }
 
 #[test]
-fn crisp_learner_matches_the_dense_equations_bit_for_bit() {
+fn crisp_learner_matches_the_dense_equations() {
     for system in [SystemKind::BallBeam, SystemKind::CartPole] {
         for algorithm in [Algorithm::Q0, Algorithm::QLambda] {
             for (res, actions) in [(2, 2), (3, 3), (5, 4)] {
                 let c = small(system, ReprKind::Crisp, algorithm, res, actions);
                 for seed in 0..3 {
-                    let ours = run_trial(&c, seed);
-                    let (lengths, converged) = dense_reference(&c, seed);
-                    assert_eq!(
-                        ours.episode_lengths, lengths,
-                        "{system} {algorithm:?} {res} {actions} seed {seed}"
-                    );
-                    assert_eq!(ours.converged, converged);
+                    assert!(check_against_dense_equations(&c, seed) > 100, "{system} {algorithm:?} {res}");
                 }
             }
         }
@@ -141,16 +156,14 @@ fn crisp_learner_matches_the_dense_equations_bit_for_bit() {
 
 #[test]
 fn fuzzy_learner_matches_the_dense_equations() {
-    // With weights < 1 the dense sum visits zero-trace entries too; q + 0 = q, so bits still agree.
     for system in [SystemKind::BallBeam, SystemKind::CartPole] {
         for algorithm in [Algorithm::Q0, Algorithm::QLambda] {
-            let mut c = small(system, ReprKind::Fuzzy, algorithm, 3, 2);
-            c.repr.prune = 0.0;
-            for seed in 0..2 {
-                let ours = run_trial(&c, seed);
-                let (lengths, converged) = dense_reference(&c, seed);
-                assert_eq!(ours.episode_lengths, lengths, "{system} {algorithm:?} seed {seed}");
-                assert_eq!(ours.converged, converged);
+            for (res, actions, prune) in [(3, 2, 0.0), (4, 3, 1e-3)] {
+                let mut c = small(system, ReprKind::Fuzzy, algorithm, res, actions);
+                c.repr.prune = prune;
+                for seed in 0..2 {
+                    assert!(check_against_dense_equations(&c, seed) > 100, "{system} {algorithm:?} {res}");
+                }
             }
         }
     }

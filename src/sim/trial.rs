@@ -192,9 +192,9 @@ fn episodes<E: Environment, R: Encode>(
                 break t.terminal;
             }
             std::mem::swap(&mut phi, &mut phi_next);
-            // qs_next is Q(s_{t+1}, ·) from before the update: under Q(0) only action a moved.
+            // qs_next is Q(s_{t+1}, ·) from before the update; phi_next is now φ(s_t).
             std::mem::swap(&mut qs, &mut qs_next);
-            learner.refresh_after_update(&phi, a, &mut qs);
+            learner.refresh_after_update(&phi, &phi_next, a, &mut qs);
         };
         lengths.push(len as u32);
         total_steps += len;

@@ -16,10 +16,11 @@ fn ball_beam_matches_equation_1_computed_by_hand() {
     let rows: Vec<Vec<&str>> = out.lines().map(|l| l.split(',').collect()).collect();
     assert_eq!(rows[0], ["step", "action", "x", "x_dot", "reward", "terminal"]);
     assert_eq!(rows[1], ["0", "", "0.1", "0.5", "0", "0"]);
-    // x1 = x0 + τ ẋ0; ẋ1 = ẋ0 + τ g sin(φ1).
+    // x1 = x0 + τ ẋ0; ẋ1 = ẋ0 + τ g sin(φ1), with the engine's own sin (the same on every CPU).
     let (tau, g) = (0.02, 9.81);
-    let (x1, v1) = (0.1 + tau * 0.5, 0.5 + tau * g * 0.5f64.sin());
-    let (x2, v2) = (x1 + tau * v1, v1 + tau * g * (-0.25f64).sin());
+    let sin = qsweep::sim::math::sin;
+    let (x1, v1) = (0.1 + tau * 0.5, 0.5 + tau * g * sin(0.5));
+    let (x2, v2) = (x1 + tau * v1, v1 + tau * g * sin(-0.25));
     for (row, (x, v)) in rows[2..].iter().zip([(x1, v1), (x2, v2)]) {
         assert_eq!(row[2].parse::<f64>().unwrap(), x);
         assert_eq!(row[3].parse::<f64>().unwrap(), v);

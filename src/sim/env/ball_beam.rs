@@ -72,7 +72,7 @@ impl Environment for BallBeam {
         let [x, x_dot, ..] = self.state;
         // Eq. (1): position advances with the previous velocity (explicit Euler).
         let x = x + self.p.tau * x_dot;
-        let x_dot = x_dot + self.p.tau * self.p.gravity * angle.sin();
+        let x_dot = x_dot + self.p.tau * self.p.gravity * crate::sim::math::sin(angle);
         self.state[0] = x;
         self.state[1] = x_dot;
         let failed = x.abs() > self.half_length;

@@ -2,6 +2,7 @@
 //! CartPole-v1 step, with the paper's g = 9.81). Reward eq. (24): 0, or −1 on failure.
 
 use super::{scalar_params, Environment, State, TaskKind, Transition};
+use crate::sim::math;
 use crate::sim::rng::TrialRng;
 use serde::{Deserialize, Serialize};
 
@@ -115,7 +116,7 @@ impl Environment for CartPole {
     #[inline]
     fn step(&mut self, force: f64) -> Transition {
         let [x, x_dot, theta, theta_dot] = self.state;
-        let (sin, cos) = (theta.sin(), theta.cos());
+        let (sin, cos) = math::sin_cos(theta);
         // Same operation order as Gymnasium's CartPole-v1, so trajectories agree to the last bit.
         let temp = (force + self.pole_mass_length * theta_dot * theta_dot * sin) / self.total_mass;
         let theta_acc = (self.p.gravity * sin - cos * temp)

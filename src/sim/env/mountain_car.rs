@@ -3,6 +3,7 @@
 //! the left wall. Reward eq. (25): 1 (terminal) at the goal x ≥ goal, −1 otherwise.
 
 use super::{scalar_params, Environment, State, TaskKind, Transition};
+use crate::sim::math;
 use crate::sim::rng::TrialRng;
 use serde::{Deserialize, Serialize};
 
@@ -89,7 +90,7 @@ impl Environment for MountainCar {
     fn step(&mut self, action: f64) -> Transition {
         let [x, v, ..] = self.state;
         // Operation order as in MountainCar-v0 (velocity first, then position from the new velocity).
-        let mut v = v + action * self.p.force + (3.0 * x).cos() * (-self.p.gravity);
+        let mut v = v + action * self.p.force + math::cos(3.0 * x) * (-self.p.gravity);
         v = v.clamp(-self.p.v_max, self.p.v_max);
         let mut x = x + v;
         x = x.clamp(self.p.x_min, self.p.x_max);

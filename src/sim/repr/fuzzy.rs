@@ -9,6 +9,7 @@
 //! the crisp edge bin), and sets whose membership is below `prune` are skipped (`prune = 0` is exact).
 
 use super::{strides, Activations, Encode, Representation};
+use crate::sim::math;
 
 /// Most fuzzy sets a single variable may have.
 pub const MAX_SETS: usize = 64;
@@ -28,10 +29,13 @@ struct Variable {
     lo: f64,
     hi: f64,
     n: usize,
-    spacing: f64,
+    /// 1 / spacing (the window position is a product, not a division).
+    inv_spacing: f64,
     inv_two_sigma_sq: f64,
     /// Half-width of the window of sets that can exceed `prune`, in units of `spacing`.
     reach: f64,
+    /// Every set's centre, `lo + k·spacing` (the midpoint for a single set).
+    centres: Vec<f64>,
 }
 
 impl Variable {
@@ -43,6 +47,15 @@ impl Variable {
         } else {
             self.n
         }
+    }
+
+    /// The set nearest to window position `pos` (≥ 0 or NaN): ⌊pos + ½⌋ with halves rounded up,
+    /// as `pos.round()` rounds them (exact for pos < 2⁵², without a library call).
+    #[inline(always)]
+    fn nearest(&self, pos: f64) -> usize {
+        let t = pos as usize;
+        let up = pos - t as f64 >= 0.5;
+        (t + usize::from(up)).min(self.n - 1)
     }
 }
 
@@ -72,17 +85,23 @@ impl Fuzzy {
                 let sigma = width * spacing;
                 let reach = if prune > 0.0 {
                     // exp(−d²/2σ²) ≥ prune  ⇔  d ≤ σ·sqrt(2 ln(1/prune)).
-                    width * (2.0 * (1.0 / prune).ln()).sqrt()
+                    width * (2.0 * math::ln(1.0 / prune)).sqrt()
                 } else {
                     f64::INFINITY
+                };
+                let centres = if n == 1 {
+                    vec![(r[0] + r[1]) / 2.0]
+                } else {
+                    (0..n).map(|k| r[0] + k as f64 * spacing).collect()
                 };
                 Variable {
                     lo: r[0],
                     hi: r[1],
                     n,
-                    spacing,
+                    inv_spacing: 1.0 / spacing,
                     inv_two_sigma_sq: 1.0 / (2.0 * sigma * sigma),
                     reach,
+                    centres,
                 }
             })
             .collect();
@@ -93,57 +112,47 @@ impl Fuzzy {
 
     /// Centre of set `k` of variable `j`.
     pub fn centre(&self, j: usize, k: usize) -> f64 {
-        let v = &self.vars[j];
-        if v.n == 1 {
-            (v.lo + v.hi) / 2.0
-        } else {
-            v.lo + k as f64 * v.spacing
-        }
+        self.vars[j].centres[k]
     }
 
-    /// Normalised memberships of variable `j` at `value`: writes `(set, μ)` pairs, returns their
-    /// count (at most the variable's `max_window`, which `sets` and `mu` must hold).
+    /// Normalised memberships of variable `j` at `value`: writes the window's memberships into
+    /// `mu` and returns (its first set, its length), the length at most the variable's
+    /// `max_window`, which `mu` must hold.
     #[inline(always)]
-    fn memberships(&self, j: usize, value: f64, sets: &mut [u32], mu: &mut [f64]) -> usize {
+    fn memberships(&self, j: usize, value: f64, mu: &mut [f64]) -> (usize, usize) {
         let v = &self.vars[j];
         if v.n == 1 {
-            sets[0] = 0;
             mu[0] = 1.0;
-            return 1;
+            return (0, 1);
         }
         let x = value.clamp(v.lo, v.hi);
-        let pos = (x - v.lo) / v.spacing;
+        let pos = (x - v.lo) * v.inv_spacing;
         let first = ceil_to_index(pos - v.reach);
         // A saturating cast is floor for every input here (negatives and NaN give 0 either way).
         let last = ((pos + v.reach) as usize).min(v.n - 1);
         let (first, last) = if first > last {
-            let nearest = (pos.round() as usize).min(v.n - 1);
+            let nearest = v.nearest(pos);
             (nearest, nearest)
         } else {
             (first, last)
         };
+        let m = last + 1 - first;
         let mut sum = 0.0;
-        let mut m = 0;
-        for k in first..=last {
-            let d = x - (v.lo + k as f64 * v.spacing); // `centre(j, k)`, inlined
-            let w = (-(d * d) * v.inv_two_sigma_sq).exp();
-            sets[m] = k as u32;
-            mu[m] = w;
-            sum += w;
-            m += 1;
+        for (w, &c) in mu[..m].iter_mut().zip(&v.centres[first..=last]) {
+            let d = x - c;
+            *w = math::exp(-(d * d) * v.inv_two_sigma_sq);
+            sum += *w;
         }
-        if sum <= 0.0 || sum.is_nan() {
+        if sum.is_nan() || sum <= 0.0 {
             // Every membership underflowed (a very narrow width): the nearest set takes it all.
-            let nearest = (pos.round() as usize).min(v.n - 1);
-            sets[0] = nearest as u32;
             mu[0] = 1.0;
-            return 1;
+            return (v.nearest(pos), 1);
         }
         let inv = 1.0 / sum;
         for w in &mut mu[..m] {
             *w *= inv;
         }
-        m
+        (first, m)
     }
 }
 
@@ -177,39 +186,49 @@ impl Encode for Fuzzy {
 impl Fuzzy {
     /// [`activate`](Representation::activate) with scratch room for `W` sets per variable. Every
     /// variable's memberships are computed first: they are independent, so their latency chains
-    /// (a division, the exponentials, the normalising division) overlap.
+    /// (the exponentials, the normalising division) overlap. The weights are the outer product,
+    /// with the last variable (stride 1) innermost so that a run of rules is a run of table rows.
     #[inline(always)]
     fn activate_with<const W: usize>(&self, state: &[f64], out: &mut Activations) {
-        // Missing variables (two-variable systems) are padded with one set of membership 1 at
-        // offset 0, which leaves every index and product unchanged (x · 1 = x exactly).
-        let mut offset = [[0u32; W]; MAX_VARS];
+        let nv = self.vars.len();
+        // Slots 4 − nv .. 4 hold the variables in order; the slots before them are padding of one
+        // set with membership 1 and stride 0 (x · 1 = x exactly).
+        let pad = MAX_VARS - nv;
         let mut mu = [[1.0f64; W]; MAX_VARS];
-        let mut count = [1usize; MAX_VARS];
-        for (j, &value) in state[..self.vars.len()].iter().enumerate() {
-            count[j] = self.memberships(j, value, &mut offset[j], &mut mu[j]);
-            for o in &mut offset[j][..count[j]] {
-                *o *= self.strides[j];
-            }
+        let mut len = [1usize; MAX_VARS];
+        let mut stride = [0u32; MAX_VARS];
+        let mut base = 0u32;
+        let f = &mut out.factors;
+        f.vars = nv;
+        f.mu.clear();
+        for (j, &value) in state[..nv].iter().enumerate() {
+            let slot = pad + j;
+            let (first, m) = self.memberships(j, value, &mut mu[slot]);
+            len[slot] = m;
+            stride[slot] = self.strides[j];
+            base += first as u32 * self.strides[j];
+            f.first[j] = first as u32;
+            f.len[j] = m as u32;
+            f.mu.extend_from_slice(&mu[slot][..m]);
         }
-        let total = count.iter().product();
+        let [m0, m1, m2, m3] = len;
+        let total = m0 * m1 * m2 * m3;
+        // Resizing from the last step's length writes only the difference.
         out.index.resize(total, 0);
         out.weight.resize(total, 0.0);
-        // Rule order and every product exactly as eq. (10) evaluated variable by variable (what an
-        // outer product built one variable at a time gives): variable 0 varies fastest, and a
-        // weight is ((1·μ₀)·μ₁)·μ₂)·μ₃, where 1·μ₀ = μ₀.
-        let [m0, m1, m2, m3] = count;
-        let (mu0, o0) = (&mu[0][..m0], &offset[0][..m0]);
-        let mut p = 0;
-        for (&mu3, &o3) in mu[3][..m3].iter().zip(&offset[3][..m3]) {
-            for (&mu2, &o2) in mu[2][..m2].iter().zip(&offset[2][..m2]) {
-                for (&mu1, &o1) in mu[1][..m1].iter().zip(&offset[1][..m1]) {
-                    let o123 = o1 + o2 + o3;
-                    let row = out.index[p..p + m0].iter_mut().zip(&mut out.weight[p..p + m0]);
-                    for ((i, w), (&m, &o)) in row.zip(mu0.iter().zip(o0)) {
-                        *i = o + o123;
-                        *w = ((m * mu1) * mu2) * mu3;
+        let (mu3, s3) = (&mu[3][..m3], stride[3]);
+        let mut rows = out.index.chunks_exact_mut(m3).zip(out.weight.chunks_exact_mut(m3));
+        for (k0, &p0) in mu[0][..m0].iter().enumerate() {
+            let o0 = base + k0 as u32 * stride[0];
+            for (k1, &p1) in mu[1][..m1].iter().enumerate() {
+                let (p01, o01) = (p0 * p1, o0 + k1 as u32 * stride[1]);
+                for (k2, &p2) in mu[2][..m2].iter().enumerate() {
+                    let (p012, o012) = (p01 * p2, o01 + k2 as u32 * stride[2]);
+                    let Some((ri, rw)) = rows.next() else { unreachable!("total rows") };
+                    for (k3, ((i, w), &m)) in ri.iter_mut().zip(rw.iter_mut()).zip(mu3).enumerate() {
+                        *i = o012 + k3 as u32 * s3;
+                        *w = p012 * m;
                     }
-                    p += m0;
                 }
             }
         }
@@ -250,7 +269,7 @@ mod tests {
                 let sigma = width * spacing;
                 let x = state[j].clamp(ranges[j][0], ranges[j][1]);
                 let c = f.centre(j, k);
-                prod *= (-(x - c).powi(2) / (2.0 * sigma * sigma)).exp();
+                prod *= libm::exp(-((x - c) * (x - c)) / (2.0 * sigma * sigma));
             }
             *w = prod;
         }
@@ -307,7 +326,7 @@ mod tests {
         f.activate(&[0.5], &mut a);
         assert!((a.weight[0] - 0.5).abs() < 1e-15 && (a.weight[1] - 0.5).abs() < 1e-15);
         let v = &f.vars[0];
-        let raw = (-(0.5f64 * 0.5) * v.inv_two_sigma_sq).exp();
+        let raw = math::exp(-(0.5f64 * 0.5) * v.inv_two_sigma_sq);
         assert!((raw - 0.5).abs() < 1e-12);
     }
 
@@ -334,6 +353,39 @@ mod tests {
                 most = most.max(a.len());
             }
             assert!(most <= f.max_active(), "{sets:?}: {most} > {}", f.max_active());
+        }
+    }
+
+    /// The factorised overlap (a product of per-variable dots) is the rule-by-rule sum
+    /// Σᵢ wᵢ(s)·wᵢ(s′), for neighbouring, distant and clamped states, pruned or not.
+    #[test]
+    fn overlap_factorises_over_variables() {
+        let ranges = [[-2.4, 2.4], [-2.0, 2.0], [-0.2, 0.2], [-3.0, 3.0]];
+        for (sets, prune) in [([4, 4, 4, 4], 1e-3), ([7, 3, 9, 2], 0.0), ([10, 10, 10, 10], 1e-3)] {
+            let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, prune);
+            let (mut a, mut b) = (Activations::default(), Activations::default());
+            for i in 0..60 {
+                let t = f64::from(i) * 0.37;
+                let s =
+                    [math::sin(t) * 2.0, math::cos(t), 0.15 * math::sin(3.0 * t), 2.5 * math::cos(0.7 * t)];
+                let s2 = [
+                    s[0] + 0.01 * f64::from(i % 7),
+                    s[1] - 0.3,
+                    s[2] * 0.9,
+                    if i % 5 == 0 { 9.0 } else { s[3] },
+                ];
+                f.activate(&s, &mut a);
+                f.activate(&s2, &mut b);
+                let mut by_rule = 0.0;
+                for (k, w) in a.index.iter().zip(&a.weight) {
+                    if let Some(p) = b.index.iter().position(|j| j == k) {
+                        by_rule += w * b.weight[p];
+                    }
+                }
+                let factored = a.overlap(&b);
+                assert!((factored - by_rule).abs() <= 1e-15, "{sets:?} {i}: {factored} vs {by_rule}");
+                assert!((a.overlap(&a) - a.weight.iter().map(|w| w * w).sum::<f64>()).abs() <= 1e-15);
+            }
         }
     }
 

@@ -37,6 +37,21 @@ pub struct Activations {
     pub index: Vec<u32>,
     /// Weights, parallel to `index`.
     pub weight: Vec<f64>,
+    /// For a fuzzy grid, the per-variable memberships whose outer product the weights are (none
+    /// for lists built otherwise): they make [`overlap`](Self::overlap) a product of short dots.
+    pub(crate) factors: Factors,
+}
+
+/// Per-variable windows of normalised memberships: variable j activates sets
+/// `first[j] .. first[j] + len[j]` with memberships `mu[offset_j ..][.. len[j]]`, the offsets
+/// being the running sum of `len`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Factors {
+    /// Variables (0: unknown).
+    pub(crate) vars: usize,
+    pub(crate) first: [u32; 4],
+    pub(crate) len: [u32; 4],
+    pub(crate) mu: Vec<f64>,
 }
 
 impl Activations {
@@ -45,6 +60,38 @@ impl Activations {
     pub fn clear(&mut self) {
         self.index.clear();
         self.weight.clear();
+        self.factors.vars = 0;
+        self.factors.mu.clear();
+    }
+
+    /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate: what one Q(0) update at `other`
+    /// adds, per unit step, to Q(self, a). For two fuzzy grid activations the sum factorises into
+    /// one short dot per variable, Πⱼ Σₖ μⱼₖ·μ′ⱼₖ; otherwise it is summed rule by rule.
+    pub fn overlap(&self, other: &Self) -> f64 {
+        let (a, b) = (&self.factors, &other.factors);
+        if a.vars > 0 && a.vars == b.vars {
+            let mut product = 1.0;
+            let (mut oa, mut ob) = (0, 0);
+            for j in 0..a.vars {
+                let (fa, fb) = (a.first[j] as usize, b.first[j] as usize);
+                let (ea, eb) = (fa + a.len[j] as usize, fb + b.len[j] as usize);
+                let mut dot = 0.0;
+                for k in fa.max(fb)..ea.min(eb) {
+                    dot += a.mu[oa + k - fa] * b.mu[ob + k - fb];
+                }
+                product *= dot;
+                oa += a.len[j] as usize;
+                ob += b.len[j] as usize;
+            }
+            return product;
+        }
+        let mut sum = 0.0;
+        for (i, w) in self.index.iter().zip(&self.weight) {
+            if let Some(p) = other.index.iter().position(|j| j == i) {
+                sum += w * other.weight[p];
+            }
+        }
+        sum
     }
 
     /// Number of active features.

@@ -1,0 +1,308 @@
+//! One learner for both representations: Q(s, a) = Σᵢ wᵢ qᵢᵃ over sparse activations (eq. 18), the
+//! TD error of eqs. (4)/(14), and the trace update of eqs. (7)/(20) followed by the parameter update
+//! of eqs. (6)/(21). A crisp table is the special case of one active feature of weight 1, and Q(0)
+//! is exactly λ = 0: the traces then hold only the current activation, so the update is eq. (5)/(19).
+//!
+//! Parameters are laid out rule-major (`q[feature · n_actions + action]`) so all actions of a rule
+//! are contiguous. Where the traces live is chosen per table ([`Learner::new`]; see [`traces`]);
+//! the layouts give bit-identical results.
+//!
+//! # Rounding (engine 2)
+//! Engine 1 summed Q(s, ·) strictly in activation order and re-summed Q(s′, a) after a Q(0)
+//! update. Engine 2 keeps the paper's arithmetic, per trace and per parameter, exactly as before,
+//! and changes only the order of two sums, so results agree with the literal equations up to
+//! rounding (every Q value within 10⁻⁹ relative of the literal dense algorithm along whole trials,
+//! `reference_tests`):
+//! - Q(s, ·) over an activation is summed in two (3–4 actions) or four (1–2 actions) interleaved
+//!   partial sums per action, so that the additions of a long fuzzy activation do not each wait on
+//!   the one before (with more actions the actions' own sums already overlap);
+//! - after a Q(0) update of s, Q(s′, a) grows by α·δ·⟨w(s′), w(s)⟩ ([`Features::overlap`]), which
+//!   is the re-summed value in exact arithmetic and for a fuzzy grid a product of one short dot per
+//!   variable, instead of a second sum over every active rule (for a crisp row it is bit for bit
+//!   the re-summed value: q + α·δ).
+//!
+//! Every operation is a fixed sequence of IEEE-754 additions and multiplications, so the results
+//! are the same on every machine.
+
+mod traces;
+
+use super::config::LearnerConfig;
+use super::repr::{Activations, OneHot};
+use traces::{DenseTraces, SparseTraces, TraceRule};
+
+/// Dense traces when the table has at most this many parameters (features × actions) per feature a
+/// single state can activate, and at most [`DENSE_MAX_PARAMS`] in all: then most traces are live in
+/// practice and a linear sweep beats list bookkeeping. A step extends the traces of one
+/// action only, so the rule counts parameters, not features (by features alone a 10-action table
+/// swept ten times the parameters its traces use).
+pub const DENSE_TRACE_RATIO: usize = 10;
+
+/// The most parameters a dense trace sweep covers (see [`DENSE_TRACE_RATIO`]).
+pub const DENSE_MAX_PARAMS: usize = 4096;
+
+/// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
+const MAX_UNROLLED_ACTIONS: usize = 16;
+
+/// Q parameters and eligibility traces of one trial.
+#[derive(Debug, Clone)]
+pub struct Learner {
+    n_actions: usize,
+    q: Vec<f64>,
+    traces: Traces,
+    rule: TraceRule,
+    alpha: f64,
+    /// α·δ of the last update.
+    last_step: f64,
+}
+
+/// Where the eligibility traces live.
+#[derive(Debug, Clone)]
+enum Traces {
+    /// γλ = 0 (Q(0)): a trace never outlives its step, so none is stored.
+    None,
+    /// One trace per parameter, swept in full every step.
+    Dense(DenseTraces),
+    /// Only the live traces, packed.
+    Sparse(SparseTraces),
+}
+
+impl Learner {
+    /// A learner over `n_features × n_actions` parameters, all set to `cfg.q_init`, for a
+    /// representation that activates at most `max_active` features per state (chooses the trace
+    /// layout).
+    pub fn new(n_features: usize, n_actions: usize, max_active: usize, cfg: &LearnerConfig) -> Self {
+        let n = n_features * n_actions;
+        let rule = TraceRule::of(cfg);
+        let traces = if rule.decay == 0.0 {
+            Traces::None
+        } else if max_active > 1 && n <= DENSE_MAX_PARAMS && n <= DENSE_TRACE_RATIO * max_active {
+            Traces::Dense(DenseTraces::new(n))
+        } else {
+            Traces::Sparse(SparseTraces::new(n))
+        };
+        Self { n_actions, q: vec![cfg.q_init; n], traces, rule, alpha: cfg.alpha, last_step: 0.0 }
+    }
+
+    /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action).
+    #[inline(always)]
+    pub fn q_values<F: Features>(&self, phi: &F, out: &mut [f64]) {
+        let (index, weight) = phi.rules();
+        if F::ONE_HOT {
+            // 0 + q, not a copy: LLVM turns a copy of a run-time length into a memcpy call.
+            let row = &self.q[index[0] as usize * self.n_actions..][..self.n_actions];
+            for (o, &v) in out.iter_mut().zip(row) {
+                *o = 0.0 + v;
+            }
+        } else {
+            self.q_values_many(index, weight, out);
+        }
+    }
+
+    /// Bring `qs`, Q(s, ·) for the activation `phi` computed just before the
+    /// [`update`](Self::update) of `prev` for `action`, up to date after it. Under Q(0) the update
+    /// added α·δ·w(prev) to `action`'s parameters, so Q(s, action) grows by α·δ·⟨w(s), w(prev)⟩
+    /// ([`Features::overlap`]) and nothing else moves; with traces every action may have moved,
+    /// and all are recomputed.
+    #[inline(always)]
+    pub fn refresh_after_update<F: Features>(&self, phi: &F, prev: &F, action: usize, qs: &mut [f64]) {
+        match &self.traces {
+            Traces::None => {
+                // Skipped when nothing is shared, so that an overflowing α·δ cannot turn an
+                // untouched value into ∞·0 = NaN.
+                let shared = phi.overlap(prev);
+                if shared != 0.0 {
+                    qs[action] += self.last_step * shared;
+                }
+            }
+            Traces::Dense(_) | Traces::Sparse(_) => self.q_values(phi, qs),
+        }
+    }
+
+    /// One learning step for the pair (s_t, a_t) with TD error δ_t: decay every trace by γλ, add the
+    /// activation of (s_t, a_t) to its traces (eq. 20), then q ← q + α·δ·e (eq. 21).
+    #[inline(always)]
+    pub fn update<F: Features>(&mut self, phi: &F, action: usize, delta: f64) {
+        let step = self.alpha * delta;
+        self.last_step = step;
+        let (index, weight) = phi.rules();
+        let (q, na, rule) = (&mut self.q[..], self.n_actions, self.rule);
+        match &mut self.traces {
+            // Q(0): the trace of this step is extend(0, w) = w (weights are never negative).
+            Traces::None => {
+                for (&i, &w) in index.iter().zip(weight) {
+                    q[i as usize * na + action] += step * w;
+                }
+            }
+            Traces::Dense(t) => t.update(q, na, rule, (index, weight), action, step),
+            Traces::Sparse(t) => t.update(q, na, rule, (index, weight), action, step),
+        }
+    }
+
+    /// Q(s, ·) for several active features: a kernel per action count.
+    #[inline(never)]
+    fn q_values_many(&self, index: &[u32], weight: &[f64], out: &mut [f64]) {
+        macro_rules! unrolled {
+            ($($n:literal)*) => {
+                match self.n_actions {
+                    $($n => q_values_fixed::<$n>(&self.q, index, weight, out),)*
+                    _ => q_values_any(&self.q, self.n_actions, index, weight, out),
+                }
+            };
+        }
+        const _: () = assert!(MAX_UNROLLED_ACTIONS == 16);
+        unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+    }
+
+    /// Clear every trace (episode start; Watkins's cut), after applying what they still owe.
+    #[inline]
+    pub fn clear_traces(&mut self) {
+        match &mut self.traces {
+            Traces::None => {}
+            Traces::Dense(t) => t.clear(),
+            Traces::Sparse(t) => t.clear(),
+        }
+    }
+
+    /// The parameter vector q (rule-major).
+    pub fn params(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// Number of traces that take part in the next update.
+    pub fn active_traces(&self) -> usize {
+        self.traces_for_next_step().iter().filter(|&&e| e != 0.0).count()
+    }
+
+    /// Every trace, one per parameter, as it enters the next update (decayed, before extension).
+    pub fn traces_for_next_step(&self) -> Vec<f64> {
+        match &self.traces {
+            Traces::None => vec![0.0; self.q.len()],
+            Traces::Dense(t) => t.values(),
+            Traces::Sparse(t) => t.values(self.q.len()),
+        }
+    }
+}
+
+/// A state's activations in the form the learner evaluates and updates: the general sparse list
+/// ([`Activations`], fuzzy rule bases) or a crisp table's single row ([`OneHot`], weight 1).
+pub trait Features {
+    /// Whether this is always one feature of weight 1 (lets the learner skip the sum).
+    const ONE_HOT: bool;
+    /// The active features and their weights, in activation order.
+    fn rules(&self) -> (&[u32], &[f64]);
+    /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate.
+    fn overlap(&self, other: &Self) -> f64;
+}
+
+impl Features for Activations {
+    const ONE_HOT: bool = false;
+
+    #[inline(always)]
+    fn rules(&self) -> (&[u32], &[f64]) {
+        (&self.index, &self.weight)
+    }
+
+    #[inline(always)]
+    fn overlap(&self, other: &Self) -> f64 {
+        Activations::overlap(self, other)
+    }
+}
+
+/// A crisp row: the list of one feature of weight 1 (`w · q = q` exactly, so Q(s, ·) is the row).
+impl Features for OneHot {
+    const ONE_HOT: bool = true;
+
+    #[inline(always)]
+    fn rules(&self) -> (&[u32], &[f64]) {
+        (std::slice::from_ref(&self.0), &[1.0])
+    }
+
+    /// 1 for the same row, else 0: the Q(0) refresh adds α·δ to exactly the entry the update
+    /// moved, the same addition on the same values (bit for bit).
+    #[inline(always)]
+    fn overlap(&self, other: &Self) -> f64 {
+        if self.0 == other.0 {
+            1.0
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Interleaved partial sums per action for `N` actions: enough independent additions in flight to
+/// hide their latency (with many actions the actions' own sums already are).
+const fn lanes(n: usize) -> usize {
+    if n <= 2 {
+        4
+    } else if n <= 4 {
+        2
+    } else {
+        1
+    }
+}
+
+/// `L` interleaved partial sums of Σᵢ wᵢ·q[iᵢ·stride + offset + a] for a = 0..N: rule j goes to
+/// partial sum j mod L, each summed in activation order from 0.
+#[inline(always)]
+fn lane_sums<const N: usize, const L: usize>(
+    q: &[f64],
+    stride: usize,
+    offset: usize,
+    index: &[u32],
+    weight: &[f64],
+) -> [[f64; N]; L] {
+    let mut acc = [[0.0f64; N]; L];
+    let row = |i: u32| -> &[f64; N] { q[i as usize * stride + offset..][..N].try_into().expect("N actions") };
+    let (mut ic, mut wc) = (index.chunks_exact(L), weight.chunks_exact(L));
+    for (ii, ww) in (&mut ic).zip(&mut wc) {
+        for l in 0..L {
+            let (r, w) = (row(ii[l]), ww[l]);
+            for a in 0..N {
+                acc[l][a] += w * r[a];
+            }
+        }
+    }
+    for (l, (&i, &w)) in ic.remainder().iter().zip(wc.remainder()).enumerate() {
+        let r = row(i);
+        for a in 0..N {
+            acc[l][a] += w * r[a];
+        }
+    }
+    acc
+}
+
+/// Q(s, ·) with `N` actions: every action's partial sums stay in registers across the activation,
+/// added at the end as (s₀ + s₁) + (s₂ + s₃).
+#[inline(always)]
+fn q_values_fixed<const N: usize>(q: &[f64], index: &[u32], weight: &[f64], out: &mut [f64]) {
+    let out: &mut [f64; N] = (&mut out[..N]).try_into().expect("N actions");
+    match const { lanes(N) } {
+        4 => {
+            let s = lane_sums::<N, 4>(q, N, 0, index, weight);
+            for a in 0..N {
+                out[a] = (s[0][a] + s[1][a]) + (s[2][a] + s[3][a]);
+            }
+        }
+        2 => {
+            let s = lane_sums::<N, 2>(q, N, 0, index, weight);
+            for a in 0..N {
+                out[a] = s[0][a] + s[1][a];
+            }
+        }
+        _ => *out = lane_sums::<N, 1>(q, N, 0, index, weight)[0],
+    }
+}
+
+/// Q(s, ·) for any action count, summing in `out` directly.
+fn q_values_any(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for (&i, &w) in index.iter().zip(weight) {
+        let row = &q[i as usize * na..(i as usize + 1) * na];
+        for (o, v) in out.iter_mut().zip(row) {
+            *o += w * v;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
