@@ -246,3 +246,59 @@ fn a_full_disk_is_a_clear_error_and_keeps_what_was_stored() {
     let verify = stdout(&mut sb.qsweep(&["verify", "--no-quarantine"]));
     assert!(verify.contains(" 0 damaged"), "{verify}");
 }
+
+/// `verify --recompute`: the trials of a fresh run reproduce; a planted row (a correct key, a
+/// wrong outcome, written as another machine might have) is named with its differing fields and
+/// exits 1; the draw is fixed by `--seed`.
+#[test]
+fn verify_recompute_finds_a_planted_wrong_row() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    sb.run_json(&p, &[]);
+    let out = stdout(&mut sb.qsweep(&["verify", "--recompute", "20", "--seed", "3"]));
+    assert!(out.contains("recomputed 20 of 56 trials of engine") && out.contains("all 20 agree"), "{out}");
+    let all = stdout(&mut sb.qsweep(&["verify", "--recompute", "1000"]));
+    assert!(all.contains("recomputed 56 of 56") && all.contains("all 56 agree"), "{all}");
+
+    let segs = sb.segment_paths();
+    let mut rows = qsweep::cache::store::read_segment(&segs[0], &|_| true).unwrap();
+    let mut wrong = rows.remove(0);
+    wrong.outcome.episodes += 1;
+    wrong.outcome.episode_lengths.push(1);
+    let store = qsweep::cache::Store::open(&sb.cache()).unwrap();
+    store.write_segment(&[wrong.clone()]).unwrap();
+    std::fs::remove_file(&segs[0]).unwrap();
+    store.write_segment(&rows).unwrap();
+    let out = sb.qsweep(&["verify", "--recompute", "1000"]).assert().code(1).get_output().stdout.clone();
+    let out = String::from_utf8(out).unwrap();
+    assert!(out.contains(&format!("differs: {} (episodes, episode_lengths)", wrong.key)), "{out}");
+    assert!(out.contains("recomputed 56 of 56") && out.contains("1 differ from the stored rows"), "{out}");
+    assert!(out.contains(" 0 damaged"), "the planted row hashes correctly: {out}");
+}
+
+/// Regression: `verify --recompute` on a cache holding no trial of this engine (the committed
+/// cache before it was regenerated) checked nothing and still exited 0; it fails and says why.
+#[test]
+fn verify_recompute_with_nothing_to_check_fails() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    sb.run_json(&p, &[]);
+    let store = qsweep::cache::Store::open(&sb.cache()).unwrap();
+    let segs = sb.segment_paths();
+    let mut rows = Vec::new();
+    for s in &segs {
+        rows.extend(qsweep::cache::store::read_segment(s, &|_| true).unwrap());
+        std::fs::remove_file(s).unwrap();
+    }
+    for r in &mut rows {
+        r.engine_version = qsweep::cache::ENGINE_VERSION - 1;
+        r.key = qsweep::cache::Key::from_canonical(&r.config_json(), r.seed, r.engine_version);
+    }
+    store.write_segment(&rows).unwrap();
+    let out = sb.qsweep(&["verify", "--recompute", "10"]).assert().code(1).get_output().stdout.clone();
+    let out = String::from_utf8(out).unwrap();
+    assert!(
+        out.contains("no trial of engine") && out.contains("56 trials of other engine versions"),
+        "{out}"
+    );
+}

@@ -43,7 +43,7 @@ impl Variable {
     /// plus one for rounding in the window edges.
     fn max_window(&self) -> usize {
         if self.reach.is_finite() {
-            ((2.0 * self.reach) as usize + 2).min(self.n)
+            ((2.0 * self.reach) as usize).saturating_add(2).min(self.n)
         } else {
             self.n
         }
@@ -387,6 +387,18 @@ mod tests {
                 assert!((a.overlap(&a) - a.weight.iter().map(|w| w * w).sum::<f64>()).abs() <= 1e-15);
             }
         }
+    }
+
+    /// Regression: a huge width made the window bound `(2·reach) as usize + 2` overflow (a panic
+    /// in debug builds, a one-set window and an out-of-bounds write in release).
+    #[test]
+    fn huge_width_overflows_no_window_bound() {
+        let f = Fuzzy::new(&[10, 3], &[[0.0, 1.0], [-1.0, 1.0]], 1e19, 1e-3);
+        assert_eq!(f.max_active(), 30);
+        let mut a = Activations::default();
+        f.activate(&[0.3, 0.2], &mut a);
+        assert_eq!(a.len(), 30);
+        assert!((a.weight.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     }
 
     #[test]
