@@ -35,7 +35,9 @@ pub enum StartArg {
 #[derive(Debug, Args)]
 #[command(after_help = "Example: no policy over Cart-Pole's 16 midpoint cells balances long:\n  \
     qsweep feasible --env cart-pole --resolution 2 --actions 2\n\
-    With the velocity splits moved to -0.4 (ranges centred there), one balances 100,000 steps:\n  \
+    With a zero-force third action, one balances 100,000 steps:\n  \
+    qsweep feasible --env cart-pole --resolution 2 --actions 3\n\
+    Velocity splits moved to -0.4 (ranges centred there):\n  \
     qsweep feasible --env cart-pole --resolution 2 --range x_dot=-2.4,1.6 --range theta_dot=-2.4,1.6")]
 pub struct FeasibleArgs {
     /// Survival system: cart-pole or ball-beam.
