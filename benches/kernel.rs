@@ -40,9 +40,8 @@ fn kernel(cfg: &TrialConfig, steps: u64, seed: u64) -> u64 {
         let mut c = cell(&s);
         loop {
             let row = q[c];
-            let a = if rng.unit() < l.epsilon {
-                rng.below(2)
-            } else if row[0] == row[1] {
+            // Explore, or break a tie, uniformly.
+            let a = if rng.unit() < l.epsilon || row[0] == row[1] {
                 rng.below(2)
             } else {
                 usize::from(row[1] > row[0])

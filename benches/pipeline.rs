@@ -66,7 +66,7 @@ fn main() {
     let loaded = qsweep::spec::load(&paper, &[]).unwrap();
     let plan = qsweep::plan::plan(&loaded, None).unwrap();
     let plan_secs = start.elapsed().as_secs_f64();
-    let unique = plan.unique_trials();
+    let unique = qsweep::exec::jobs(&plan);
     println!(
         "plan paper.yaml ({} variants): {} distinct trials in {:.3} s (target < 1 s)",
         plan.variants.len(),
@@ -135,7 +135,7 @@ fn race_cost(pipeline: &Path, cache: &Path) {
     let plan = qsweep::plan::plan(&loaded, None).unwrap();
     let store = Store::open(cache).unwrap();
     let scan = store.keys().unwrap();
-    let raced = qsweep::pipeline::raced(&plan, &store, &scan).unwrap();
+    let raced = qsweep::race::replay_cached(&plan, &store, &scan).unwrap();
     let secs = start.elapsed().as_secs_f64();
     let wanted = raced.plan.trials().map(|(_, _, t)| t.key).collect();
     let outcomes = store.read_outcomes(&scan, &wanted, false).unwrap();

@@ -6,6 +6,7 @@
 // denies the lint) must do without them.
 #![allow(clippy::disallowed_methods)]
 
+pub mod analysis;
 pub mod atomic;
 pub mod bench;
 pub mod bench_pipeline;

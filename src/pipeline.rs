@@ -1,7 +1,8 @@
 //! The pipeline as the library runs it, the same for every command: scan the cache's keys (and
 //! move damaged segments aside, [`scan`]), choose the trials to run ([`select`]: shard, cached,
 //! `--force`), execute and store them ([`run`]); the report stage is [`crate::report::write`].
-//! A raced plan ([`crate::race`]) is resolved against the cache first ([`raced`]), and `run`
+//! A raced plan ([`crate::race`]) is replayed against the cache first
+//! ([`crate::race::replay_cached`]), and `run`
 //! runs its rounds one after another (one round per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeyScan, Store};
@@ -62,16 +63,9 @@ fn in_shard<'p>(plan: &Plan, trials: Vec<Job<'p>>, shard: Option<Shard>) -> Vec<
 
 /// The plan's distinct trials that `sel` keeps (its shard), and of those the ones to run.
 pub fn select<'p>(plan: &'p Plan, scan: &KeyScan, sel: Selection) -> (Vec<Job<'p>>, Vec<Job<'p>>) {
-    let unique = in_shard(plan, plan.unique_trials(), sel.shard);
+    let unique = in_shard(plan, crate::exec::jobs(plan), sel.shard);
     let jobs = unique.iter().filter(|t| sel.force || !scan.keys.contains(&t.key)).copied().collect();
     (unique, jobs)
-}
-
-/// `plan` with its races resolved against the cache's outcomes (the plan itself, with no race).
-pub fn raced(plan: &Plan, store: &Store, scan: &KeyScan) -> anyhow::Result<crate::race::Raced> {
-    crate::race::resolve(plan, &scan.keys, &mut |wanted| {
-        Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
-    })
 }
 
 /// What [`run`] did.
@@ -110,9 +104,9 @@ pub fn run(
     // `--force` recomputes each trial once, not once per round.
     let mut forced: std::collections::HashSet<crate::cache::Key> = std::collections::HashSet::new();
     loop {
-        let raced = raced(plan, store, scan)?;
+        let raced = crate::race::replay_cached(plan, store, scan)?;
         // This round's trials, of this task's shard (owned by key: see shard_owners).
-        let unique = in_shard(plan, raced.plan.unique_trials(), sel.shard);
+        let unique = in_shard(plan, crate::exec::jobs(&raced.plan), sel.shard);
         let jobs: Vec<Job> = if sel.force {
             unique.iter().filter(|t| forced.insert(t.key)).copied().collect()
         } else {

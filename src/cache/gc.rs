@@ -5,8 +5,9 @@
 //! before any old segment is removed, and only segments listed at the start are removed, so a
 //! crash leaves at worst duplicate rows (dropped on read) and rows written meanwhile are untouched.
 
+use super::key::Key;
+use super::record::TrialRecord;
 use super::store::{read_segment, Store};
-use super::{Key, TrialRecord};
 use std::collections::HashSet;
 
 /// Rows per compacted segment.

@@ -13,8 +13,8 @@
 //! (`pl.read_parquet("cache/seg-*.parquet")`) and DuckDB (`read_parquet('cache/seg-*.parquet')`);
 //! the schema is [`schema`].
 
+use super::key::Key;
 use super::record::TrialRecord;
-use super::Key;
 use crate::atomic::write_atomic;
 use crate::parquet_io::{column, to_parquet, Cols};
 use crate::sim::config::{TieBreak, TrialConfig};

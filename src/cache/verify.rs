@@ -13,8 +13,9 @@
 //! row. A difference means a row computed by another engine under the same version number, a
 //! platform whose floating point is not IEEE-754 binary64 with round-to-nearest, or a bug.
 
+use super::key::{Key, ENGINE_VERSION};
+use super::record::TrialRecord;
 use super::store::{read_segment, Damaged, Store};
-use super::{Key, TrialRecord, ENGINE_VERSION};
 use crate::sim::{run_trial, Outcome};
 use rayon::prelude::*;
 use std::collections::HashSet;

@@ -37,7 +37,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
                 scan = Some(store.keys()?);
             }
             let scan = scan.as_ref().expect("scanned just above");
-            planned = crate::pipeline::raced(&planned, &store, scan)?.plan;
+            planned = crate::race::replay_cached(&planned, &store, scan)?.plan;
         }
         keep.get_or_insert_with(HashSet::new).extend(planned.trials().map(|(_, _, t)| t.key));
     }

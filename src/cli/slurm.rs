@@ -99,7 +99,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     let script = submission.render()?;
     print!("{script}");
 
-    let unique = plan.unique_trials();
+    let unique = crate::exec::jobs(&plan);
     let cache_dir = a.pipeline.cache_dir();
     let cached: HashSet<_> =
         if cache_dir.is_dir() { a.pipeline.store()?.keys()?.keys } else { HashSet::new() };

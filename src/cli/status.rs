@@ -35,8 +35,8 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let cached = &scan.keys;
     // A race's trials so far come from the cached outcomes of its earlier rounds.
     let raced = match &store {
-        Some(store) if plan.has_race() => Some(crate::pipeline::raced(&plan, store, &scan)?),
-        _ if plan.has_race() => Some(crate::race::resolve(&plan, cached, &mut |_| Ok(Default::default()))?),
+        Some(store) if plan.has_race() => Some(crate::race::replay_cached(&plan, store, &scan)?),
+        _ if plan.has_race() => Some(crate::race::replay(&plan, cached, &mut |_| Ok(Default::default()))?),
         _ => None,
     };
     let plan = raced.as_ref().map_or(&plan, |r| &r.plan);

@@ -11,6 +11,7 @@ pub mod shard;
 pub use progress::ProgressMode;
 
 use crate::cache::{Key, TrialRecord};
+use crate::plan::Plan;
 use crate::sim::repr::ReprKind;
 use crate::sim::{run_trial, TrialConfig};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -55,7 +56,7 @@ pub struct ExecReport {
     pub interrupted: bool,
 }
 
-/// A trial to run: configuration, seed and key (as [`crate::plan::Plan::unique_trials`] lists them).
+/// A trial to run: configuration, seed and key.
 #[derive(Debug, Clone, Copy)]
 pub struct Job<'a> {
     /// Its configuration.
@@ -64,6 +65,11 @@ pub struct Job<'a> {
     pub seed: u64,
     /// Its key.
     pub key: Key,
+}
+
+/// The distinct trials of `plan` as jobs, in plan order ([`Plan::unique_trials`]).
+pub fn jobs(plan: &Plan) -> Vec<Job<'_>> {
+    plan.unique_trials().into_iter().map(|(config, t)| Job { config, seed: t.seed, key: t.key }).collect()
 }
 
 /// CPU seconds the calling thread has used so far (`CLOCK_THREAD_CPUTIME_ID`): what a trial costs,

@@ -1,7 +1,7 @@
 //! Expanding a typed pipeline into a [`Plan`]: layering settings, building each cell's
 //! `TrialConfig`, validating it, and keying its trials.
 
-use super::{Cell, Experiment, Plan, PlannedTrial, Variant};
+use super::resolved::{Cell, Experiment, Plan, PlannedTrial, Variant};
 use crate::cache::Key;
 use crate::error::user_error;
 use crate::sim::config::{default_ranges, default_success, Success, TrialConfig};

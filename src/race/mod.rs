@@ -2,14 +2,14 @@
 //!
 //! A heatmap is one experiment × algorithm of one variant (one Table III row). Round 0 is the
 //! pipeline's `seeds`. After each round the cells still in the race (the *contenders*) are tested
-//! against the current best contender, chosen by Table III's rule ([`crate::report::model::best_cell`]):
+//! against the current best contender, chosen by Table III's rule ([`crate::analysis::best_cell`]):
 //! a cell whose mean is higher than the best's by a one-sided Welch t-test, with Holm's correction
 //! over the contenders tested in that round at α = 1 − `confidence` ([`welch`]), leaves the race.
 //! Every remaining contender gets `batch` more seeds, numbered on from the largest first-round
 //! seed, until one contender remains or every contender has `max_seeds`.
 //!
 //! The measure is the one Table III averages: episodes to the goal, a trial that never reached it
-//! counted at the episode cap ([`crate::report::model::episodes_counted`]). For that capped
+//! counted at the episode cap ([`crate::analysis::episodes_counted`]). For that capped
 //! measure a censored trial is an exact value, not missing data; and since its true episode count
 //! is larger still, censoring can only make a cell look better than it is, so a cell is never
 //! dropped because of its own failures.
@@ -21,16 +21,15 @@
 //! means; with 5–10 skewed episode counts per cell that is an approximation, which is why the
 //! first round should not be tiny and every verdict is stated as "not significantly worse".
 //!
-//! A race is a pure function of the pipeline and the cached outcomes: [`resolve`] replays the
+//! A race is a pure function of the pipeline and the cached outcomes: [`replay`] replays the
 //! rounds from the cache, as far as their trials are present, and plans the next round's trials.
 //! Rerunning a finished race runs nothing; raising `max_seeds` runs only the new rounds; the answer
 //! is the same on any number of threads or shards, because every decision reads only stored outcomes.
 
-pub mod welch;
-
+use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
+use crate::cache::store::{KeyScan, Store};
 use crate::cache::{Key, ENGINE_VERSION};
 use crate::plan::{Plan, PlannedTrial};
-use crate::report::model::{best_cell, episodes_counted, Candidate};
 use crate::sim::{Algorithm, Outcome};
 use std::collections::{HashMap, HashSet};
 
@@ -62,7 +61,7 @@ pub struct HeatRace {
     pub without_race: usize,
 }
 
-/// A plan whose races are resolved against the cache.
+/// A plan whose races are replayed against the cache.
 #[derive(Debug, Clone)]
 pub struct Raced {
     /// The plan with every raced cell's trials (decided rounds and the pending one) and its
@@ -112,10 +111,18 @@ struct Heat {
     finished: bool,
 }
 
-/// Resolve every race of `plan`: replay its rounds from the outcomes of the trials in `present`
+/// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
+/// the trials `scan` lists (the plan itself, with no race).
+pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeyScan) -> anyhow::Result<Raced> {
+    replay(plan, &scan.keys, &mut |wanted| {
+        Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
+    })
+}
+
+/// Replay every race of `plan`: replay its rounds from the outcomes of the trials in `present`
 /// (`read` fetches the outcomes of some of them), as far as each round's trials are all present,
 /// and plan the next round's. Without a race the plan comes back as it is.
-pub fn resolve(plan: &Plan, present: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
+pub fn replay(plan: &Plan, present: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
     let mut out = plan.clone();
     let mut heats: Vec<Heat> = Vec::new();
     for (ei, e) in out.experiments.iter_mut().enumerate() {
@@ -261,7 +268,7 @@ pub fn decide(samples: &[Option<Sample>], alpha: f64) -> Vec<bool> {
             index: i,
             n: s.values.len(),
             successes: s.successes,
-            mean: (!s.values.is_empty()).then(|| crate::report::stats::mean(&s.values)),
+            mean: (!s.values.is_empty()).then(|| crate::analysis::mean(&s.values)),
         })
     });
     let mut keep: Vec<bool> = samples.iter().map(Option::is_some).collect();
@@ -344,7 +351,7 @@ mod tests {
         loop {
             let present: HashSet<Key> = store.keys().copied().collect();
             let raced =
-                resolve(plan, &present, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect()))
+                replay(plan, &present, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect()))
                     .unwrap();
             let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
                 .cells
@@ -398,7 +405,7 @@ mod tests {
     #[test]
     fn a_race_stops_where_the_cache_stops_and_plans_the_next_round() {
         let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        let none = resolve(&p, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let none = replay(&p, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
         let h = &none.heats[0];
         assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.present), (0, false, 3, 9, 0));
         assert!(none.plan.experiments[0]
@@ -408,7 +415,7 @@ mod tests {
         // Without a race the plan comes back untouched.
         let mut plain = p.clone();
         plain.experiments[0].race = None;
-        let r = resolve(&plain, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
         assert!(r.heats.is_empty() && r.plan.experiments[0].cells.iter().all(|c| c.contender.is_none()));
     }
 }

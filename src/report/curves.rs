@@ -14,7 +14,7 @@
 
 use super::figures::{self, nice_ticks, Canvas, Picture, Res, INK, SUBTLE};
 use super::model::{CellData, ExpData, ReportData};
-use super::stats::quantile_sorted;
+use crate::analysis::quantile_sorted;
 use crate::sim::config::Success;
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;

@@ -5,8 +5,9 @@
 
 use super::curves::CURVE_RULE;
 use super::formats::Formats;
-use super::model::{ExpData, ReportData, BEST_RULE, CENSORING};
+use super::model::{ExpData, ReportData};
 use super::table::{cell_table, render, table3, Html};
+use crate::analysis::{BEST_RULE, CENSORING};
 use crate::report::table::html::escape_html as esc;
 
 /// The pages' stylesheet (`.aK`: the tables whose number columns follow the first K, see

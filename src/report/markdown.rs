@@ -4,8 +4,9 @@
 
 use super::formats::Formats;
 use super::html::identity;
-use super::model::{ReportData, CENSORING};
+use super::model::ReportData;
 use super::table::{render, Markdown, Table};
+use crate::analysis::CENSORING;
 
 /// The Markdown page of one report; `t3` is its Table III.
 pub fn page(data: &ReportData, t3: &Table, formats: Formats) -> String {

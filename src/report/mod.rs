@@ -27,7 +27,6 @@ pub mod markdown;
 pub mod model;
 pub mod parquet;
 pub mod stage;
-pub mod stats;
 pub mod svg;
 pub mod table;
 

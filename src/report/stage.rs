@@ -169,7 +169,7 @@ pub fn write(
     // A raced plan is reported as far as its races have run: each cell with the seeds it got.
     let raced;
     let plan = if plan.has_race() {
-        raced = crate::pipeline::raced(plan, store, scan)?;
+        raced = crate::race::replay_cached(plan, store, scan)?;
         &raced.plan
     } else {
         plan

@@ -357,9 +357,9 @@ fn readme(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::bootstrap_diff_ci;
     use crate::cache::TrialRecord;
     use crate::plan::plan;
-    use crate::report::stats::bootstrap_diff_ci;
     use crate::sim::run_trial;
     use crate::spec::{load_str, LoadedSpec, Override};
     use plotters::style::RGBColor;
@@ -399,7 +399,7 @@ systems:
     fn run_all(plan: &Plan) -> HashMap<Key, TrialRecord> {
         plan.unique_trials()
             .into_iter()
-            .map(|j| (j.key, TrialRecord::new(j.config.clone(), j.seed, run_trial(j.config, j.seed), 0.0)))
+            .map(|(c, t)| (t.key, TrialRecord::new(c.clone(), t.seed, run_trial(c, t.seed), 0.0)))
             .collect()
     }
 
@@ -585,10 +585,7 @@ systems:
                 let bc = matching(b, e, i).unwrap();
                 let ci = bootstrap_diff_ci(&va, &vb, 2000, diff_seed(bc, c));
                 assert_eq!(d.ci, ci);
-                assert!(
-                    (d.diff - (crate::report::stats::mean(&vb) - crate::report::stats::mean(&va))).abs()
-                        < 1e-12
-                );
+                assert!((d.diff - (crate::analysis::mean(&vb) - crate::analysis::mean(&va))).abs() < 1e-12);
                 assert_eq!(d.significant, ci.0 > 0.0 || ci.1 < 0.0);
                 if d.significant {
                     marked += 1;

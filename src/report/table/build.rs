@@ -3,7 +3,8 @@
 //! experiment.
 
 use super::{Align, Column, Row, Table, Value};
-use crate::report::model::{resolution_columns, ExpData, ReportData, BEST_RULE, CENSORING, RACE_RULE};
+use crate::analysis::{BEST_RULE, CENSORING, RACE_RULE};
+use crate::report::model::{resolution_columns, ExpData, ReportData};
 
 fn var_columns(prefix: &str) -> Vec<Column> {
     let vars = [

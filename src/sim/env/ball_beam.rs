@@ -1,7 +1,7 @@
 //! Ball-Beam, eq. (1): the ball rolls under gravity along a beam tilted by the action angle φ.
 //! Reward eq. (23): 0 while |x| ≤ L/2, −1 (terminal) when the ball falls off.
 
-use super::{scalar_params, Environment, State, TaskKind, Transition};
+use super::environment::{scalar_params, Environment, State, TaskKind, Transition};
 use serde::{Deserialize, Serialize};
 
 /// Ball-Beam constants; the beam length is not given in the paper (see the replication notes).

@@ -1,7 +1,7 @@
 //! Cart-Pole, eq. (2): Euler integration of the frictionless cart-pole (Barto et al.; Gymnasium's
 //! CartPole-v1 step, with the paper's g = 9.81). Reward eq. (24): 0, or −1 on failure.
 
-use super::{scalar_params, Environment, State, TaskKind, Transition};
+use super::environment::{scalar_params, Environment, State, TaskKind, Transition};
 use crate::sim::math;
 use crate::sim::rng::TrialRng;
 use serde::{Deserialize, Serialize};

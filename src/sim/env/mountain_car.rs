@@ -2,7 +2,7 @@
 //! velocity clipped to ±v_max, position clipped to [x_min, x_max], and a negative velocity zeroed at
 //! the left wall. Reward eq. (25): 1 (terminal) at the goal x ≥ goal, −1 otherwise.
 
-use super::{scalar_params, Environment, State, TaskKind, Transition};
+use super::environment::{scalar_params, Environment, State, TaskKind, Transition};
 use crate::sim::math;
 use crate::sim::rng::TrialRng;
 use serde::{Deserialize, Serialize};

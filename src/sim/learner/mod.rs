@@ -27,7 +27,7 @@
 mod traces;
 
 use super::config::LearnerConfig;
-use super::repr::{Activations, OneHot};
+use super::repr::Features;
 use traces::{DenseTraces, SparseTraces, TraceRule};
 
 /// Dense traces when the table has at most this many parameters (features × actions) per feature a
@@ -179,52 +179,6 @@ impl Learner {
             Traces::None => vec![0.0; self.q.len()],
             Traces::Dense(t) => t.values(),
             Traces::Sparse(t) => t.values(self.q.len()),
-        }
-    }
-}
-
-/// A state's activations in the form the learner evaluates and updates: the general sparse list
-/// ([`Activations`], fuzzy rule bases) or a crisp table's single row ([`OneHot`], weight 1).
-pub trait Features {
-    /// Whether this is always one feature of weight 1 (lets the learner skip the sum).
-    const ONE_HOT: bool;
-    /// The active features and their weights, in activation order.
-    fn rules(&self) -> (&[u32], &[f64]);
-    /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate.
-    fn overlap(&self, other: &Self) -> f64;
-}
-
-impl Features for Activations {
-    const ONE_HOT: bool = false;
-
-    #[inline(always)]
-    fn rules(&self) -> (&[u32], &[f64]) {
-        (&self.index, &self.weight)
-    }
-
-    #[inline(always)]
-    fn overlap(&self, other: &Self) -> f64 {
-        Activations::overlap(self, other)
-    }
-}
-
-/// A crisp row: the list of one feature of weight 1 (`w · q = q` exactly, so Q(s, ·) is the row).
-impl Features for OneHot {
-    const ONE_HOT: bool = true;
-
-    #[inline(always)]
-    fn rules(&self) -> (&[u32], &[f64]) {
-        (std::slice::from_ref(&self.0), &[1.0])
-    }
-
-    /// 1 for the same row, else 0: the Q(0) refresh adds α·δ to exactly the entry the update
-    /// moved, the same addition on the same values (bit for bit).
-    #[inline(always)]
-    fn overlap(&self, other: &Self) -> f64 {
-        if self.0 == other.0 {
-            1.0
-        } else {
-            0.0
         }
     }
 }

@@ -5,7 +5,7 @@ use super::*;
 use crate::sim::config::{Algorithm, TraceKind, TrialConfig};
 use crate::sim::env::SystemKind;
 use crate::sim::math;
-use crate::sim::repr::ReprKind;
+use crate::sim::repr::{Activations, OneHot, ReprKind};
 use traces::TraceRule;
 
 fn config(lambda: f64, replacing: bool, cutoff: f64) -> LearnerConfig {

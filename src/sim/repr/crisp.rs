@@ -15,7 +15,7 @@
 //! without the `- 1`, is this one mirrored (edges `linspace(lo, hi, n)[:-1]`); for the paper's
 //! symmetric ranges, start states and action sets the two give the same results up to mirroring.
 
-use super::{strides, Activations, Encode, OneHot, Representation};
+use super::activation::{strides, Activations, Encode, OneHot, Representation};
 use serde::{Deserialize, Serialize};
 
 /// Where crisp bin edges lie (see the module documentation for the exact edges).

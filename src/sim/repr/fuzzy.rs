@@ -8,7 +8,7 @@
 //! they are computed. Values outside `[lo, hi]` are clamped to the range first (the fuzzy analogue of
 //! the crisp edge bin), and sets whose membership is below `prune` are skipped (`prune = 0` is exact).
 
-use super::{strides, Activations, Encode, Representation};
+use super::activation::{strides, Activations, Encode, Representation};
 use crate::sim::math;
 
 /// Most fuzzy sets a single variable may have.

@@ -4,7 +4,7 @@
 //! beta function (a continued fraction), so no statistics crate is needed; the values are checked
 //! against SciPy's in the tests.
 
-use crate::report::stats::{mean, sample_std};
+use super::summary::{mean, sample_std};
 
 /// One-sided p-value of Welch's t-test for H₀: μ_worse ≤ μ_best against H₁: μ_worse > μ_best.
 ///

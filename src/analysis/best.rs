@@ -1,0 +1,126 @@
+//! Table III's rules, defined once for the report and the race: the episodes a trial counts and
+//! which cell of a heatmap is best.
+//!
+//! Episodes counted: a converged trial counts its `episodes_to_goal`; a trial that never reached
+//! the goal is kept and counted at the episode cap `max_episodes` (right-censored), so failures
+//! raise a cell's mean instead of vanishing from it.
+
+use crate::sim::Outcome;
+
+/// The Table III rule, as stated in every caption.
+pub const BEST_RULE: &str = "Best cell: the lowest mean among the cells where every seed reached the \
+learning goal; if no cell qualifies, the cell with the most successes, then the lowest mean (marked †).";
+
+/// How a race changes the rule and the counts, as stated in the captions of raced reports.
+pub const RACE_RULE: &str = "Raced: seeds went round by round only to the cells not significantly worse \
+than the best (one-sided Welch t-test against the best cell, Holm-corrected over the cells of the heatmap, \
+at the pipeline's confidence); n is the seeds a cell got, the best cell is chosen among the final \
+contenders, and contenders = how many cells are still tied with it.";
+
+/// How non-converged trials enter the statistics, as stated in every caption.
+pub const CENSORING: &str = "Trials that never reached the goal are not dropped: they count at the \
+episode cap (max_episodes), so those means are lower bounds. std is the sample standard deviation \
+(n − 1).";
+
+/// Episodes a trial contributes to its cell's statistics, under the episode cap `max_episodes`.
+pub fn episodes_counted(outcome: &Outcome, max_episodes: u32) -> u32 {
+    match (outcome.converged, outcome.episodes_to_goal) {
+        (true, Some(e)) => e,
+        _ => max_episodes,
+    }
+}
+
+/// The chosen best cell of one algorithm in one experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Best {
+    /// Index into the experiment's cells.
+    pub cell: usize,
+    /// Whether every present seed of that cell reached the goal (false: fallback, marked †).
+    pub all_converged: bool,
+}
+
+/// What the best-cell rule looks at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// Cell index.
+    pub index: usize,
+    /// Present trials.
+    pub n: usize,
+    /// Trials that reached the goal.
+    pub successes: usize,
+    /// Mean counted episodes (`None` without trials).
+    pub mean: Option<f64>,
+}
+
+/// The best-cell rule ([`BEST_RULE`]). Cells without trials never win; ties keep the earlier cell.
+pub fn best_cell(candidates: impl IntoIterator<Item = Candidate>) -> Option<Best> {
+    let mut best: Option<(Candidate, bool)> = None;
+    for c in candidates {
+        let Some(mean) = c.mean.filter(|_| c.n > 0) else { continue };
+        let all = c.successes == c.n;
+        let better = match best {
+            None => true,
+            Some((b, b_all)) => {
+                let b_mean = b.mean.expect("kept candidates have a mean");
+                match (all, b_all) {
+                    (true, false) => true,
+                    (false, true) => false,
+                    (true, true) => mean < b_mean,
+                    (false, false) => {
+                        c.successes > b.successes || (c.successes == b.successes && mean < b_mean)
+                    }
+                }
+            }
+        };
+        if better {
+            best = Some((c, all));
+        }
+    }
+    best.map(|(c, all)| Best { cell: c.index, all_converged: all })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c(index: usize, n: usize, successes: usize, mean: Option<f64>) -> Candidate {
+        Candidate { index, n, successes, mean }
+    }
+
+    #[test]
+    fn lowest_mean_among_fully_converged_cells_wins() {
+        let cands = [
+            c(0, 10, 9, Some(1.0)), // lower mean but one seed failed
+            c(1, 10, 10, Some(5.0)),
+            c(2, 10, 10, Some(3.0)),
+            c(3, 10, 10, Some(3.0)), // tie: the earlier cell stays
+            c(4, 0, 0, None),
+        ];
+        assert_eq!(best_cell(cands), Some(Best { cell: 2, all_converged: true }));
+    }
+
+    #[test]
+    fn all_failed_falls_back_to_most_successes_then_lowest_mean() {
+        let cands = [
+            c(0, 10, 3, Some(50.0)),
+            c(1, 10, 7, Some(90.0)),
+            c(2, 10, 7, Some(80.0)),
+            c(3, 10, 0, Some(1.0)),
+        ];
+        assert_eq!(best_cell(cands), Some(Best { cell: 2, all_converged: false }));
+        // No trial converged anywhere: the lowest (censored) mean.
+        let none = [c(0, 4, 0, Some(200.0)), c(1, 4, 0, Some(150.0))];
+        assert_eq!(best_cell(none), Some(Best { cell: 1, all_converged: false }));
+    }
+
+    #[test]
+    fn no_trials_no_best() {
+        assert_eq!(best_cell([c(0, 0, 0, None), c(1, 0, 0, None)]), None);
+        assert_eq!(best_cell([]), None);
+        // A cell whose only present trials all converged qualifies even if others are missing.
+        assert_eq!(
+            best_cell([c(0, 0, 0, None), c(1, 2, 2, Some(4.0))]),
+            Some(Best { cell: 1, all_converged: true })
+        );
+    }
+}

@@ -1,0 +1,157 @@
+//! What a representation produces and the learner consumes: sparse activations (the general list,
+//! a crisp table's one-hot row), the traits that make and read them, and the grid strides.
+
+/// Sparse feature activations of one state; reused across steps to avoid allocation.
+#[derive(Debug, Clone, Default)]
+pub struct Activations {
+    /// Feature (rule or bin) indices.
+    pub index: Vec<u32>,
+    /// Weights, parallel to `index`.
+    pub weight: Vec<f64>,
+    /// For a fuzzy grid, the per-variable memberships whose outer product the weights are (none
+    /// for lists built otherwise): they make [`overlap`](Self::overlap) a product of short dots.
+    pub(crate) factors: Factors,
+}
+
+/// Per-variable windows of normalised memberships: variable j activates sets
+/// `first[j] .. first[j] + len[j]` with memberships `mu[offset_j ..][.. len[j]]`, the offsets
+/// being the running sum of `len`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Factors {
+    /// Variables (0: unknown).
+    pub(crate) vars: usize,
+    pub(crate) first: [u32; 4],
+    pub(crate) len: [u32; 4],
+    pub(crate) mu: Vec<f64>,
+}
+
+impl Activations {
+    /// Remove all activations, keeping capacity.
+    #[inline]
+    pub fn clear(&mut self) {
+        self.index.clear();
+        self.weight.clear();
+        self.factors.vars = 0;
+        self.factors.mu.clear();
+    }
+
+    /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate: what one Q(0) update at `other`
+    /// adds, per unit step, to Q(self, a). For two fuzzy grid activations the sum factorises into
+    /// one short dot per variable, Πⱼ Σₖ μⱼₖ·μ′ⱼₖ; otherwise it is summed rule by rule.
+    pub fn overlap(&self, other: &Self) -> f64 {
+        let (a, b) = (&self.factors, &other.factors);
+        if a.vars > 0 && a.vars == b.vars {
+            let mut product = 1.0;
+            let (mut oa, mut ob) = (0, 0);
+            for j in 0..a.vars {
+                let (fa, fb) = (a.first[j] as usize, b.first[j] as usize);
+                let (ea, eb) = (fa + a.len[j] as usize, fb + b.len[j] as usize);
+                let mut dot = 0.0;
+                for k in fa.max(fb)..ea.min(eb) {
+                    dot += a.mu[oa + k - fa] * b.mu[ob + k - fb];
+                }
+                product *= dot;
+                oa += a.len[j] as usize;
+                ob += b.len[j] as usize;
+            }
+            return product;
+        }
+        let mut sum = 0.0;
+        for (i, w) in self.index.iter().zip(&self.weight) {
+            if let Some(p) = other.index.iter().position(|j| j == i) {
+                sum += w * other.weight[p];
+            }
+        }
+        sum
+    }
+
+    /// Number of active features.
+    pub fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Whether no feature is active.
+    pub fn is_empty(&self) -> bool {
+        self.index.is_empty()
+    }
+}
+
+/// The one feature (table row) a crisp state activates, with weight exactly 1: the trial loop's
+/// form of a crisp activation, so a step does no list bookkeeping for a single entry.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OneHot(pub u32);
+
+/// A map from states to sparse feature activations over a fixed number of features.
+pub trait Representation {
+    /// Total number of features (bins or rules).
+    fn n_features(&self) -> usize;
+    /// Most features a single state can activate (the learner sizes its trace strategy by it).
+    fn max_active(&self) -> usize;
+    /// Write the activations of `state` (its first `dim` entries) into `out`.
+    fn activate(&self, state: &[f64], out: &mut Activations);
+}
+
+/// The form of a state's activations the trial loop works with, and how it is computed:
+/// [`OneHot`] for crisp tables, [`Activations`] for fuzzy rule bases. Both denote the same sparse
+/// activations as [`Representation::activate`].
+pub trait Encode: Representation {
+    /// The activation type the learner consumes.
+    type Active: Default + Features;
+    /// Write the activations of `state` into `out`.
+    fn encode(&self, state: &[f64], out: &mut Self::Active);
+}
+
+/// Row-major strides for a grid with `counts` cells per variable.
+pub(crate) fn strides(counts: &[u32]) -> Vec<u32> {
+    let mut s = vec![1u32; counts.len()];
+    for j in (0..counts.len().saturating_sub(1)).rev() {
+        s[j] = s[j + 1] * counts[j + 1];
+    }
+    s
+}
+
+/// A state's activations in the form the learner evaluates and updates: the general sparse list
+/// ([`Activations`], fuzzy rule bases) or a crisp table's single row ([`OneHot`], weight 1).
+pub trait Features {
+    /// Whether this is always one feature of weight 1 (lets the learner skip the sum).
+    const ONE_HOT: bool;
+    /// The active features and their weights, in activation order.
+    fn rules(&self) -> (&[u32], &[f64]);
+    /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate.
+    fn overlap(&self, other: &Self) -> f64;
+}
+
+impl Features for Activations {
+    const ONE_HOT: bool = false;
+
+    #[inline(always)]
+    fn rules(&self) -> (&[u32], &[f64]) {
+        (&self.index, &self.weight)
+    }
+
+    #[inline(always)]
+    fn overlap(&self, other: &Self) -> f64 {
+        Activations::overlap(self, other)
+    }
+}
+
+/// A crisp row: the list of one feature of weight 1 (`w · q = q` exactly, so Q(s, ·) is the row).
+impl Features for OneHot {
+    const ONE_HOT: bool = true;
+
+    #[inline(always)]
+    fn rules(&self) -> (&[u32], &[f64]) {
+        (std::slice::from_ref(&self.0), &[1.0])
+    }
+
+    /// 1 for the same row, else 0: the Q(0) refresh adds α·δ to exactly the entry the update
+    /// moved, the same addition on the same values (bit for bit).
+    #[inline(always)]
+    fn overlap(&self, other: &Self) -> f64 {
+        if self.0 == other.0 {
+            1.0
+        } else {
+            0.0
+        }
+    }
+}
