@@ -143,7 +143,7 @@ pub fn read(dir: &Path) -> anyhow::Result<Option<Kept>> {
             Ok(Some(Kept::Manifest(m)))
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            let legacy = super::existing_trials(dir).map_err(|e| {
+            let legacy = super::folder::existing_trials(dir).map_err(|e| {
                 e.context(format!(
                     "{} holds a report whose size cannot be read; replace it with --force",
                     dir.display()
@@ -178,7 +178,7 @@ pub fn write(dir: &Path, m: &Manifest) -> anyhow::Result<PathBuf> {
     let path = dir.join(MANIFEST);
     let mut text = serde_json::to_string_pretty(m)?;
     text.push('\n');
-    super::write_atomic(&path, text.as_bytes())?;
+    crate::atomic::write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }
 

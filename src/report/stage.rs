@@ -9,10 +9,12 @@
 //! plan replaces the old one, and [`ReportOutcome::replaced`] says what changed.
 
 use super::compare::{self, VariantDigest, VariantInfo};
+use super::datasets;
+use super::folder::{write_folder, ReportSummary};
 use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
 use super::model::ReportData;
-use super::{parquet, write_atomic, write_folder, ReportSummary};
+use crate::atomic::write_atomic;
 use crate::cache::store::{KeyScan, Store};
 use crate::cache::Key;
 use crate::error::user_error;
@@ -235,7 +237,7 @@ pub fn write(
         out.summary.add(&ReportSummary::of(&data, Vec::new()));
         if let (Some(v), true) = (info, with_comparison) {
             if formats.has(Format::Cells) {
-                cells.push(parquet::cells_batch(&data)?);
+                cells.push(datasets::cells_batch(&data)?);
             }
             digests.push(VariantDigest::of(v.clone(), sub, &data));
         }
@@ -292,7 +294,7 @@ impl TrialsSink {
     /// ever in memory uncompressed) as one row group.
     fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
         for k in 0..data.experiments.len() {
-            let batch = parquet::trials_batch_of(&data.experiments[k..k + 1])?;
+            let batch = datasets::trials_batch_of(&data.experiments[k..k + 1])?;
             if self.writer.is_none() {
                 let file = std::fs::File::create(&self.tmp)
                     .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.tmp.display()))?;

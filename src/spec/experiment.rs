@@ -2,9 +2,11 @@
 //! resolution grid in Table I's notation — `vary` holds the varied axes `v(·)`, each a group of
 //! variables sharing one value (`x == theta`), `fixed` the constants `c(·)`.
 
-use super::load::at_field;
+use super::fields::at_field;
+use super::fields::{suggest, variable_index};
+use super::settings::{Ranges, Settings, SystemMarker};
+use super::values::AxisValues;
 use super::values::{CheckedKey, CheckedValue};
-use super::{suggest, variable_index, AxisValues, Ranges, Settings, SystemMarker};
 use crate::sim::env::{EnvParams, SystemKind};
 use crate::sim::repr::ReprKind;
 use crate::sim::rules;
@@ -117,7 +119,7 @@ pub struct ExperimentSpec<M: SystemMarker> {
     /// Published results per algorithm.
     pub reference: BTreeMap<Algorithm, Reference>,
     /// This experiment's race (replaces a pipeline-wide one).
-    pub race: Option<super::RaceSpec>,
+    pub race: Option<super::race::RaceSpec>,
     _m: PhantomData<M>,
 }
 
@@ -143,7 +145,7 @@ struct RawExperiment<M: SystemMarker> {
     #[serde(default)]
     reference: BTreeMap<Algorithm, Reference>,
     #[serde(default)]
-    race: Option<super::RaceSpec>,
+    race: Option<super::race::RaceSpec>,
 }
 
 fn both_algorithms() -> Vec<Algorithm> {
@@ -242,7 +244,7 @@ fn check_value(t: Target, v: f64) -> Result<(), String> {
     match t {
         Target::Actions => rules::actions(v as u32).map(drop),
         Target::Var(_) => rules::resolution(v as u32, None).map(drop),
-        Target::Setting(name) => super::setting_level(name, v).map(drop),
+        Target::Setting(name) => super::settings::setting_level(name, v).map(drop),
         _ => Ok(()),
     }
 }

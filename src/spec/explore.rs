@@ -13,7 +13,6 @@
 //! out). Checked against the pipeline: each entry must name rows that exist and carry a
 //! `reference:` (a fit needs one), and at least one row with a reference must be held out.
 
-use super::{PipelineSpec, Problem, SystemMarker, SystemSpec};
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 use serde::{Deserialize, Deserializer};
@@ -77,69 +76,4 @@ impl Exploratory {
     pub fn is_fit_row(&self, system: SystemKind, experiment: &str, algorithm: Algorithm) -> bool {
         self.fit_rows.iter().any(|r| r.matches(system, experiment, algorithm))
     }
-}
-
-/// Every Table III row of the pipeline: (system, experiment id, algorithm, has a reference).
-fn rows(spec: &PipelineSpec) -> Vec<(SystemKind, String, Algorithm, bool)> {
-    fn of<M: SystemMarker>(s: Option<&SystemSpec<M>>) -> Vec<(SystemKind, String, Algorithm, bool)> {
-        s.iter()
-            .flat_map(|s| &s.experiments)
-            .flat_map(|e| {
-                e.algorithms.iter().map(move |&a| (M::SYSTEM, e.id.clone(), a, e.reference.contains_key(&a)))
-            })
-            .collect()
-    }
-    let s = &spec.systems;
-    [of(s.ball_beam.as_ref()), of(s.cart_pole.as_ref()), of(s.mountain_car.as_ref())].concat()
-}
-
-/// Check the block against the pipeline's rows.
-pub fn check(spec: &PipelineSpec) -> Result<(), Problem> {
-    let Some(x) = &spec.exploratory else { return Ok(()) };
-    let all = rows(spec);
-    let at = |i: usize| vec!["exploratory".to_string(), "fit_rows".to_string(), i.to_string()];
-    if x.fit_rows.is_empty() {
-        return Err(Problem {
-            path: vec!["exploratory".into(), "fit_rows".into()],
-            message: "the list is empty; name the Table III rows that choose the reading".into(),
-        });
-    }
-    for (i, r) in x.fit_rows.iter().enumerate() {
-        let hit: Vec<_> = all.iter().filter(|(s, e, a, _)| r.matches(*s, e, *a)).collect();
-        if hit.is_empty() {
-            let of_system: Vec<String> = all
-                .iter()
-                .filter(|(s, ..)| *s == r.system)
-                .map(|(_, e, a, _)| format!("exp {e} {}", a.name()))
-                .collect();
-            let known = if of_system.is_empty() {
-                format!("the pipeline has no {}", r.system)
-            } else {
-                format!("its rows are {}", of_system.join(", "))
-            };
-            return Err(Problem {
-                path: at(i),
-                message: format!("no Table III row is {}; {known}", r.label()),
-            });
-        }
-        if !hit.iter().any(|h| h.3) {
-            return Err(Problem {
-                path: at(i),
-                message: format!(
-                    "{} has no `reference:` value, so it cannot choose a reading; name rows with a reference",
-                    r.label()
-                ),
-            });
-        }
-    }
-    let held_out = all.iter().filter(|(s, e, a, r)| *r && !x.is_fit_row(*s, e, *a)).count();
-    if held_out == 0 {
-        return Err(Problem {
-            path: vec!["exploratory".into(), "fit_rows".into()],
-            message: "the fit rows cover every row with a reference, so nothing is held out to judge the \
-                      chosen reading; leave some rows out"
-                .into(),
-        });
-    }
-    Ok(())
 }

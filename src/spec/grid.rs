@@ -61,37 +61,37 @@ impl<'de> Deserialize<'de> for VariantGrid {
                     match key.as_str() {
                         "sample" => {
                             let n = crate::sim::rules::at_least_one(map.next_value::<u64>()?)
-                                .map_err(|m| super::load::at_field(&["sample"], m))?;
+                                .map_err(|m| super::fields::at_field(&["sample"], m))?;
                             g.sample = Some(usize::try_from(n).unwrap_or(usize::MAX));
                         }
                         "seed" => g.seed = map.next_value()?,
                         path => {
                             if path.split('.').any(|p| p.trim().is_empty()) {
-                                return Err(super::load::at_field(
+                                return Err(super::fields::at_field(
                                     &[path],
                                     "the path has an empty part; write e.g. systems.cart-pole.crisp.alpha",
                                 ));
                             }
                             if path.split('.').next() == Some("variants") || path.starts_with("variant_grid")
                             {
-                                return Err(super::load::at_field(
+                                return Err(super::fields::at_field(
                                     &[path],
                                     "a grid cannot change the variants",
                                 ));
                             }
                             if g.axes.iter().any(|(p, _)| p == path) {
-                                return Err(super::load::at_field(&[path], "the path is given twice"));
+                                return Err(super::fields::at_field(&[path], "the path is given twice"));
                             }
                             let values = match map.next_value::<Value>()? {
                                 Value::Sequence(v) if v.is_empty() => {
-                                    return Err(super::load::at_field(
+                                    return Err(super::fields::at_field(
                                         &[path],
                                         "the list is empty; give at least one value",
                                     ))
                                 }
                                 Value::Sequence(v) => v,
                                 _ => {
-                                    return Err(super::load::at_field(
+                                    return Err(super::fields::at_field(
                                         &[path],
                                         "give a list of values, e.g. [2, 4] (one value is [2])",
                                     ))
@@ -99,7 +99,7 @@ impl<'de> Deserialize<'de> for VariantGrid {
                             };
                             for (i, v) in values.iter().enumerate() {
                                 if values[..i].contains(v) {
-                                    return Err(super::load::at_field(
+                                    return Err(super::fields::at_field(
                                         &[path],
                                         format!("the value {} is listed twice", shown(v)),
                                     ));
@@ -128,7 +128,7 @@ impl<'de> Deserialize<'de> for VariantGrid {
                     let ids: Vec<String> = values.iter().map(|v| id_value(v, false)).collect();
                     for (i, id) in ids.iter().enumerate() {
                         if let Some(j) = ids[..i].iter().position(|o| o == id) {
-                            return Err(super::load::at_field(
+                            return Err(super::fields::at_field(
                                 &[path],
                                 format!(
                                     "the values {} and {} give the same variant id `{id}`; keep one",
@@ -243,9 +243,9 @@ fn id_value(v: &Value, short: bool) -> String {
             Some(x) if short && x != 0.0 && x.is_finite() => {
                 let digits = (3 - x.abs().log10().floor() as i32).max(0) as usize;
                 let rounded: f64 = format!("{x:.digits$}").parse().unwrap_or(x);
-                crate::spec::format_value(rounded)
+                super::experiment::format_value(rounded)
             }
-            Some(x) => crate::spec::format_value(x),
+            Some(x) => super::experiment::format_value(x),
             None => n.to_string(),
         },
         other => shown(other),

@@ -2,8 +2,12 @@
 //! naming the file, the line and column of the field's key, the field's dotted path and what is
 //! allowed. serde_path_to_error gives the path; `locate` finds it in the text.
 
+use super::fields::{improve, split_location};
+use super::fields::{FIELD, SEP};
 use super::locate::locate_prefix;
-use super::{suggest, LoadedVariant, Override, PipelineSpec};
+use super::overrides::Override;
+use super::pipeline::PipelineSpec;
+use super::readings::LoadedVariant;
 use crate::error::user_error;
 use serde_path_to_error::Segment;
 use std::path::{Path, PathBuf};
@@ -46,7 +50,7 @@ pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
         user_error(format!("{shown}:{line}: the file is not valid UTF-8 (byte {at}); save it as UTF-8"))
     })?;
     let spec = load_str(&text, &shown.to_string(), overrides)?;
-    let variants = super::variants::resolve(&spec, &text, &shown.to_string(), overrides)?;
+    let variants = super::readings::resolve(&spec, &text, &shown.to_string(), overrides)?;
     Ok(LoadedSpec { spec, path: path.to_path_buf(), variants })
 }
 
@@ -89,7 +93,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         )));
     }
     if overrides.is_empty() {
-        if let Err(p) = super::check_whole(&spec) {
+        if let Err(p) = super::check::check_whole(&spec) {
             return Err(located(p.into()));
         }
         return Ok(spec);
@@ -108,7 +112,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
     };
     let spec = typed(doc).map_err(with_sets)?;
-    super::check_whole(&spec).map_err(|p| with_sets(p.into()))?;
+    super::check::check_whole(&spec).map_err(|p| with_sets(p.into()))?;
     Ok(spec)
 }
 
@@ -138,9 +142,9 @@ impl Failure {
     }
 }
 
-impl From<super::race::Problem> for Failure {
+impl From<super::check::Problem> for Failure {
     /// A whole-pipeline check's problem, at its field's path.
-    fn from(p: super::race::Problem) -> Self {
+    fn from(p: super::check::Problem) -> Self {
         Self { shown: p.path.len(), path: p.path, msg: p.message, yaml_at: None }
     }
 }
@@ -201,58 +205,9 @@ where
     })
 }
 
-/// Marks the sub-path that [`at_field`] puts before a message.
-const FIELD: char = '\u{1f}';
-/// Separates the sub-path's segments.
-const SEP: char = '\u{1e}';
-
-/// An error about a field below the value being deserialised (a check that sees the whole
-/// section, e.g. one parameter of `params`, or the `id` of one experiment in the list): `sub` is
-/// the field's path relative to that value, which `load_str` adds to the error's path.
-pub(super) fn at_field<E: serde::de::Error>(sub: &[&str], msg: impl std::fmt::Display) -> E {
-    E::custom(format!("{FIELD}{}{FIELD}{msg}", sub.join(&SEP.to_string())))
-}
-
-/// A typing error's message without its position, with "did you mean" where it helps.
-pub(super) fn message(e: &serde_yaml::Error) -> String {
-    let msg = split_location(e).0;
-    // A field marker from `at_field` (no path tracking here): show the sub-path as words.
-    let msg = match msg.split_once(FIELD).and_then(|(head, rest)| Some((head, rest.split_once(FIELD)?))) {
-        Some((head, (sub, tail))) => format!("{head}{}: {tail}", sub.replace(SEP, ".")),
-        None => msg,
-    };
-    improve(&msg)
-}
-
-/// serde_yaml's message without its " at line L column C" suffix, and the location.
-fn split_location(e: &serde_yaml::Error) -> (String, Option<(usize, usize)>) {
-    let full = e.to_string();
-    let loc = e.location().map(|l| (l.line(), l.column()));
-    let msg = match full.rfind(" at line ") {
-        Some(i) if loc.is_some() => full[..i].to_string(),
-        _ => full,
-    };
-    (msg, loc)
-}
-
-/// Add "did you mean" to unknown-field and unknown-variant messages.
-fn improve(msg: &str) -> String {
-    for kind in ["unknown field `", "unknown variant `"] {
-        if let Some(start) = msg.find(kind) {
-            let rest = &msg[start + kind.len()..];
-            let Some(end) = rest.find('`') else { continue };
-            let word = &rest[..end];
-            let expected: Vec<&str> = rest[end..].split('`').skip(2).step_by(2).collect();
-            if let Some(s) = suggest(word, expected.iter().copied()) {
-                return format!("{msg}; did you mean `{s}`?");
-            }
-        }
-    }
-    msg.to_string()
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::fields::{at_field, message};
     use super::*;
 
     #[test]

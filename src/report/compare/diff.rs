@@ -5,7 +5,7 @@
 use super::super::figures::{
     self, cell_label_value, columns, ink_on, Canvas, Drawn, Grid, Picture, Res, INK, MISSING, SUBTLE,
 };
-use super::{CellDigest, ExpDigest, VariantDigest};
+use super::digest::{CellDigest, ExpDigest, VariantDigest};
 use crate::analysis::{bootstrap_diff_ci, BOOTSTRAP_RESAMPLES};
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;

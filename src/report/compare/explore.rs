@@ -3,8 +3,8 @@
 //! (rank 1) is then judged on the held-out rows, beside the as-written reading (the listed variant
 //! without a `set`), and the number of readings tried is stated.
 
+use super::digest::{VariantDigest, VariantInfo};
 use super::fit::{fit_order, Fit, RowFit, Verdict, FIT_ORDER, VERDICT_RULE};
-use super::{VariantDigest, VariantInfo};
 use crate::plan::Plan;
 use crate::report::table::{Align, Column, Row, Table, Value};
 use crate::spec::explore::Exploratory;

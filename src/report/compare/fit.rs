@@ -5,7 +5,7 @@
 
 use super::super::model::{resolution_columns, ReportData};
 use super::super::table::{Align, Column, Row, Table, Value};
-use super::VariantInfo;
+use super::info::VariantInfo;
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 

@@ -10,8 +10,12 @@
 //!   the table and the difference figures.
 
 pub mod diff;
+mod digest;
 pub mod explore;
 pub mod fit;
+mod info;
+
+pub use digest::{CellDigest, ExpDigest, VariantDigest, VariantInfo};
 
 pub use diff::{all_diffs, diff_figure, diff_label, diff_seed, diverging, matching, CellDiff, DIFF_RULE};
 pub use fit::{
@@ -19,116 +23,11 @@ pub use fit::{
 };
 
 use super::formats::{Format, Formats};
-use super::model::ReportData;
 use super::table::html::escape_html as esc;
 use super::table::{render, Csv, Html, Markdown, Table};
-use crate::cache::Key;
-use crate::plan::{Cell, Experiment, Plan};
+use crate::plan::Plan;
 use crate::sim::env::SystemKind;
-use crate::sim::Algorithm;
 use std::path::{Path, PathBuf};
-
-/// A variant's identity, as the pipeline declares it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VariantInfo {
-    /// Identifier (also its report folder's name).
-    pub id: String,
-    /// Optional title.
-    pub title: Option<String>,
-}
-
-/// What the comparison keeps of one cell: its present trials' keys (for the bootstrap seed) and
-/// counted episodes, and their mean.
-#[derive(Debug, Clone)]
-pub struct CellDigest<'p> {
-    /// The planned cell.
-    pub cell: &'p Cell,
-    /// Keys of the present trials, in seed order.
-    pub keys: Vec<Key>,
-    /// Their counted episodes.
-    pub values: Vec<f64>,
-    /// Mean of `values`.
-    pub mean: Option<f64>,
-}
-
-/// What the comparison keeps of one experiment.
-#[derive(Debug, Clone)]
-pub struct ExpDigest<'p> {
-    /// The planned experiment.
-    pub exp: &'p Experiment,
-    /// Its cells, in plan order.
-    pub cells: Vec<CellDigest<'p>>,
-}
-
-impl AsRef<Experiment> for ExpDigest<'_> {
-    fn as_ref(&self) -> &Experiment {
-        self.exp
-    }
-}
-
-impl ExpDigest<'_> {
-    /// The index of the cell with this algorithm and coordinates.
-    pub fn find(&self, algorithm: Algorithm, coords: &[f64]) -> Option<usize> {
-        self.cells.iter().position(|c| c.cell.algorithm == algorithm && c.cell.coords == coords)
-    }
-}
-
-/// What the comparison keeps of one variant's report.
-#[derive(Debug, Clone)]
-pub struct VariantDigest<'p> {
-    /// The variant.
-    pub info: VariantInfo,
-    /// Its fit to the reference values.
-    pub fit: Fit,
-    /// Its Table III rows scored one by one (what `fit` tallies).
-    pub rows: Vec<RowFit>,
-    /// Planned (cell, seed) trials.
-    pub trials_planned: usize,
-    /// Of those, present.
-    pub trials_present: usize,
-    /// Its experiments.
-    pub exps: Vec<ExpDigest<'p>>,
-}
-
-impl<'p> VariantDigest<'p> {
-    /// The digest of `data`, the report data of `plan` (whose cells the digest borrows, so it
-    /// outlives the trials `data` borrows).
-    pub fn of(info: VariantInfo, plan: &'p Plan, data: &ReportData) -> Self {
-        let exps = plan
-            .experiments
-            .iter()
-            .zip(&data.experiments)
-            .map(|(exp, e)| ExpDigest {
-                exp,
-                cells: exp
-                    .cells
-                    .iter()
-                    .zip(&e.cells)
-                    .map(|(cell, c)| CellDigest {
-                        cell,
-                        keys: c.trials.iter().map(|t| t.planned.key).collect(),
-                        values: c.trials.iter().map(|t| f64::from(t.counted)).collect(),
-                        mean: c.summary.mean,
-                    })
-                    .collect(),
-            })
-            .collect();
-        let rows = rows_of(data);
-        Self {
-            info,
-            fit: Fit::from_rows(&rows),
-            rows,
-            trials_planned: data.trials_planned,
-            trials_present: data.trials_present,
-            exps,
-        }
-    }
-
-    /// Systems present, in report order.
-    pub fn systems(&self) -> Vec<SystemKind> {
-        SystemKind::ALL.into_iter().filter(|s| self.exps.iter().any(|e| e.exp.system == *s)).collect()
-    }
-}
 
 /// Write the comparison of `variants` (the first is the base of the difference figures) of
 /// `plan` into `dir` in `formats`. Returns the files written, relative to `dir`, in writing order.
@@ -138,7 +37,7 @@ pub fn write_comparison(
     variants: &[VariantDigest],
     formats: Formats,
 ) -> anyhow::Result<Vec<PathBuf>> {
-    let mut out = super::Folder::create(dir)?;
+    let mut out = super::folder::Folder::create(dir)?;
     let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
     let table = match &plan.exploratory {
         Some(x) => explore::search_table(plan, x, variants),
@@ -358,8 +257,9 @@ fn readme(
 mod tests {
     use super::*;
     use crate::analysis::bootstrap_diff_ci;
-    use crate::cache::TrialRecord;
+    use crate::cache::{Key, TrialRecord};
     use crate::plan::plan;
+    use crate::report::model::ReportData;
     use crate::sim::run_trial;
     use crate::spec::{load_str, LoadedSpec, Override};
     use plotters::style::RGBColor;

@@ -2,7 +2,7 @@
 //! algorithm, with the paper's values when the pipeline has them) and one cell table per
 //! experiment.
 
-use super::{Align, Column, Row, Table, Value};
+use super::model::{Align, Column, Row, Table, Value};
 use crate::analysis::{BEST_RULE, CENSORING, RACE_RULE};
 use crate::report::model::{resolution_columns, ExpData, ReportData};
 

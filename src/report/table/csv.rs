@@ -1,7 +1,7 @@
 //! CSV (RFC 4180, `\n` line ends): one header line of field names, then one line per row. Numbers
 //! are written in their shortest exact form, missing values as empty fields; no caption.
 
-use super::{Column, Row, Table, TableWriter, Value};
+use super::model::{Column, Row, Table, TableWriter, Value};
 
 /// CSV exporter.
 #[derive(Debug, Clone, Copy, Default)]

@@ -5,7 +5,7 @@
 //! tags (`</td>`, `</th>`), which HTML implies before the next cell or the row's end. Styling is
 //! left to the page.
 
-use super::{display, Align, Column, Row, Symbols, Table, TableWriter};
+use super::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
 
 /// HTML table exporter.
 #[derive(Debug, Clone, Copy, Default)]

@@ -2,7 +2,7 @@
 //! of the report (λ, θ, ẋ, ±, —, †, Δ) become math or TeX ligatures so pdflatex needs nothing
 //! beyond `\usepackage{booktabs}`.
 
-use super::{display, Align, Column, Row, Symbols, Table, TableWriter};
+use super::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
 
 /// LaTeX exporter.
 #[derive(Debug, Clone, Copy, Default)]

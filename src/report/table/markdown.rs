@@ -1,6 +1,6 @@
 //! GitHub-flavoured Markdown: the caption as a bold-titled paragraph, then a pipe table.
 
-use super::{display, Align, Column, Row, Symbols, Table, TableWriter};
+use super::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
 
 /// Markdown exporter.
 #[derive(Debug, Clone, Copy, Default)]
