@@ -9,7 +9,6 @@
 pub mod analysis;
 pub mod atomic;
 pub mod bench;
-pub mod bench_pipeline;
 pub mod cache;
 pub mod parquet_io;
 pub mod pipeline;

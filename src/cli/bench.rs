@@ -79,7 +79,7 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
 
 /// `qsweep bench --pipeline P`: time the plan's most expensive cells.
 fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
-    use crate::bench_pipeline::{format_row, header, ranked_cells, time_cell, CostBasis};
+    use crate::bench::pipeline::{format_row, header, ranked_cells, time_cell, CostBasis};
     if a.top == 0 {
         return Err(user_error("--top: must be at least 1"));
     }

@@ -156,11 +156,11 @@ pub struct PipelineBenchReport {
     /// Pipeline name.
     pub pipeline: String,
     /// How the cells were ranked: `cached` (CPU seconds of the cached trials) or `estimated`.
-    pub basis: crate::bench_pipeline::CostBasis,
+    pub basis: crate::bench::pipeline::CostBasis,
     /// Distinct cells of the plan.
     pub cells: usize,
     /// The timed cells, most expensive first.
-    pub results: Vec<crate::bench_pipeline::CellBench>,
+    pub results: Vec<crate::bench::pipeline::CellBench>,
 }
 
 impl PipelineBenchReport {

@@ -64,7 +64,7 @@ fn pipeline_bench_times_the_costliest_cells_to_their_real_stop() {
         let name = r["cell"].as_str().unwrap();
         let steps: u64 = recs
             .iter()
-            .filter(|rec| qsweep::bench_pipeline::cell_name(None, &cell_of(rec)) == name)
+            .filter(|rec| qsweep::bench::pipeline::cell_name(None, &cell_of(rec)) == name)
             .map(|rec| rec.outcome.total_steps)
             .sum();
         assert_eq!(r["steps"].as_u64().unwrap(), steps, "{name}: the real trials, to their real stop");

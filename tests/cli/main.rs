@@ -9,6 +9,7 @@ mod explore;
 mod feasible;
 mod helpers;
 mod json_formats;
+mod layering;
 mod mutations;
 mod no_overwrite;
 mod pipeline;

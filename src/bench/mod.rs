@@ -4,6 +4,9 @@
 //! Nothing here is a copy of the engine. A budget is imposed purely through a trial's limits (see
 //! [`with_budget`]), so the measured code is exactly what a sweep runs: environment, representation,
 //! learner, episode bookkeeping and all. `qsweep bench` and `cargo bench` both call [`run_cases`].
+//! [`pipeline`] benchmarks the real work instead: a pipeline's costliest cells with their real seeds.
+
+pub mod pipeline;
 
 use crate::sim::config::{Success, TrialConfig};
 use crate::sim::env::SystemKind;
