@@ -22,3 +22,4 @@ pub mod spec;
 pub mod cli;
 pub mod error;
 pub mod exec;
+pub mod formats;

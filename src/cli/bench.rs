@@ -70,8 +70,10 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
     }
     let results = bench::run_cases(&cases, &a.filter, a.steps, a.repeat, print_row);
     if a.json {
-        let v =
-            super::json::BenchReport { format_version: super::json::BenchReport::FORMAT_VERSION, results };
+        let v = crate::formats::BenchReport {
+            format_version: crate::formats::BenchReport::FORMAT_VERSION,
+            results,
+        };
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
     Ok(crate::error::exit::OK)
@@ -118,8 +120,8 @@ fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
         results.push(r);
     }
     if a.json {
-        let v = super::json::PipelineBenchReport {
-            format_version: super::json::PipelineBenchReport::FORMAT_VERSION,
+        let v = crate::formats::PipelineBenchReport {
+            format_version: crate::formats::PipelineBenchReport::FORMAT_VERSION,
             pipeline: plan.name.clone(),
             basis,
             cells: cells.len(),

@@ -4,7 +4,6 @@ mod args;
 mod bench;
 mod feasible;
 mod gc;
-pub mod json;
 mod pipeline_args;
 mod report;
 mod run;

@@ -60,8 +60,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        let v = super::json::RunSummary {
-            format_version: super::json::RunSummary::FORMAT_VERSION,
+        let v = crate::formats::RunSummary {
+            format_version: crate::formats::RunSummary::FORMAT_VERSION,
             pipeline: plan.name.clone(),
             executed: report.executed,
             cached: done.cached,

@@ -1,9 +1,9 @@
 //! `qsweep status`: what is cached and what is missing, per system and experiment, without running
 //! anything; `--explain` says why missing cells are missing.
 
-use super::json::{StatusExperiment, StatusRace, StatusReport};
 use super::pipeline_args::PipelineArgs;
 use crate::cache::TrialRecord;
+use crate::formats::{StatusExperiment, StatusRace, StatusReport};
 use clap::Args;
 use serde_json::Value;
 use std::collections::{BTreeMap, HashMap, HashSet};

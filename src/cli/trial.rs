@@ -2,38 +2,14 @@
 
 use super::args;
 use crate::error::user_error;
-use crate::sim::config::TrialConfig;
+use crate::formats::TrialReport;
+use crate::plan::{one_cell, CellRequest};
+use crate::sim::config::{TieBreak, TrialConfig};
 use crate::sim::env::{SystemKind, TaskKind};
-use crate::sim::run_trial;
-use crate::spec::{load_str, LoadedSpec, Override};
-use clap::{Args, ValueEnum};
-
-/// Representation names on the command line.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ReprArg {
-    /// Uniform bins per variable (tabular Q).
-    Crisp,
-    /// Gaussian fuzzy sets per variable.
-    Fuzzy,
-}
-
-/// Algorithm names on the command line.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum AlgorithmArg {
-    /// One-step Q-learning.
-    Q0,
-    /// Q(λ) with eligibility traces.
-    QLambda,
-}
-
-/// Tie-breaking names on the command line.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum TieArg {
-    /// Uniformly at random among tied actions.
-    Random,
-    /// The lowest-index tied action.
-    First,
-}
+use crate::sim::repr::ReprKind;
+use crate::sim::{run_trial, Algorithm};
+use crate::spec::Override;
+use clap::Args;
 
 /// Arguments of `qsweep trial`.
 #[derive(Debug, Args)]
@@ -43,7 +19,7 @@ pub struct TrialArgs {
     pub env: SystemKind,
     /// State representation.
     #[arg(long, value_enum)]
-    pub repr: ReprArg,
+    pub repr: ReprKind,
     /// Bins or fuzzy sets per state variable, comma-separated in state order (one value = all variables).
     #[arg(long, value_parser = args::count_list)]
     pub resolution: args::Counts,
@@ -52,7 +28,7 @@ pub struct TrialArgs {
     pub actions: Option<u32>,
     /// Learning algorithm.
     #[arg(long, value_enum)]
-    pub algorithm: AlgorithmArg,
+    pub algorithm: Algorithm,
     /// Seed of the trial's random stream.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -73,7 +49,7 @@ pub struct TrialArgs {
     pub q_init: Option<f64>,
     /// Greedy tie-breaking [default: random].
     #[arg(long, value_enum)]
-    pub tie_break: Option<TieArg>,
+    pub tie_break: Option<TieBreak>,
     /// Use replacing traces instead of accumulating ones.
     #[arg(long)]
     pub replacing_traces: bool,
@@ -112,10 +88,9 @@ pub struct TrialArgs {
     pub json: bool,
 }
 
-/// Resolve the arguments into a validated trial configuration through the pipeline path: the
-/// flags become a one-cell pipeline plus `--set` overrides, which `spec` parses and `plan`
-/// resolves exactly as it does a pipeline file, so `qsweep trial` and a pipeline cell with the
-/// same settings have the same configuration and the same cache key.
+/// Resolve the arguments into a validated trial configuration: the flags become the settings of
+/// a one-cell plan ([`one_cell`]), resolved exactly as a pipeline cell with the same settings, so
+/// `qsweep trial` and that cell have the same configuration and the same cache key.
 pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
     let system = a.env;
     let dim = system.dim();
@@ -130,77 +105,51 @@ pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
         )))
         }
     };
-    let actions = a.actions.unwrap_or(system.default_actions());
-    let repr = match a.repr {
-        ReprArg::Crisp => "crisp",
-        ReprArg::Fuzzy => "fuzzy",
-    };
-    let algorithm = match a.algorithm {
-        AlgorithmArg::Q0 => "q0",
-        AlgorithmArg::QLambda => "q-lambda",
-    };
-    let fixed: Vec<String> =
-        system.variables().iter().zip(&resolution).map(|(v, r)| format!("{v}: {r}")).collect();
-    let text = format!(
-        "name: trial\nseeds: [{seed}]\nsystems:\n  {system}:\n    experiments:\n      - id: trial\n        repr: {repr}\n        algorithms: [{algorithm}]\n        vary: {{ actions: {actions} }}\n        fixed: {{ {fixed} }}\n",
-        seed = a.seed,
-        fixed = fixed.join(", "),
-    );
-    let mut sets: Vec<String> = Vec::new();
-    let mut setting = |name: &str, v: Option<String>| {
+    let mut overrides = Vec::new();
+    let mut setting = |name: &str, v: Option<serde_yaml::Value>| {
         if let Some(v) = v {
-            sets.push(format!("defaults.{name}={v}"));
+            overrides.push(Override::setting(&["defaults", name], v));
         }
     };
-    setting("epsilon", a.epsilon.map(|v| v.to_string()));
-    setting("gamma", a.gamma.map(|v| v.to_string()));
-    setting("alpha", a.alpha.map(|v| v.to_string()));
-    setting("lambda", a.lambda.map(|v| v.to_string()));
-    setting("q_init", a.q_init.map(|v| v.to_string()));
-    setting(
-        "tie_break",
-        a.tie_break.map(|t| match t {
-            TieArg::Random => "random".to_string(),
-            TieArg::First => "first".to_string(),
-        }),
-    );
-    setting("traces", a.replacing_traces.then(|| "replacing".to_string()));
-    setting("watkins_cut", a.watkins_cut.then(|| "true".to_string()));
-    setting("width", a.width.map(|v| v.to_string()));
-    setting("prune", a.prune.map(|v| v.to_string()));
-    setting("trace_cutoff", a.trace_cutoff.map(|v| v.to_string()));
-    setting("max_episodes", a.max_episodes.map(|v| v.to_string()));
-    setting("max_total_steps", a.max_total_steps.map(|v| v.to_string()));
+    let num = |v: Option<f64>| v.map(serde_yaml::Value::from);
+    setting("epsilon", num(a.epsilon));
+    setting("gamma", num(a.gamma));
+    setting("alpha", num(a.alpha));
+    setting("lambda", num(a.lambda));
+    setting("q_init", num(a.q_init));
+    setting("tie_break", a.tie_break.map(|t| serde_yaml::to_value(t).unwrap_or_default()));
+    setting("traces", a.replacing_traces.then(|| "replacing".into()));
+    setting("watkins_cut", a.watkins_cut.then_some(true.into()));
+    setting("width", num(a.width));
+    setting("prune", num(a.prune));
+    setting("trace_cutoff", num(a.trace_cutoff));
+    setting("max_episodes", a.max_episodes.map(serde_yaml::Value::from));
+    setting("max_total_steps", a.max_total_steps.map(serde_yaml::Value::from));
     if let Some(v) = a.balance_steps {
         if TaskKind::of(system) != TaskKind::Survival {
             return Err(user_error(format!(
                 "--balance-steps: {system} is a goal-reaching task, not a survival task; use --set success.within=N"
             )));
         }
-        sets.push(format!("systems.{system}.success.steps={v}"));
+        overrides.push(Override::setting(&["systems", system.name(), "success", "steps"], v));
     }
     let mut env = crate::sim::env::EnvParams::default_for(system);
     for (name, v) in &a.params {
         env.set_param(name, *v).map_err(|e| user_error(format!("--param: {e}")))?;
-        sets.push(format!("systems.{system}.params.{name}={v}"));
-    }
-    let mut overrides = Vec::new();
-    for s in &sets {
-        overrides.push(Override::parse(s).map_err(user_error)?);
+        overrides.push(Override::setting(&["systems", system.name(), "params", name], *v));
     }
     for s in &a.set {
         overrides.push(trial_override(system, s)?);
     }
-    let spec = load_str(&text, "qsweep trial", &overrides)?;
-    let loaded = LoadedSpec { spec, path: "qsweep trial".into(), variants: Vec::new() };
-    let plan = crate::plan::plan(&loaded, None)?;
-    let cell = plan
-        .experiments
-        .into_iter()
-        .flat_map(|e| e.cells)
-        .next()
-        .ok_or_else(|| anyhow::anyhow!("the one-cell pipeline of qsweep trial planned no cell"))?;
-    Ok(cell.config)
+    one_cell(&CellRequest {
+        system,
+        repr: a.repr,
+        resolution,
+        actions: a.actions.unwrap_or(system.default_actions()),
+        algorithm: a.algorithm,
+        seed: a.seed,
+        overrides,
+    })
 }
 
 /// A `--set` of `qsweep trial`: a bare setting name (`start=gym`) means `defaults.NAME`, a path
@@ -226,8 +175,8 @@ pub fn run(a: TrialArgs) -> anyhow::Result<u8> {
     let out = run_trial(&cfg, a.seed);
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        let v = super::json::TrialReport {
-            format_version: super::json::TrialReport::FORMAT_VERSION,
+        let v = TrialReport {
+            format_version: TrialReport::FORMAT_VERSION,
             config: cfg.clone(),
             seed: a.seed,
             outcome: out.clone(),

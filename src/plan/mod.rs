@@ -3,8 +3,10 @@
 //! before hashing, so a changed default changes exactly the keys it affects. What a plan is:
 //! [`resolved`]; how a pipeline becomes one: [`resolve`].
 
+mod one_cell;
 mod resolve;
 mod resolved;
 
+pub use one_cell::{one_cell, CellRequest};
 pub use resolve::{plan, plan_variants, DEFAULT_MAX_TRIALS};
 pub use resolved::{Cell, Experiment, Plan, PlannedTrial, Variant};

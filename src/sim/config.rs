@@ -7,7 +7,9 @@ use super::rules;
 use serde::{Deserialize, Serialize};
 
 /// Q(0) or Q(λ).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, clap::ValueEnum,
+)]
 pub enum Algorithm {
     /// One-step Q-learning, eqs. (4)–(5) / (19).
     #[serde(rename = "q0")]
@@ -38,7 +40,7 @@ impl Algorithm {
 }
 
 /// How greedy ties between equal Q-values are broken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum TieBreak {
     /// Uniformly at random among the tied actions (uses the trial's random stream).

@@ -42,6 +42,17 @@ impl Override {
         })
     }
 
+    /// The override of `path` by a typed value (what `--set PATH=VALUE` with that value gives).
+    pub fn setting(path: &[&str], value: impl serde::Serialize) -> Self {
+        let value = serde_yaml::to_value(value).unwrap_or(Value::Null);
+        let shown = serde_yaml::to_string(&value).unwrap_or_default();
+        Self {
+            path: path.iter().map(|p| p.to_string()).collect(),
+            raw: format!("{}={}", path.join("."), shown.trim()),
+            value,
+        }
+    }
+
     /// Apply to a document, creating missing mappings along the path.
     pub fn apply(&self, doc: &mut Value) -> Result<(), String> {
         let mut node = doc;

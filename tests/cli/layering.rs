@@ -15,7 +15,8 @@ const LAYERS: &[&[&str]] = &[
     &["exec"],
     &["report"],
     &["pipeline"],
-    &["bench", "slurm", "status", "formats"],
+    &["bench", "slurm", "status"],
+    &["formats"],
     &["cli"],
 ];
 

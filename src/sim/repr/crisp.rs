@@ -19,7 +19,7 @@ use super::activation::{strides, Activations, Encode, OneHot, Representation};
 use serde::{Deserialize, Serialize};
 
 /// Where crisp bin edges lie (see the module documentation for the exact edges).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Binning {
     /// `n` equal bins over `[lo, hi]` (2 bins of a symmetric range split at 0).

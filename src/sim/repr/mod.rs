@@ -14,7 +14,9 @@ pub use fuzzy::{Fuzzy, HALF_CROSSING_WIDTH, MAX_SETS};
 use serde::{Deserialize, Serialize};
 
 /// Crisp bins or fuzzy sets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum ReprKind {
     /// Uniform bins per variable (tabular Q).
