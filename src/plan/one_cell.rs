@@ -6,7 +6,7 @@ use super::resolve::plan;
 use crate::sim::env::SystemKind;
 use crate::sim::repr::ReprKind;
 use crate::sim::{Algorithm, TrialConfig};
-use crate::spec::{load_str, LoadedSpec, Override};
+use crate::spec::{load_value, LoadedSpec, Override};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -51,7 +51,8 @@ struct Experiment<'a> {
     fixed: BTreeMap<&'a str, u32>,
 }
 
-/// Resolve one cell: the request becomes a one-cell pipeline plus its overrides, which `spec`
+/// Resolve one cell: the request becomes a one-cell pipeline (typed values, no YAML text) plus its
+/// overrides, which `spec`
 /// checks and `plan` resolves exactly as it does a pipeline file's.
 pub fn one_cell(r: &CellRequest) -> anyhow::Result<TrialConfig> {
     let fixed = r.system.variables().iter().copied().zip(r.resolution.iter().copied()).collect();
@@ -71,8 +72,7 @@ pub fn one_cell(r: &CellRequest) -> anyhow::Result<TrialConfig> {
             },
         )]),
     };
-    let text = serde_yaml::to_string(&pipeline)?;
-    let spec = load_str(&text, "qsweep trial", &r.overrides)?;
+    let spec = load_value(serde_yaml::to_value(&pipeline)?, "qsweep trial", &r.overrides)?;
     let loaded = LoadedSpec { spec, path: "qsweep trial".into(), variants: Vec::new() };
     let planned = plan(&loaded, None)?;
     planned

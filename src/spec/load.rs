@@ -98,7 +98,17 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
         }
         return Ok(spec);
     }
-    let mut doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| located(Failure::from(e)))?;
+    let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| located(Failure::from(e)))?;
+    load_value(doc, origin, overrides)
+}
+
+/// Check a pipeline given as a YAML value (built in code, so it has no lines to point at) with
+/// `--set` overrides applied in order: errors name the field and the overrides that touch it.
+pub fn load_value(
+    mut doc: serde_yaml::Value,
+    origin: &str,
+    overrides: &[Override],
+) -> anyhow::Result<PipelineSpec> {
     for o in overrides {
         o.apply(&mut doc).map_err(user_error)?;
     }
@@ -109,7 +119,11 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
             overrides.iter().filter(|o| o.path.starts_with(&e.path) || e.path.starts_with(&o.path)).collect();
         let from = if from.is_empty() { overrides.iter().collect() } else { from };
         let sets: Vec<&str> = from.iter().map(|o| o.raw.as_str()).collect();
-        user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
+        if sets.is_empty() {
+            user_error(format!("{origin}: {}", e.message()))
+        } else {
+            user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
+        }
     };
     let spec = typed(doc).map_err(with_sets)?;
     super::check::check_whole(&spec).map_err(|p| with_sets(p.into()))?;

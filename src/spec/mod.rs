@@ -43,7 +43,7 @@ mod variants;
 pub use check::Problem;
 pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference, Target, AXIS_SETTINGS};
 pub use fields::{safe_folder_name, suggest, variable_index};
-pub use load::{load, load_str, LoadedSpec};
+pub use load::{load, load_str, load_value, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
 pub use pipeline::{PipelineSpec, Systems};
