@@ -111,7 +111,8 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
     let s = &o.summary;
     let page = if opts.formats.has(Format::Html) { "index.html" } else { "" };
     println!(
-        "report: {} ({} of {} planned trials present, {} of {} cells)",
+        "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
+         that uses it, the distinct trials are the `executed`/`cached` counts)",
         opts.dir.join(page).display(),
         s.trials_present,
         s.trials_planned,

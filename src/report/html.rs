@@ -4,7 +4,7 @@
 //! stored once) and a cell table per experiment, plus links to the data files.
 
 use super::curves::CURVE_RULE;
-use super::formats::Formats;
+use super::formats::{Format, Formats};
 use super::model::{ExpData, ReportData};
 use super::table::{cell_table, render, table3, Html};
 use crate::analysis::{BEST_RULE, CENSORING};
@@ -87,17 +87,30 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
         h.push_str(&format!(" Reference values: {}.", esc(src)));
     }
     h.push_str("</p>\n");
-    let trials = if plan.report_variant().is_some() {
-        "<a href=\"../trials.parquet\">../trials.parquet</a> (one row per trial of every variant, with a \
-         <code>variant</code> column; written by <code>qsweep report</code>, not committed)"
-    } else {
-        "<a href=\"trials.parquet\">trials.parquet</a> (one row per trial)"
-    };
-    h.push_str(&format!(
-        "<p>Data: <a href=\"table3.csv\">table3.csv</a> · <a href=\"table3.md\">table3.md</a> · \
-         <a href=\"table3.tex\">table3.tex</a> · <a href=\"cells.parquet\">cells.parquet</a> (one row per cell) · \
-         {trials}</p>\n"
-    ));
+    // Only the files this report writes (`--formats`).
+    let mut links = Vec::new();
+    for (f, file, note) in [
+        (Format::Csv, "table3.csv", ""),
+        (Format::Md, "table3.md", ""),
+        (Format::Tex, "table3.tex", ""),
+        (Format::Cells, "cells.parquet", " (one row per cell)"),
+    ] {
+        if formats.has(f) {
+            links.push(format!("<a href=\"{file}\">{file}</a>{note}"));
+        }
+    }
+    if formats.has(Format::Trials) {
+        links.push(if plan.report_variant().is_some() {
+            "<a href=\"../trials.parquet\">../trials.parquet</a> (one row per trial of every variant, with a \
+             <code>variant</code> column; written by <code>qsweep report</code>, not committed)"
+                .to_string()
+        } else {
+            "<a href=\"trials.parquet\">trials.parquet</a> (one row per trial)".to_string()
+        });
+    }
+    if !links.is_empty() {
+        h.push_str(&format!("<p>Data: {}</p>\n", links.join(" · ")));
+    }
     let systems = data.systems();
     h.push_str("<nav><a href=\"#table3\">Table III</a>");
     for s in &systems {

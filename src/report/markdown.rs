@@ -2,7 +2,7 @@
 //! Markdown and SVG images, not HTML pages). The same identity as `index.html` (pipeline,
 //! variant, its `set` overrides), Table III, and each system's figures.
 
-use super::formats::Formats;
+use super::formats::{Format, Formats};
 use super::html::identity;
 use super::model::ReportData;
 use super::table::{render, Markdown, Table};
@@ -18,11 +18,27 @@ pub fn page(data: &ReportData, t3: &Table, formats: Formats) -> String {
     if let Some(d) = &data.plan.description {
         m.push_str(&format!("{}\n\n", d.trim()));
     }
-    m.push_str(&format!(
-        "Trials present: {} of {} planned. Data: [table3.csv](table3.csv), [table3.tex](table3.tex), \
-         [cells.parquet](cells.parquet); `index.html` shows every cell.\n\n",
-        data.trials_present, data.trials_planned
-    ));
+    // Only the files this report writes (`--formats`).
+    let links: Vec<String> =
+        [(Format::Csv, "table3.csv"), (Format::Tex, "table3.tex"), (Format::Cells, "cells.parquet")]
+            .into_iter()
+            .filter(|(f, _)| formats.has(*f))
+            .map(|(_, file)| format!("[{file}]({file})"))
+            .collect();
+    m.push_str(&format!("Trials present: {} of {} planned.", data.trials_present, data.trials_planned));
+    if !links.is_empty() {
+        m.push_str(&format!(" Data: {}", links.join(", ")));
+    }
+    if formats.has(Format::Html) {
+        m.push_str(if links.is_empty() {
+            " `index.html` shows every cell."
+        } else {
+            "; `index.html` shows every cell."
+        });
+    } else if !links.is_empty() {
+        m.push('.');
+    }
+    m.push_str("\n\n");
     m.push_str(&render(t3, &Markdown));
     if let Some(ext) = formats.figure_ext() {
         for s in data.systems() {

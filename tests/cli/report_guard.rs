@@ -34,6 +34,49 @@ fn formats_choose_the_files_and_a_report_removes_the_files_it_no_longer_writes()
     assert_eq!(std::fs::read(dir.join("index.html")).unwrap(), before);
 }
 
+/// The local files a page links: `href="X"` in HTML, `](X)` in Markdown, without anchors or URLs.
+fn local_links(page: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for open in ["href=\"", "](", "src=\""] {
+        let close = if open == "](" { ')' } else { '"' };
+        for part in page.split(open).skip(1) {
+            let target = part.split(close).next().unwrap_or("");
+            let target = target.split('#').next().unwrap_or("");
+            if !target.is_empty() && !target.contains("://") && !target.starts_with("data:") {
+                out.push(target.to_string());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn pages_linked_files_that_formats_did_not_write() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let p = p.to_str().unwrap();
+    let dir = sb.path("reports/tiny");
+    for formats in ["md,html", "html,svg", "csv,html,md", "cells,html,tex,md"] {
+        sb.qsweep(&["run", p, "--quiet", "--force", "--formats", formats]).assert().success();
+        for page in ["index.html", "README.md"] {
+            let Ok(text) = std::fs::read_to_string(dir.join(page)) else { continue };
+            let links = local_links(&text);
+            for l in &links {
+                assert!(
+                    dir.join(l).exists(),
+                    "{page} with --formats {formats} links {l}, which was not written"
+                );
+            }
+            if formats.contains("csv") {
+                assert!(
+                    links.iter().any(|l| l == "table3.csv"),
+                    "{page} with --formats {formats}: {links:?}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn bad_formats_an_out_that_is_a_file_and_unknown_manifests_are_usage_errors() {
     let done = Test::new()

@@ -84,11 +84,15 @@ pub fn write_comparison(
             }
         }
     }
+    let notes = dir.join(NOTES).is_file();
     if formats.has(Format::Html) {
-        put("index.html", page(plan, variants, &table, held_out.as_ref(), &figs, formats).as_bytes())?;
+        put("index.html", page(plan, variants, &table, held_out.as_ref(), &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        put("README.md", readme(plan, variants, &table, held_out.as_ref(), &figs, formats).as_bytes())?;
+        put(
+            "README.md",
+            readme(plan, variants, &table, held_out.as_ref(), &figs, formats, notes).as_bytes(),
+        )?;
     }
     Ok(out.files)
 }
@@ -112,7 +116,11 @@ fn heading(plan: &Plan) -> String {
 
 type FigRef<'a> = (&'a VariantInfo, SystemKind, String, (u32, u32));
 
-/// The comparison page.
+/// The hand-written notes a comparison folder may hold beside the report (the paper's
+/// `REPLICATION.md`): never written or removed by qsweep, linked from the page when present.
+pub const NOTES: &str = "REPLICATION.md";
+
+/// The comparison page; `notes`: the folder holds [`NOTES`].
 fn page(
     plan: &Plan,
     variants: &[VariantDigest],
@@ -120,6 +128,7 @@ fn page(
     held_out: Option<&Table>,
     figs: &[FigRef],
     formats: Formats,
+    notes: bool,
 ) -> String {
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     let mut h = String::new();
@@ -151,8 +160,25 @@ fn page(
             ));
         }
     }
-    h.push_str("</ul>\n<p>Data: <a href=\"variants.csv\">variants.csv</a> · <a href=\"variants.md\">variants.md</a> · \
-                <a href=\"cells.parquet\">cells.parquet</a> (every variant's cells, with a <code>variant</code> column)</p>\n");
+    h.push_str("</ul>\n");
+    if notes {
+        h.push_str(&format!(
+            "<p>What these results mean for the replication: <a href=\"{NOTES}\">{NOTES}</a>.</p>\n"
+        ));
+    }
+    // Only the files this report writes (`--formats`).
+    let links: Vec<&str> = [
+        (Format::Csv, "<a href=\"variants.csv\">variants.csv</a>"),
+        (Format::Md, "<a href=\"variants.md\">variants.md</a>"),
+        (Format::Cells, "<a href=\"cells.parquet\">cells.parquet</a> (every variant's cells, with a <code>variant</code> column)"),
+    ]
+    .into_iter()
+    .filter(|(f, _)| formats.has(*f))
+    .map(|(_, l)| l)
+    .collect();
+    if !links.is_empty() {
+        h.push_str(&format!("<p>Data: {}</p>\n", links.join(" · ")));
+    }
     h.push_str("<h2 id=\"fit\">Fit to the reference values</h2>\n");
     h.push_str(&captioned(table));
     if let Some(t) = held_out {
@@ -204,11 +230,15 @@ fn readme(
     held_out: Option<&Table>,
     figs: &[FigRef],
     formats: Formats,
+    notes: bool,
 ) -> String {
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     let mut m = format!("# {}\n\n", heading(plan));
     if let Some(d) = plan.description.as_deref() {
         m.push_str(&format!("{}\n\n", d.trim()));
+    }
+    if notes {
+        m.push_str(&format!("What these results mean for the replication: [{NOTES}]({NOTES}).\n\n"));
     }
     m.push_str(
         "Each variant is the whole pipeline with some settings changed; each has its own full report:\n\n",
