@@ -88,6 +88,7 @@ pub fn run(
     scan: &KeyScan,
     sel: Selection,
     opts: &ExecOptions,
+    reporter: &mut dyn crate::exec::Reporter,
 ) -> anyhow::Result<RunOutcome> {
     let flush = |batch: &[crate::cache::TrialRecord]| {
         store.write_segment(batch)?;
@@ -95,7 +96,7 @@ pub fn run(
     };
     if !plan.has_race() {
         let (unique, jobs) = select(plan, scan, sel);
-        let exec = execute(&jobs, opts, flush)?;
+        let exec = execute(&jobs, opts, flush, reporter)?;
         return Ok(RunOutcome { exec, cached: unique.len() - jobs.len() });
     }
     let mut total = ExecReport::default();
@@ -115,7 +116,7 @@ pub fn run(
         if jobs.is_empty() {
             return Ok(RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total });
         }
-        let exec = execute(&jobs, opts, flush)?;
+        let exec = execute(&jobs, opts, flush, reporter)?;
         total.executed += exec.executed;
         total.failed += exec.failed;
         total.interrupted |= exec.interrupted;

@@ -5,6 +5,7 @@ mod bench;
 mod feasible;
 mod gc;
 mod pipeline_args;
+mod progress;
 mod report;
 mod run;
 mod simulate;

@@ -1,7 +1,7 @@
 //! `qsweep run`: execute the pipeline's missing trials, store them, then write the report.
 
 use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
-use crate::exec::{ExecOptions, ProgressMode, INTERRUPTED};
+use crate::exec::{ExecOptions, Reporter, INTERRUPTED};
 use clap::Args;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -53,10 +53,11 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
         batch_trials: a.batch_trials.max(1),
         batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
-        progress: if a.quiet || a.json { ProgressMode::Hidden } else { ProgressMode::Auto },
     };
     let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
-    let done = crate::pipeline::run(&plan, &store, &scan.keys, sel, &opts)?;
+    let mut bar = super::progress::ProgressReporter::default();
+    let reporter: &mut dyn Reporter = if a.quiet || a.json { &mut () } else { &mut bar };
+    let done = crate::pipeline::run(&plan, &store, &scan.keys, sel, &opts, reporter)?;
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {

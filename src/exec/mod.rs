@@ -1,14 +1,15 @@
 //! Executing trials: a rayon pool pulls trials longest-first from a shared counter (so the tail
 //! is short), the calling thread collects finished trials and hands them to a sink in batches
-//! bounded by count and by time (so an interrupted run keeps them), and shows progress.
+//! bounded by count and by time (so an interrupted run keeps them), and reports [`Event`]s to the
+//! caller's [`Reporter`].
 //!
 //! Results never depend on the number of threads: each trial is a pure function of its config and
 //! seed, and batches are written in completion order, which only affects segment layout.
 
-mod progress;
+mod events;
 pub mod shard;
 
-pub use progress::ProgressMode;
+pub use events::{Event, Reporter};
 
 use crate::cache::{Key, TrialRecord};
 use crate::plan::Plan;
@@ -30,8 +31,6 @@ pub struct ExecOptions {
     pub batch_trials: usize,
     /// ...or after this long since the last flush, whichever comes first.
     pub batch_interval: Duration,
-    /// Progress display.
-    pub progress: ProgressMode,
 }
 
 impl Default for ExecOptions {
@@ -40,7 +39,6 @@ impl Default for ExecOptions {
             jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
             batch_trials: 500,
             batch_interval: Duration::from_secs(10),
-            progress: ProgressMode::Hidden,
         }
     }
 }
@@ -102,11 +100,12 @@ pub fn estimated_cost(c: &TrialConfig) -> f64 {
 
 /// Run `jobs` and hand finished records to `sink` in batches; stops early (after flushing) when
 /// [`INTERRUPTED`] is set. A sink error stops the run and is returned; records already handed
-/// to the sink are kept.
+/// to the sink are kept. Every step is reported to `reporter`.
 pub fn execute(
     jobs: &[Job<'_>],
     opts: &ExecOptions,
     mut sink: impl FnMut(&[TrialRecord]) -> anyhow::Result<()>,
+    reporter: &mut dyn Reporter,
 ) -> anyhow::Result<ExecReport> {
     let mut order: Vec<usize> = (0..jobs.len()).collect();
     // Longest first; ties keep plan order, so scheduling is reproducible.
@@ -117,9 +116,9 @@ pub fn execute(
     let stop = AtomicBool::new(false);
     let (tx, rx) = mpsc::channel::<TrialRecord>();
     let mut report = ExecReport::default();
-    let mut progress = progress::Progress::new(opts.progress, jobs.len());
+    reporter.event(&Event::Started { trials: jobs.len() });
 
-    std::thread::scope(|scope| -> anyhow::Result<()> {
+    let collected = std::thread::scope(|scope| -> anyhow::Result<()> {
         let (order, next, stop) = (&order, &next, &stop);
         scope.spawn(move || {
             pool.scope(|s| {
@@ -154,9 +153,13 @@ pub fn execute(
 
         let mut batch: Vec<TrialRecord> = Vec::new();
         let mut last_flush = Instant::now();
-        let mut flush = |batch: &mut Vec<TrialRecord>, report: &mut ExecReport| -> anyhow::Result<()> {
+        let mut flush = |batch: &mut Vec<TrialRecord>,
+                         report: &mut ExecReport,
+                         reporter: &mut dyn Reporter|
+         -> anyhow::Result<()> {
             if !batch.is_empty() {
                 sink(batch)?;
+                reporter.event(&Event::Flushed { trials: batch.len() });
                 report.executed += batch.len();
                 report.failed += batch.iter().filter(|r| r.outcome.failure.is_some()).count();
                 batch.clear();
@@ -166,11 +169,13 @@ pub fn execute(
         let result = loop {
             match rx.recv_timeout(Duration::from_millis(200)) {
                 Ok(rec) => {
-                    progress.inc(rec.outcome.failure.is_some());
+                    reporter.event(&Event::Finished { key: rec.key, failed: rec.outcome.failure.is_some() });
                     batch.push(rec);
                 }
-                Err(mpsc::RecvTimeoutError::Timeout) => progress.tick(),
-                Err(mpsc::RecvTimeoutError::Disconnected) => break flush(&mut batch, &mut report),
+                Err(mpsc::RecvTimeoutError::Timeout) => reporter.event(&Event::Tick),
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    break flush(&mut batch, &mut report, &mut *reporter)
+                }
             }
             // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
             // SIGKILL soon after) store what is finished at once rather than at the next batch.
@@ -178,7 +183,7 @@ pub fn execute(
                 || last_flush.elapsed() >= opts.batch_interval
                 || INTERRUPTED.load(Ordering::Relaxed)
             {
-                if let Err(e) = flush(&mut batch, &mut report) {
+                if let Err(e) = flush(&mut batch, &mut report, &mut *reporter) {
                     break Err(e);
                 }
                 last_flush = Instant::now();
@@ -190,9 +195,13 @@ pub fn execute(
             while rx.recv().is_ok() {}
         }
         result
-    })?;
-    progress.finish();
+    });
     report.interrupted = INTERRUPTED.load(Ordering::Relaxed) && report.executed < jobs.len();
+    if report.interrupted {
+        reporter.event(&Event::Interrupted);
+    }
+    reporter.event(&Event::Done { executed: report.executed, failed: report.failed });
+    collected?;
     Ok(report)
 }
 
@@ -224,14 +233,27 @@ mod tests {
             let opts = ExecOptions { jobs: threads, batch_trials: 4, ..Default::default() };
             let mut got = Vec::new();
             let mut batches = 0;
-            let r = execute(&jobs, &opts, |b| {
-                assert!(b.len() <= 4);
-                batches += 1;
-                got.extend(b.iter().cloned());
-                Ok(())
-            })
+            let mut events: Vec<Event> = Vec::new();
+            let r = execute(
+                &jobs,
+                &opts,
+                |b| {
+                    assert!(b.len() <= 4);
+                    batches += 1;
+                    got.extend(b.iter().cloned());
+                    Ok(())
+                },
+                &mut events,
+            )
             .unwrap();
             assert_eq!(r.executed, jobs.len());
+            // Started first, Done last, one Finished per trial, the flushes add up to the trials.
+            assert_eq!(events.first(), Some(&Event::Started { trials: jobs.len() }));
+            assert_eq!(events.last(), Some(&Event::Done { executed: jobs.len(), failed: 0 }));
+            let finished = events.iter().filter(|e| matches!(e, Event::Finished { .. })).count();
+            let flushed: usize =
+                events.iter().map(|e| if let Event::Flushed { trials } = e { *trials } else { 0 }).sum();
+            assert_eq!((finished, flushed), (jobs.len(), jobs.len()));
             assert!(batches >= jobs.len() / 4);
             got.sort_by_key(|r| r.key);
             got.into_iter().map(|r| (r.key, r.outcome)).collect::<Vec<_>>()
@@ -245,7 +267,9 @@ mod tests {
         let cs = vec![c];
         let jobs = jobs_for(&cs);
         let opts = ExecOptions { jobs: 2, batch_trials: 1, ..Default::default() };
-        let err = execute(&jobs, &opts, |_| anyhow::bail!("disk full")).unwrap_err();
+        let mut events: Vec<Event> = Vec::new();
+        let err = execute(&jobs, &opts, |_| anyhow::bail!("disk full"), &mut events).unwrap_err();
         assert!(err.to_string().contains("disk full"));
+        assert!(matches!(events.last(), Some(Event::Done { executed: 0, .. })), "{events:?}");
     }
 }

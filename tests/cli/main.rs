@@ -10,6 +10,7 @@ mod feasible;
 mod helpers;
 mod json_formats;
 mod layering;
+mod library;
 mod mutations;
 mod no_overwrite;
 mod pipeline;

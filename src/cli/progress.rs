@@ -1,20 +1,42 @@
-//! Progress display: an indicatif bar with rate and ETA on a terminal, plain lines every few
-//! seconds otherwise, nothing when quiet.
+//! The CLI's reporter of execution events: an indicatif bar with rate and ETA on a terminal,
+//! plain lines every few seconds otherwise (nothing when quiet or `--json`: the `()` reporter).
 
+use crate::exec::{Event, Reporter};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
-/// How progress is shown.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ProgressMode {
-    /// Nothing (`--quiet`).
-    Hidden,
-    /// A bar on a terminal, plain lines otherwise.
-    Auto,
+/// A bar on a terminal, plain lines otherwise; one per [`Event::Started`] (a raced run's round).
+#[derive(Default)]
+pub struct ProgressReporter {
+    current: Option<Progress>,
 }
 
-pub(super) struct Progress {
+impl Reporter for ProgressReporter {
+    fn event(&mut self, e: &Event) {
+        match e {
+            Event::Started { trials } => self.current = Some(Progress::new(*trials)),
+            Event::Finished { failed, .. } => {
+                if let Some(p) = &mut self.current {
+                    p.inc(*failed)
+                }
+            }
+            Event::Tick => {
+                if let Some(p) = &mut self.current {
+                    p.tick()
+                }
+            }
+            Event::Done { .. } => {
+                if let Some(p) = self.current.take() {
+                    p.finish()
+                }
+            }
+            Event::Flushed { .. } | Event::Interrupted => {}
+        }
+    }
+}
+
+struct Progress {
     bar: Option<ProgressBar>,
     plain: bool,
     total: usize,
@@ -25,8 +47,8 @@ pub(super) struct Progress {
 }
 
 impl Progress {
-    pub(super) fn new(mode: ProgressMode, total: usize) -> Self {
-        let show = mode == ProgressMode::Auto && total > 0;
+    fn new(total: usize) -> Self {
+        let show = total > 0;
         let terminal = std::io::stderr().is_terminal();
         let bar = (show && terminal).then(|| {
             let b = ProgressBar::new(total as u64);
@@ -43,7 +65,7 @@ impl Progress {
         Self { bar, plain: show && !terminal, total, done: 0, failed: 0, start: now, last_line: now }
     }
 
-    pub(super) fn inc(&mut self, failed: bool) {
+    fn inc(&mut self, failed: bool) {
         self.done += 1;
         self.failed += usize::from(failed);
         if let Some(b) = &self.bar {
@@ -55,7 +77,7 @@ impl Progress {
         self.tick();
     }
 
-    pub(super) fn tick(&mut self) {
+    fn tick(&mut self) {
         if self.plain && self.last_line.elapsed() >= Duration::from_secs(5) {
             self.last_line = Instant::now();
             let secs = self.start.elapsed().as_secs_f64();
@@ -73,7 +95,7 @@ impl Progress {
         }
     }
 
-    pub(super) fn finish(&self) {
+    fn finish(&self) {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
         }

@@ -1,0 +1,50 @@
+//! Running a pipeline from the library alone, without the CLI or a terminal: load and plan
+//! `tests/fixtures/pipelines/tiny.yaml`, run its trials into a fresh cache while collecting the execution's
+//! events, then write its report. `cargo run --release --example library_run [CACHE_DIR]`.
+
+use qsweep::exec::{Event, ExecOptions};
+use qsweep::pipeline::{run, scan, Selection};
+use qsweep::report::formats::{Format, Formats};
+use qsweep::report::ReportOptions;
+
+fn main() -> anyhow::Result<()> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let work = match std::env::args().nth(1) {
+        Some(dir) => std::path::PathBuf::from(dir),
+        None => std::env::temp_dir().join(format!("qsweep-example-{}", std::process::id())),
+    };
+    let loaded = qsweep::spec::load(&root.join("tests/fixtures/pipelines/tiny.yaml"), &[])?;
+    let plan = qsweep::plan::plan(&loaded, None)?;
+    let store = qsweep::cache::Store::open(&work.join("cache"))?;
+    let keys = scan(&store)?.keys;
+
+    let mut events: Vec<Event> = Vec::new();
+    let sel = Selection { shard: None, force: false };
+    let done = run(&plan, &store, &keys, sel, &ExecOptions::default(), &mut events)?;
+    let finished = events.iter().filter(|e| matches!(e, Event::Finished { .. })).count();
+    let flushes = events.iter().filter(|e| matches!(e, Event::Flushed { .. })).count();
+    println!(
+        "executed {}, cached {}; events: {} trials finished, {} batches stored, last {:?}",
+        done.exec.executed,
+        done.cached,
+        finished,
+        flushes,
+        events.last()
+    );
+
+    let keys = scan(&store)?.keys;
+    let opts = ReportOptions {
+        dir: work.join("report"),
+        formats: Formats::of(&[Format::Md, Format::Csv]),
+        force: false,
+    };
+    let report = qsweep::report::write(&plan, &store, &keys, &opts)?;
+    println!(
+        "report: {} files in {} ({} of {} planned trials present)",
+        report.summary.files.len(),
+        opts.dir.display(),
+        report.summary.trials_present,
+        report.summary.trials_planned
+    );
+    Ok(())
+}
