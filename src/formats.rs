@@ -1,4 +1,4 @@
-//! The `--json` outputs of `run`, `status`, `trial` and `bench`: one struct per format, each with
+//! The `--json` outputs of `run`, `status`, `trial`, `bench` and `feasible`: one struct per format, each with
 //! a `format_version`.
 //!
 //! Like cargo-nextest's machine-readable formats, a format's version is bumped only on an
@@ -7,6 +7,8 @@
 //! format is at version 1. The README documents each one.
 
 use crate::bench::BenchResult;
+use crate::sim::env::SystemKind;
+use crate::sim::feasible::Feasibility;
 use crate::sim::{Outcome, TrialConfig};
 use serde::{Deserialize, Serialize};
 
@@ -165,5 +167,39 @@ pub struct PipelineBenchReport {
 
 impl PipelineBenchReport {
     /// The current version of the `bench --pipeline --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// One visited cell of the best policy.
+#[derive(Debug, Serialize)]
+pub struct FeasibleCell {
+    /// Bin index per variable.
+    pub bins: Vec<u32>,
+    /// `[lo, hi)` of each bin (±inf at the open ends).
+    pub intervals: Vec<[f64; 2]>,
+    /// The action value (force, tilt).
+    pub action: f64,
+}
+
+/// `qsweep feasible --json`: the search's settings, its result and the best policy's visited cells.
+#[derive(Debug, Serialize)]
+pub struct FeasibleReport {
+    /// Version of this format ([`FeasibleReport::FORMAT_VERSION`]).
+    pub format_version: u32,
+    pub system: SystemKind,
+    pub resolution: Vec<u32>,
+    pub actions: u32,
+    pub ranges: Vec<[f64; 2]>,
+    pub binning: &'static str,
+    pub start: Vec<f64>,
+    pub max_steps: u64,
+    pub max_nodes: u64,
+    #[serde(flatten)]
+    pub result: Feasibility,
+    pub policy_cells: Vec<FeasibleCell>,
+}
+
+impl FeasibleReport {
+    /// Current version of the `feasible --json` format.
     pub const FORMAT_VERSION: u32 = 1;
 }

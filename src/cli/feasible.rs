@@ -4,14 +4,14 @@
 use super::args;
 use super::simulate::env_params;
 use crate::error::user_error;
+use crate::formats::{FeasibleCell as CellAction, FeasibleReport as Report};
 use crate::sim::config::TrialConfig;
 use crate::sim::env::{BallBeam, CartPole, EnvParams, Environment, StartKind, State, SystemKind};
-use crate::sim::feasible::{search, Feasibility};
+use crate::sim::feasible::search;
 use crate::sim::repr::{Binning, Crisp, ReprKind};
 use crate::sim::rng::TrialRng;
 use crate::sim::Algorithm;
 use clap::{Args, ValueEnum};
-use serde::Serialize;
 
 /// Bin-edge rules on the command line.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -76,33 +76,6 @@ pub struct FeasibleArgs {
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// One visited cell of the best policy.
-#[derive(Debug, Serialize)]
-struct CellAction {
-    /// Bin index per variable.
-    bins: Vec<u32>,
-    /// `[lo, hi)` of each bin (±inf at the open ends).
-    intervals: Vec<[f64; 2]>,
-    /// The action value (force, tilt).
-    action: f64,
-}
-
-/// The JSON report.
-#[derive(Debug, Serialize)]
-struct Report {
-    system: SystemKind,
-    resolution: Vec<u32>,
-    actions: u32,
-    ranges: Vec<[f64; 2]>,
-    binning: &'static str,
-    start: Vec<f64>,
-    max_steps: u64,
-    max_nodes: u64,
-    #[serde(flatten)]
-    result: Feasibility,
-    policy_cells: Vec<CellAction>,
 }
 
 fn parse_range(system: SystemKind, s: &str) -> anyhow::Result<(usize, [f64; 2])> {
@@ -211,6 +184,7 @@ pub fn run(a: FeasibleArgs) -> anyhow::Result<u8> {
         })
         .collect();
     let report = Report {
+        format_version: Report::FORMAT_VERSION,
         system,
         resolution: c.repr.resolution.clone(),
         actions: c.actions,

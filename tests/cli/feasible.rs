@@ -53,6 +53,7 @@ fn velocity_edges_at_minus_0_4_are_searched_exhaustively() {
         "--json",
     ]));
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["format_version"], 1);
     assert_eq!(
         (v["best"].as_u64(), v["survives"].as_bool(), v["complete"].as_bool()),
         (Some(12_438), Some(false), Some(true))
