@@ -28,7 +28,7 @@ fn unknown_filter_and_bad_budget_are_usage_errors() {
         .status(2)
         .stderr_contains("cart-pole/fuzzy/q-lambda/4^4/2a")
         .run();
-    Test::new().args(["bench", "--steps", "0"]).status(2).run();
+    Test::new().args(["bench", "--steps", "0"]).status(2).stderr_contains("--steps: 0 is not allowed").run();
 }
 
 /// `bench --pipeline`: real cells with their real seeds to their real stop, so each timed cell's
@@ -77,6 +77,7 @@ fn pipeline_bench_times_the_costliest_cells_to_their_real_stop() {
         .pipeline("tiny.yaml")
         .args(["bench", "--pipeline", "tiny.yaml", "--top", "0"])
         .status(2)
+        .stderr_contains("--top: must be at least 1")
         .run();
 }
 

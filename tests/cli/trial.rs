@@ -71,7 +71,10 @@ fn bad_arguments_exit_2_naming_the_argument() {
     let base = ["trial", "--env", "ball-beam", "--repr", "crisp", "--algorithm", "q0"];
     let cases: &[(&[&str], &str)] = &[
         (&["--resolution", "0"], "0 is not allowed"),
-        (&["--resolution", "3,3,3"], "--resolution"),
+        (
+            &["--resolution", "3,3,3"],
+            "--resolution: ball-beam has 2 state variables (x,x_dot); give 2 values",
+        ),
         (&["--resolution", "3", "--actions", "1"], "n ≥ 2"),
         (&["--resolution", "3", "--lambda", "1.5"], "expected a number in [0, 1]"),
         (&["--resolution", "3", "--alpha", "0"], "expected a finite number > 0"),

@@ -145,7 +145,7 @@ def test_pandas_polars_duckdb_agree_on_rows_and_types(cells: pd.DataFrame, trial
 
     assert pd.api.types.is_float_dtype(cells["mean"])
     assert pd.api.types.is_bool_dtype(trials["converged"])
-    assert pd.api.types.is_string_dtype(trials["system"]) or trials["system"].dtype == object
+    assert pd.api.types.is_string_dtype(trials["system"]), trials["system"].dtype
 
     # Every trial's episode list has one entry per episode run.
     assert (pl_trials["episode_lengths"].list.len() == pl_trials["episodes"].cast(pl.UInt32)).all()
