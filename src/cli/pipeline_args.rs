@@ -92,7 +92,7 @@ impl ReportFlags {
     /// The report options for `plan`.
     pub fn options(&self, plan: &Plan, force: bool) -> ReportOptions {
         ReportOptions {
-            dir: self.out.clone().unwrap_or_else(|| Path::new("reports").join(&plan.name)),
+            dir: self.out.clone().unwrap_or_else(|| crate::report::default_dir(plan)),
             formats: Formats::of(&self.formats),
             force,
         }

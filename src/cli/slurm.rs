@@ -82,7 +82,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         variants: a.pipeline.variant.clone(),
         yes: a.pipeline.yes,
         cache: abs(&a.pipeline.cache_dir())?,
-        report_dir: abs(&a.out.clone().unwrap_or_else(|| Path::new("reports").join(&plan.name)))?,
+        report_dir: abs(&a.out.clone().unwrap_or_else(|| crate::report::default_dir(&plan)))?,
         tasks: a.array,
         max_running: a.max_running,
         cpus_per_task: a.cpus_per_task,

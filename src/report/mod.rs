@@ -38,7 +38,7 @@ use std::path::Path;
 pub use crate::atomic::write_atomic;
 pub use folder::{existing_trials, write_folder, ReportSummary};
 pub use model::{Outcomes, ReportData};
-pub use stage::{write, ReportOptions, ReportOutcome};
+pub use stage::{default_dir, write, ReportOptions, ReportOutcome};
 
 /// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it, in
 /// the default formats, with its own `trials.parquet`.

@@ -33,6 +33,11 @@ pub struct ReportOptions {
     pub force: bool,
 }
 
+/// Where a pipeline's report goes unless `--out` says otherwise: `reports/<name>`.
+pub fn default_dir(plan: &Plan) -> PathBuf {
+    Path::new("reports").join(&plan.name)
+}
+
 /// What the stage wrote.
 #[derive(Debug, Clone)]
 pub struct ReportOutcome {
