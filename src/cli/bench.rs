@@ -87,14 +87,13 @@ fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
     }
     let p = PipelineArgs { pipeline, set: a.set, variant: a.variant, cache: a.cache, yes: true };
     let plan = p.plan()?;
-    let dir = p.cache_dir();
     // The cache only ranks the cells; a missing one is not created (ranking by the estimate).
-    let cache = if dir.is_dir() {
-        let store = p.store()?;
-        let scan = store.keys()?;
-        Some((store, scan))
-    } else {
-        None
+    let cache = match p.existing_store()? {
+        Some(store) => {
+            let scan = store.keys()?;
+            Some((store, scan))
+        }
+        None => None,
     };
     let (cells, basis) = ranked_cells(&plan, cache.as_ref().map(|(s, k)| (s, k)))?;
     let total: f64 = cells.iter().map(|c| c.cost).sum();

@@ -53,6 +53,12 @@ impl PipelineArgs {
         let dir = self.cache_dir();
         Store::open(&dir).map_err(|e| anyhow::anyhow!("cache {}: {e}", dir.display()))
     }
+
+    /// The cache if its directory exists, else `None` (treated as empty): the rule of the
+    /// commands that only read a cache and never create one (`status`, `slurm`, `bench`).
+    pub fn existing_store(&self) -> anyhow::Result<Option<Store>> {
+        self.cache_dir().is_dir().then(|| self.store()).transpose()
+    }
 }
 
 /// Fail with a usage error (exit 2) unless `dir` is an existing directory: the read-only

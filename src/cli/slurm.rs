@@ -100,9 +100,10 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     print!("{script}");
 
     let unique = crate::exec::jobs(&plan);
-    let cache_dir = a.pipeline.cache_dir();
-    let cached: HashSet<_> =
-        if cache_dir.is_dir() { a.pipeline.store()?.keys()?.keys } else { HashSet::new() };
+    let cached: HashSet<_> = match a.pipeline.existing_store()? {
+        Some(store) => store.keys()?.keys,
+        None => HashSet::new(),
+    };
     let owner = crate::pipeline::shard_owners(&plan, &unique, a.array);
     let mut per_shard = vec![(0usize, 0usize); a.array as usize];
     for (t, s) in unique.iter().zip(owner) {

@@ -27,7 +27,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
     // A dry run before the first run stays useful: a missing cache means every trial is missing,
     // and status (read-only) does not create it.
-    let store = a.pipeline.cache_dir().is_dir().then(|| a.pipeline.store()).transpose()?;
+    let store = a.pipeline.existing_store()?;
     let scan = match &store {
         Some(store) => store.keys()?,
         None => crate::cache::store::KeyScan::default(),
