@@ -6,6 +6,7 @@
 //! runs its rounds one after another (one round per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeyScan, Store};
+use crate::cache::Key;
 use crate::exec::shard::{assign, key_owner, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
 use crate::plan::Plan;
@@ -126,4 +127,25 @@ pub fn run(
         rescanned = store.keys()?;
         scan = &rescanned;
     }
+}
+
+/// Every key the given plans reference (what `qsweep gc PIPELINES` keeps): all their trials,
+/// and for a race every round it has run, replayed from the cache (its later rounds are planned
+/// from the outcomes stored).
+pub fn referenced_keys(plans: &[Plan], store: &Store) -> anyhow::Result<std::collections::HashSet<Key>> {
+    let mut keep = std::collections::HashSet::new();
+    let mut scan = None;
+    for planned in plans {
+        if planned.has_race() {
+            if scan.is_none() {
+                scan = Some(store.keys()?);
+            }
+            let scan = scan.as_ref().expect("scanned just above");
+            let raced = crate::race::replay_cached(planned, store, scan)?.plan;
+            keep.extend(raced.trials().map(|(_, _, t)| t.key));
+        } else {
+            keep.extend(planned.trials().map(|(_, _, t)| t.key));
+        }
+    }
+    Ok(keep)
 }

@@ -6,7 +6,6 @@ use crate::error::exit;
 use crate::plan::plan;
 use crate::spec::load;
 use clap::Args;
-use std::collections::HashSet;
 use std::path::PathBuf;
 
 /// Arguments of `qsweep gc`.
@@ -27,20 +26,13 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     let dir = cache_dir(a.cache.as_ref());
     require_cache(&dir)?;
     let store = Store::open(&dir)?;
-    let mut keep: Option<HashSet<_>> = None;
-    let mut scan = None;
-    for p in &a.pipelines {
-        let mut planned = plan(&load(p, &[])?, None)?;
-        if planned.has_race() {
-            // A race's later rounds are planned from the cache: keep every round it has run.
-            if scan.is_none() {
-                scan = Some(store.keys()?);
-            }
-            let scan = scan.as_ref().expect("scanned just above");
-            planned = crate::race::replay_cached(&planned, &store, scan)?.plan;
-        }
-        keep.get_or_insert_with(HashSet::new).extend(planned.trials().map(|(_, _, t)| t.key));
-    }
+    let keep = if a.pipelines.is_empty() {
+        None
+    } else {
+        let plans =
+            a.pipelines.iter().map(|p| plan(&load(p, &[])?, None)).collect::<anyhow::Result<Vec<_>>>()?;
+        Some(crate::pipeline::referenced_keys(&plans, &store)?)
+    };
     let r = store.gc(keep.as_ref(), a.dry_run)?;
     for s in &r.skipped {
         eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");
