@@ -149,3 +149,28 @@ pub fn referenced_keys(plans: &[Plan], store: &Store) -> anyhow::Result<std::col
     }
     Ok(keep)
 }
+
+/// One shard's share of a plan's distinct trials (what `qsweep slurm` prints per task).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ShardCount {
+    /// Distinct trials the shard owns.
+    pub trials: usize,
+    /// Of those, not in `cached`.
+    pub missing: usize,
+}
+
+/// Per shard 1..=`shards` (index 0 is shard 1), its trials of `unique` and how many are missing.
+pub fn shard_counts(
+    plan: &Plan,
+    unique: &[Job<'_>],
+    cached: &std::collections::HashSet<Key>,
+    shards: u32,
+) -> Vec<ShardCount> {
+    let mut per_shard = vec![ShardCount::default(); shards as usize];
+    for (t, s) in unique.iter().zip(shard_owners(plan, unique, shards)) {
+        let c = &mut per_shard[s as usize - 1];
+        c.trials += 1;
+        c.missing += usize::from(!cached.contains(&t.key));
+    }
+    per_shard
+}

@@ -104,19 +104,13 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         Some(store) => store.keys()?.keys,
         None => HashSet::new(),
     };
-    let owner = crate::pipeline::shard_owners(&plan, &unique, a.array);
-    let mut per_shard = vec![(0usize, 0usize); a.array as usize];
-    for (t, s) in unique.iter().zip(owner) {
-        let entry = &mut per_shard[s as usize - 1];
-        entry.0 += 1;
-        entry.1 += usize::from(!cached.contains(&t.key));
-    }
-    let sizes = |f: fn(&(usize, usize)) -> usize| {
+    let per_shard = crate::pipeline::shard_counts(&plan, &unique, &cached, a.array);
+    let sizes = |f: fn(&crate::pipeline::ShardCount) -> usize| {
         let v: Vec<usize> = per_shard.iter().map(f).collect();
         (v.iter().min().copied().unwrap_or(0), v.iter().max().copied().unwrap_or(0))
     };
-    let ((lo, hi), (mlo, mhi)) = (sizes(|p| p.0), sizes(|p| p.1));
-    let missing: usize = per_shard.iter().map(|p| p.1).sum();
+    let ((lo, hi), (mlo, mhi)) = (sizes(|p| p.trials), sizes(|p| p.missing));
+    let missing: usize = per_shard.iter().map(|p| p.missing).sum();
     eprintln!(
         "pipeline '{}': {} distinct trials ({missing} not cached) in {} shards of {lo}-{hi} trials \
          ({mlo}-{mhi} to run)",
