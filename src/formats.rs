@@ -170,16 +170,8 @@ impl PipelineBenchReport {
     pub const FORMAT_VERSION: u32 = 1;
 }
 
-/// One visited cell of the best policy.
-#[derive(Debug, Serialize)]
-pub struct FeasibleCell {
-    /// Bin index per variable.
-    pub bins: Vec<u32>,
-    /// `[lo, hi)` of each bin (±inf at the open ends).
-    pub intervals: Vec<[f64; 2]>,
-    /// The action value (force, tilt).
-    pub action: f64,
-}
+/// One visited cell of the best policy (defined with the search).
+pub use crate::sim::feasible::PolicyCell as FeasibleCell;
 
 /// `qsweep feasible --json`: the search's settings, its result and the best policy's visited cells.
 #[derive(Debug, Serialize)]

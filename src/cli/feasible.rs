@@ -4,32 +4,13 @@
 use super::args;
 use super::simulate::env_params;
 use crate::error::user_error;
-use crate::formats::{FeasibleCell as CellAction, FeasibleReport as Report};
+use crate::formats::FeasibleReport as Report;
 use crate::sim::config::TrialConfig;
-use crate::sim::env::{BallBeam, CartPole, EnvParams, Environment, StartKind, State, SystemKind};
-use crate::sim::feasible::search;
-use crate::sim::repr::{Binning, Crisp, ReprKind};
-use crate::sim::rng::TrialRng;
+use crate::sim::env::{EnvParams, StartKind, State, SystemKind};
+use crate::sim::feasible::{first_start, policy_cells, search};
+use crate::sim::repr::{Binning, ReprKind};
 use crate::sim::Algorithm;
-use clap::{Args, ValueEnum};
-
-/// Bin-edge rules on the command line.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum BinningArg {
-    /// n equal bins over [lo, hi] (2 bins of a symmetric range split at 0).
-    Midpoint,
-    /// np.digitize(x, np.linspace(lo, hi, n)) - 1 clipped to 0..n-1 (2 bins split at hi).
-    Digitize,
-}
-
-/// Start-state rules on the command line.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum StartArg {
-    /// The system's fixed start state (cart-pole and ball-beam: all zeros).
-    Fixed,
-    /// The first episode's start a trial with --seed draws from Gymnasium's reset() distribution.
-    Gym,
-}
+use clap::Args;
 
 /// Arguments of `qsweep feasible`.
 #[derive(Debug, Args)]
@@ -57,10 +38,10 @@ pub struct FeasibleArgs {
     pub ranges: Vec<String>,
     /// Where the bin edges lie (the pipeline setting `binning`).
     #[arg(long, value_enum, default_value = "midpoint")]
-    pub binning: BinningArg,
+    pub binning: Binning,
     /// Start state: fixed, or the first start a trial with --seed draws under `start: gym`.
     #[arg(long, value_enum, default_value = "fixed")]
-    pub start: StartArg,
+    pub start: StartKind,
     /// Seed whose first gym start is searched from (with --start gym).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -106,20 +87,7 @@ fn start_state(a: &FeasibleArgs, env: &EnvParams) -> anyhow::Result<State> {
         out[..dim].copy_from_slice(&s.0);
         return Ok(out);
     }
-    Ok(match (a.start, env) {
-        (StartArg::Fixed, _) => env.start(),
-        (StartArg::Gym, EnvParams::CartPole(p)) => {
-            let mut e = CartPole::new(p.clone());
-            e.reset_gym(&mut TrialRng::new(a.seed));
-            *e.state()
-        }
-        (StartArg::Gym, EnvParams::BallBeam(p)) => {
-            let mut e = BallBeam::new(p.clone());
-            e.reset_gym(&mut TrialRng::new(a.seed));
-            *e.state()
-        }
-        (StartArg::Gym, EnvParams::MountainCar(_)) => env.start(),
-    })
+    Ok(first_start(env, a.start, a.seed))
 }
 
 /// Run `qsweep feasible`.
@@ -142,14 +110,8 @@ pub fn run(a: FeasibleArgs) -> anyhow::Result<u8> {
         let (j, lohi) = parse_range(system, r)?;
         c.repr.ranges[j] = lohi;
     }
-    c.repr.binning = match a.binning {
-        BinningArg::Midpoint => Binning::Midpoint,
-        BinningArg::Digitize => Binning::Digitize,
-    };
-    c.start = match a.start {
-        StartArg::Fixed => StartKind::Fixed,
-        StartArg::Gym => StartKind::Gym,
-    };
+    c.repr.binning = a.binning;
+    c.start = a.start;
     c.validate().map_err(|e| user_error(format!("--resolution/--actions/--range: {e}")))?;
     let cells: u64 = c.repr.resolution.iter().map(|&n| u64::from(n)).product();
     if cells > 1 << 24 {
@@ -159,30 +121,7 @@ pub fn run(a: FeasibleArgs) -> anyhow::Result<u8> {
     }
     let start = start_state(&a, &c.env)?;
     let result = search(&c, &start, a.max_steps, a.max_nodes).map_err(user_error)?;
-    let crisp = Crisp::with_binning(&c.repr.resolution, &c.repr.ranges, c.repr.binning);
-    let action_values = crate::sim::actions::action_set(c.env.action_max(), c.actions);
-    let strides = crate::sim::repr::strides(&c.repr.resolution);
-    let policy_cells: Vec<CellAction> = result
-        .policy
-        .iter()
-        .enumerate()
-        .filter_map(|(cell, a)| a.map(|a| (cell, a)))
-        .map(|(cell, action)| {
-            let bins: Vec<u32> =
-                strides.iter().zip(&c.repr.resolution).map(|(&s, &n)| (cell as u32 / s) % n).collect();
-            let intervals = bins
-                .iter()
-                .enumerate()
-                .map(|(j, &b)| {
-                    let e = crisp.edges(j);
-                    let lo = if b == 0 { f64::NEG_INFINITY } else { e[b as usize - 1] };
-                    let hi = e.get(b as usize).copied().unwrap_or(f64::INFINITY);
-                    [lo, hi]
-                })
-                .collect();
-            CellAction { bins, intervals, action: action_values[action as usize] }
-        })
-        .collect();
+    let policy_cells = policy_cells(&c, &result.policy);
     let report = Report {
         format_version: Report::FORMAT_VERSION,
         system,

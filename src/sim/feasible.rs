@@ -12,8 +12,9 @@
 
 use super::actions::action_set;
 use super::config::TrialConfig;
-use super::env::{BallBeam, CartPole, EnvParams, Environment, State, TaskKind};
+use super::env::{BallBeam, CartPole, EnvParams, Environment, StartKind, State, TaskKind};
 use super::repr::{Crisp, Representation};
+use super::rng::TrialRng;
 use serde::Serialize;
 
 /// What the search found.
@@ -298,5 +299,63 @@ mod tests {
         assert!(search(&d, &ZERO, 100_000, u64::MAX).unwrap().complete);
         let mc = TrialConfig::paper(SystemKind::MountainCar, ReprKind::Crisp, Algorithm::Q0, vec![2, 2], 3);
         assert!(search(&mc, &ZERO, 10, 10).is_err());
+    }
+}
+
+/// One visited cell of a policy: its bins, their intervals and the action's value.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PolicyCell {
+    /// Bin index per variable.
+    pub bins: Vec<u32>,
+    /// `[lo, hi)` of each bin (±inf at the open ends).
+    pub intervals: Vec<[f64; 2]>,
+    /// The action value (force, tilt).
+    pub action: f64,
+}
+
+/// A searched policy (action index per table cell, `None`: never visited) as the bins and
+/// intervals of its visited cells, in cell order, under `cfg`'s crisp binning and action set.
+pub fn policy_cells(cfg: &TrialConfig, policy: &[Option<u32>]) -> Vec<PolicyCell> {
+    let res = &cfg.repr.resolution;
+    let crisp = Crisp::with_binning(res, &cfg.repr.ranges, cfg.repr.binning);
+    let action_values = action_set(cfg.env.action_max(), cfg.actions);
+    let strides = super::repr::strides(res);
+    policy
+        .iter()
+        .enumerate()
+        .filter_map(|(cell, a)| a.map(|a| (cell, a)))
+        .map(|(cell, action)| {
+            let bins: Vec<u32> = strides.iter().zip(res).map(|(&s, &n)| (cell as u32 / s) % n).collect();
+            let intervals = bins
+                .iter()
+                .enumerate()
+                .map(|(j, &b)| {
+                    let e = crisp.edges(j);
+                    let lo = if b == 0 { f64::NEG_INFINITY } else { e[b as usize - 1] };
+                    let hi = e.get(b as usize).copied().unwrap_or(f64::INFINITY);
+                    [lo, hi]
+                })
+                .collect();
+            PolicyCell { bins, intervals, action: action_values[action as usize] }
+        })
+        .collect()
+}
+
+/// The first episode's start state of a trial with `seed` under `start` (what the search starts
+/// from with `--start`): the fixed start, or the first Gymnasium reset the trial's stream draws.
+pub fn first_start(env: &EnvParams, start: StartKind, seed: u64) -> State {
+    match (start, env) {
+        (StartKind::Fixed, _) => env.start(),
+        (StartKind::Gym, EnvParams::CartPole(p)) => {
+            let mut e = CartPole::new(p.clone());
+            e.reset_gym(&mut TrialRng::new(seed));
+            *e.state()
+        }
+        (StartKind::Gym, EnvParams::BallBeam(p)) => {
+            let mut e = BallBeam::new(p.clone());
+            e.reset_gym(&mut TrialRng::new(seed));
+            *e.state()
+        }
+        (StartKind::Gym, EnvParams::MountainCar(_)) => env.start(),
     }
 }
