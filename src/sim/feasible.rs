@@ -12,7 +12,7 @@
 
 use super::actions::action_set;
 use super::config::TrialConfig;
-use super::env::{BallBeam, CartPole, EnvParams, Environment, StartKind, State, TaskKind};
+use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, State, TaskKind};
 use super::repr::{Crisp, Representation};
 use super::rng::TrialRng;
 use serde::Serialize;
@@ -344,18 +344,14 @@ pub fn policy_cells(cfg: &TrialConfig, policy: &[Option<u32>]) -> Vec<PolicyCell
 /// The first episode's start state of a trial with `seed` under `start` (what the search starts
 /// from with `--start`): the fixed start, or the first Gymnasium reset the trial's stream draws.
 pub fn first_start(env: &EnvParams, start: StartKind, seed: u64) -> State {
+    fn gym<E: Environment>(mut e: E, seed: u64) -> State {
+        e.reset_gym(&mut TrialRng::new(seed));
+        *e.state()
+    }
     match (start, env) {
         (StartKind::Fixed, _) => env.start(),
-        (StartKind::Gym, EnvParams::CartPole(p)) => {
-            let mut e = CartPole::new(p.clone());
-            e.reset_gym(&mut TrialRng::new(seed));
-            *e.state()
-        }
-        (StartKind::Gym, EnvParams::BallBeam(p)) => {
-            let mut e = BallBeam::new(p.clone());
-            e.reset_gym(&mut TrialRng::new(seed));
-            *e.state()
-        }
-        (StartKind::Gym, EnvParams::MountainCar(_)) => env.start(),
+        (StartKind::Gym, EnvParams::CartPole(p)) => gym(CartPole::new(p.clone()), seed),
+        (StartKind::Gym, EnvParams::BallBeam(p)) => gym(BallBeam::new(p.clone()), seed),
+        (StartKind::Gym, EnvParams::MountainCar(p)) => gym(MountainCar::new(p.clone()), seed),
     }
 }
