@@ -1,10 +1,15 @@
 //! Statistics in one layer, below both the race and the report: cell summaries (mean, std,
 //! quantiles, bootstrap intervals), Table III's rules (episodes counted, the best cell) and the
-//! race's test (Welch, Holm). Everything is a pure, seeded function of its inputs, so reports stay
+//! race's test (Welch, Holm), equivalence with the published values (TOST), survival under the
+//! episode cap (Kaplan–Meier), rank correlation, and the paper's claims as tests. Everything is a pure, seeded function of its inputs, so reports stay
 //! byte-identical; the race only decides rounds with these, the report only renders them.
 
 mod best;
+pub mod claims;
+pub mod equivalence;
+pub mod rank;
 mod summary;
+pub mod survival;
 pub mod welch;
 
 pub use best::{best_cell, episodes_counted, Best, Candidate, BEST_RULE, CENSORING, RACE_RULE};

@@ -1,0 +1,115 @@
+//! Equivalence of a Table III row with its published value: two one-sided Welch t-tests (TOST)
+//! of ours − paper against a margin on the ratio of the means, declared in
+//! `docs/preregistration.md` before it was computed. The paper never states how many runs its
+//! means average, so the test takes that number as an argument and the report shows both
+//! assumptions ([`PAPER_N`]).
+
+use super::welch::student_t_sf;
+
+/// The equivalence margin on ours / paper: the conventional average-bioequivalence limits
+/// (FDA 2001), symmetric on the log scale.
+pub const MARGIN: (f64, f64) = (0.80, 1.25);
+
+/// Level of each one-sided test.
+pub const ALPHA: f64 = 0.05;
+
+/// The assumed numbers of runs behind each published mean: the fit measure's 10, and 100.
+pub const PAPER_N: [usize; 2] = [10, 100];
+
+/// The rule, as stated in captions.
+pub const EQUIVALENCE_RULE: &str = "Equivalent (n = 10 / n = 100): two one-sided Welch t-tests at \
+α = 0.05 reject that ours / paper lies outside [0.80, 1.25] (bounds −0.20·paper and +0.25·paper on \
+the difference), with the paper's std over an assumed 10 or 100 runs (the paper does not say how \
+many); — when undecidable (a single trial). p = the larger one-sided p-value.";
+
+/// A summary a test needs: mean, sample std (`None` below two values) and sample size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Moments {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (ddof = 1).
+    pub std: Option<f64>,
+    /// Sample size.
+    pub n: usize,
+}
+
+/// The outcome of one TOST.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tost {
+    /// The larger of the two one-sided p-values (equivalence is shown when it is ≤ α).
+    pub p: f64,
+    /// Whether both one-sided tests reject at [`ALPHA`].
+    pub equivalent: bool,
+}
+
+/// TOST of `ours` against the published `paper` mean and std over `paper_n` runs, with the margin
+/// [`MARGIN`] on ours / paper. `None` when it cannot be decided: ours has a single trial (no
+/// std), the paper's mean is not positive, or a sample is too small for degrees of freedom.
+pub fn tost(ours: Moments, paper: Moments) -> Option<Tost> {
+    let s_ours = ours.std?;
+    let s_paper = paper.std?;
+    if paper.mean <= 0.0 || ours.n < 2 || paper.n < 2 {
+        return None;
+    }
+    let lo = (MARGIN.0 - 1.0) * paper.mean;
+    let hi = (MARGIN.1 - 1.0) * paper.mean;
+    let d = ours.mean - paper.mean;
+    let v1 = s_ours * s_ours / ours.n as f64;
+    let v2 = s_paper * s_paper / paper.n as f64;
+    let se2 = v1 + v2;
+    if se2 == 0.0 {
+        // Both means known exactly: the point estimate decides.
+        let inside = lo < d && d < hi;
+        return Some(Tost { p: if inside { 0.0 } else { 1.0 }, equivalent: inside });
+    }
+    let se = se2.sqrt();
+    let term = |v: f64, n: usize| if v == 0.0 { 0.0 } else { v * v / (n as f64 - 1.0) };
+    let df = se2 * se2 / (term(v1, ours.n) + term(v2, paper.n));
+    // H₀¹: d ≤ lo against d > lo; H₀²: d ≥ hi against d < hi.
+    let p_lower = student_t_sf((d - lo) / se, df);
+    let p_upper = student_t_sf((hi - d) / se, df);
+    let p = p_lower.max(p_upper);
+    Some(Tost { p, equivalent: p <= ALPHA })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn m(mean: f64, std: f64, n: usize) -> Moments {
+        Moments { mean, std: Some(std), n }
+    }
+
+    #[test]
+    fn tost_matches_two_scipy_welch_tests() {
+        // Oracle: scipy.stats.ttest_ind_from_stats(m1, s1, n1, m2·(1+b), s2, n2, equal_var=False,
+        // alternative=…) for the two bounds, SciPy 1.17.1: ours 95 ± 20 (n 10) vs paper 90.5 ± 25.8.
+        // lower: alternative="greater" against 90.5·0.80 → p = 0.021432 (t = 2.1893)
+        // upper: alternative="less" against 90.5·1.25 → p = 0.048590 (t = −1.7558)
+        let t = tost(m(95.0, 20.0, 10), m(90.5, 25.8, 10)).unwrap();
+        assert!((t.p - 0.048590_0937).abs() < 1e-9, "{}", t.p);
+        assert!(t.equivalent);
+    }
+
+    #[test]
+    fn more_paper_runs_can_only_sharpen_the_test() {
+        // A small shift with a wide paper std: undecided at n = 10, equivalent at n = 100.
+        let ours = m(46.0, 10.0, 40);
+        let t10 = tost(ours, m(42.4, 13.8, 10)).unwrap();
+        let t100 = tost(ours, m(42.4, 13.8, 100)).unwrap();
+        // SciPy as above: p = 0.079280 (n = 10), 6.0081e-4 (n = 100).
+        assert!(!t10.equivalent && t100.equivalent, "{t10:?} {t100:?}");
+        assert!((t10.p - 0.079_279_823_2).abs() < 1e-9 && (t100.p - 6.008_092_787e-4).abs() < 1e-12);
+        assert!(t100.p < t10.p);
+    }
+
+    #[test]
+    fn far_values_are_not_equivalent_and_one_trial_is_undecided() {
+        assert!(!tost(m(4.5, 1.6, 10), m(90.5, 25.8, 10)).unwrap().equivalent);
+        let single = Moments { mean: 90.0, std: None, n: 1 };
+        assert_eq!(tost(single, m(90.5, 25.8, 10)), None);
+        // No spread anywhere: the point estimate decides, at the margin's asymmetric bounds.
+        assert!(tost(m(2.4, 0.0, 10), m(2.0, 0.0, 10)).unwrap().equivalent);
+        assert!(!tost(m(2.6, 0.0, 10), m(2.0, 0.0, 10)).unwrap().equivalent);
+    }
+}

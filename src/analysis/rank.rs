@@ -1,0 +1,60 @@
+//! Rank statistics: average ranks with ties and Spearman's ρ, for the claims that say "more
+//! states, more episodes".
+
+/// Ranks 1..=n of `values`, ties sharing their average rank (`scipy.stats.rankdata`).
+pub fn average_ranks(values: &[f64]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..values.len()).collect();
+    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
+    let mut ranks = vec![0.0; values.len()];
+    let mut i = 0;
+    while i < order.len() {
+        let tie = order[i..].iter().take_while(|&&j| values[j] == values[order[i]]).count();
+        // Positions i..i+tie hold ranks i+1..=i+tie; their average.
+        let r = i as f64 + (tie as f64 + 1.0) / 2.0;
+        for &j in &order[i..i + tie] {
+            ranks[j] = r;
+        }
+        i += tie;
+    }
+    ranks
+}
+
+/// Spearman's ρ of paired samples: Pearson's correlation of their average ranks
+/// (`scipy.stats.spearmanr`). `None` below three pairs or when either sample is constant.
+pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
+    if x.len() != y.len() || x.len() < 3 {
+        return None;
+    }
+    let (rx, ry) = (average_ranks(x), average_ranks(y));
+    let n = x.len() as f64;
+    let (mx, my) = (rx.iter().sum::<f64>() / n, ry.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in rx.iter().zip(&ry) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx) * (a - mx);
+        syy += (b - my) * (b - my);
+    }
+    if sxx == 0.0 || syy == 0.0 {
+        return None;
+    }
+    Some(sxy / (sxx * syy).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranks_average_over_ties() {
+        assert_eq!(average_ranks(&[10.0, 20.0, 10.0, 5.0]), vec![2.5, 4.0, 2.5, 1.0]);
+    }
+
+    #[test]
+    fn spearman_matches_scipy() {
+        // scipy.stats.spearmanr([1, 2, 3, 4, 5, 6], [2, 1, 4, 3, 6, 6]).statistic, SciPy 1.17.1.
+        let rho = spearman(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], &[2.0, 1.0, 4.0, 3.0, 6.0, 6.0]).unwrap();
+        assert!((rho - 0.869_656_553_5).abs() < 1e-9, "{rho}");
+        assert_eq!(spearman(&[1.0, 2.0, 3.0], &[3.0, 2.0, 1.0]), Some(-1.0));
+        assert_eq!(spearman(&[1.0, 2.0, 3.0], &[1.0, 1.0, 1.0]), None);
+    }
+}
