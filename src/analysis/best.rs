@@ -1,11 +1,12 @@
 //! Table III's rules, defined once for the report and the race: the episodes a trial counts and
 //! which cell of a heatmap is best.
 //!
-//! Episodes counted: a converged trial counts its `episodes_to_goal`; a trial that never reached
-//! the goal is kept and counted at the episode cap `max_episodes` (right-censored), so failures
-//! raise a cell's mean instead of vanishing from it.
+//! Episodes counted: a converged trial counts its `episodes_to_goal` (or, under the exploratory
+//! `counting: failures`, the `episodes_to_goal − 1` failed episodes before it); a trial that never
+//! reached the goal is kept and counted at the episode cap `max_episodes` (right-censored), so
+//! failures raise a cell's mean instead of vanishing from it.
 
-use crate::sim::Outcome;
+use crate::sim::{Counting, Outcome};
 
 /// The Table III rule, as stated in every caption.
 pub const BEST_RULE: &str = "Best cell: the lowest mean among the cells where every seed reached the \
@@ -22,10 +23,12 @@ pub const CENSORING: &str = "Trials that never reached the goal are not dropped:
 episode cap (max_episodes), so those means are lower bounds. std is the sample standard deviation \
 (n − 1).";
 
-/// Episodes a trial contributes to its cell's statistics, under the episode cap `max_episodes`.
-pub fn episodes_counted(outcome: &Outcome, max_episodes: u32) -> u32 {
-    match (outcome.converged, outcome.episodes_to_goal) {
-        (true, Some(e)) => e,
+/// Episodes a trial contributes to its cell's statistics, under the episode cap `max_episodes`
+/// and the pipeline's `counting`.
+pub fn episodes_counted(outcome: &Outcome, max_episodes: u32, counting: Counting) -> u32 {
+    match (outcome.converged, outcome.episodes_to_goal, counting) {
+        (true, Some(e), Counting::Episodes) => e,
+        (true, Some(e), Counting::Failures) => e.saturating_sub(1),
         _ => max_episodes,
     }
 }

@@ -5,8 +5,8 @@
 //! **reversed** when it lies entirely on the other side, and is **undecided** otherwise.
 
 use super::best::{best_cell, Candidate};
-use super::rank::spearman;
-use super::summary::quantile_sorted;
+use super::rank::{average_ranks, pearson, spearman};
+use super::summary::interval_95;
 use crate::sim::env::SystemKind;
 use crate::sim::rng::TrialRng;
 use crate::sim::Algorithm;
@@ -235,68 +235,99 @@ pub fn evaluate(cells: &[ClaimCell]) -> Vec<ClaimResult> {
         })
         .collect();
     let g = Groups::of(cells);
+    let estimates = statistics(cells, &g, &point);
+    // All claims of one resample at once: its view, best cells and correlations are shared.
+    let reps: Vec<[Option<f64>; CLAIMS.len()]> = (0..CLAIM_RESAMPLES)
+        .into_par_iter()
+        .map(|r| {
+            let view: Vec<View> = draws.iter().map(|d| d[r]).collect();
+            statistics(cells, &g, &view)
+        })
+        .collect();
     CLAIMS
         .iter()
         .enumerate()
         .map(|(k, claim)| {
-            let estimate = statistic(k, cells, &g, &point);
-            let mut reps: Vec<f64> = (0..CLAIM_RESAMPLES)
-                .into_par_iter()
-                .filter_map(|r| {
-                    let view: Vec<View> = draws.iter().map(|d| d[r]).collect();
-                    statistic(k, cells, &g, &view)
-                })
-                .collect();
-            reps.sort_by(f64::total_cmp);
-            let interval = (estimate.is_some() && reps.len() * 2 > CLAIM_RESAMPLES)
-                .then(|| (quantile_sorted(&reps, 0.025), quantile_sorted(&reps, 0.975)));
-            let verdict = match interval {
-                None => ClaimVerdict::Missing,
-                Some((lo, hi)) => {
-                    let (above, below) = if claim.id == "cart-pole-converged" {
-                        // "All converged": at or above the threshold counts as the claim.
-                        (lo >= claim.null, hi < claim.null)
-                    } else {
-                        (lo > claim.null, hi < claim.null)
-                    };
-                    match (claim.side, above, below) {
-                        (Side::Above, true, _) | (Side::Below, _, true) => ClaimVerdict::Holds,
-                        (Side::Above, _, true) | (Side::Below, true, _) => ClaimVerdict::Reversed,
-                        _ => ClaimVerdict::Undecided,
-                    }
-                }
-            };
-            ClaimResult { claim, estimate, interval, verdict }
+            let estimate = estimates[k];
+            let mut values: Vec<f64> = reps.iter().filter_map(|r| r[k]).collect();
+            let interval =
+                (estimate.is_some() && values.len() * 2 > CLAIM_RESAMPLES).then(|| interval_95(&mut values));
+            ClaimResult { claim, estimate, interval, verdict: verdict(claim, interval) }
         })
         .collect()
 }
 
+/// The verdict rule ([`CLAIM_RULE`]) for one interval.
+fn verdict(claim: &Claim, interval: Option<(f64, f64)>) -> ClaimVerdict {
+    let Some((lo, hi)) = interval else { return ClaimVerdict::Missing };
+    let (above, below) = if claim.id == "cart-pole-converged" {
+        // "All converged": at or above the threshold counts as the claim.
+        (lo >= claim.null, hi < claim.null)
+    } else {
+        (lo > claim.null, hi < claim.null)
+    };
+    match (claim.side, above, below) {
+        (Side::Above, true, _) | (Side::Below, _, true) => ClaimVerdict::Holds,
+        (Side::Above, _, true) | (Side::Below, true, _) => ClaimVerdict::Reversed,
+        _ => ClaimVerdict::Undecided,
+    }
+}
+
+/// A heatmap: its cells and their state counts.
+struct Heatmap {
+    system: SystemKind,
+    fuzzy: bool,
+    experiment: usize,
+    algorithm: Algorithm,
+    cells: Vec<usize>,
+    states: Vec<f64>,
+    /// Ranks of `states` (fixed: only the means are resampled).
+    state_ranks: Vec<f64>,
+}
+
+/// Two paired cells and their state count.
+type StatePair = (usize, usize, f64);
+
 /// Index structures shared by every resample.
 struct Groups {
-    /// (experiment, algorithm) → cell indices: one heatmap.
-    heatmaps: BTreeMap<(usize, Algorithm), Vec<usize>>,
-    /// Experiment → (system, fuzzy).
-    experiments: BTreeMap<usize, (SystemKind, bool)>,
-    /// Per system, pairs (Q(0) cell, Q(λ) cell) of the same experiment and configuration.
-    algorithm_pairs: BTreeMap<SystemKind, Vec<(usize, usize)>>,
-    /// Per (system, algorithm), pairs (crisp Exp. 1 cell, fuzzy Exp. 3 cell) of one configuration.
-    repr_pairs: BTreeMap<(SystemKind, Algorithm), Vec<(usize, usize)>>,
+    /// One per (experiment, algorithm), in that order.
+    heatmaps: Vec<Heatmap>,
+    /// Per system (in order), pairs (Q(0) cell, Q(λ) cell) of one experiment and configuration.
+    algorithm_pairs: Vec<Vec<(usize, usize)>>,
+    /// Per (system, algorithm), pairs (crisp Exp. 1 cell, fuzzy Exp. 3 cell) of one configuration,
+    /// with the pair's state count.
+    repr_pairs: Vec<Vec<StatePair>>,
+    /// Cart-Pole cells; Mountain Car cells of Q(0) and of Q(λ).
+    cart_pole: Vec<usize>,
+    mountain_car: [Vec<usize>; 2],
+    /// Cells with a compact configuration, and the cells counted.
+    compact: Vec<bool>,
 }
 
 impl Groups {
     fn of(cells: &[ClaimCell]) -> Self {
-        let mut heatmaps: BTreeMap<(usize, Algorithm), Vec<usize>> = BTreeMap::new();
-        let mut experiments = BTreeMap::new();
+        let mut by_heatmap: BTreeMap<(usize, Algorithm), Vec<usize>> = BTreeMap::new();
         type Config = (Vec<u32>, u32);
         let mut by_config: BTreeMap<(usize, Config, Algorithm), usize> = BTreeMap::new();
         let mut by_exp_id: BTreeMap<(SystemKind, String, Config, Algorithm), usize> = BTreeMap::new();
         for (i, c) in cells.iter().enumerate() {
-            heatmaps.entry((c.experiment, c.algorithm)).or_default().push(i);
-            experiments.insert(c.experiment, (c.system, c.fuzzy));
+            by_heatmap.entry((c.experiment, c.algorithm)).or_default().push(i);
             let cfg = (c.resolution.clone(), c.actions);
             by_config.insert((c.experiment, cfg.clone(), c.algorithm), i);
             by_exp_id.insert((c.system, c.experiment_id.clone(), cfg, c.algorithm), i);
         }
+        let heatmaps = by_heatmap
+            .into_iter()
+            .map(|((experiment, algorithm), idx)| Heatmap {
+                system: cells[idx[0]].system,
+                fuzzy: cells[idx[0]].fuzzy,
+                experiment,
+                algorithm,
+                states: idx.iter().map(|&i| cells[i].states()).collect(),
+                state_ranks: average_ranks(&idx.iter().map(|&i| cells[i].states()).collect::<Vec<_>>()),
+                cells: idx,
+            })
+            .collect();
         let mut algorithm_pairs: BTreeMap<SystemKind, Vec<(usize, usize)>> = BTreeMap::new();
         for ((e, cfg, a), &i) in &by_config {
             if *a == Algorithm::Q0 {
@@ -305,33 +336,28 @@ impl Groups {
                 }
             }
         }
-        let mut repr_pairs: BTreeMap<(SystemKind, Algorithm), Vec<(usize, usize)>> = BTreeMap::new();
+        let mut repr_pairs: BTreeMap<(SystemKind, Algorithm), Vec<StatePair>> = BTreeMap::new();
         for ((s, id, cfg, a), &i) in &by_exp_id {
             if id == "1" && !cells[i].fuzzy {
                 if let Some(&j) = by_exp_id.get(&(*s, "3".to_string(), cfg.clone(), *a)) {
                     if cells[j].fuzzy {
-                        repr_pairs.entry((*s, *a)).or_default().push((i, j));
+                        repr_pairs.entry((*s, *a)).or_default().push((i, j, cells[i].states()));
                     }
                 }
             }
         }
-        Self { heatmaps, experiments, algorithm_pairs, repr_pairs }
-    }
-
-    /// The best cell of each heatmap under Table III's rule.
-    fn best(&self, view: &[View]) -> BTreeMap<(usize, Algorithm), usize> {
-        self.heatmaps
-            .iter()
-            .filter_map(|(&k, idx)| {
-                let cands = idx.iter().map(|&i| Candidate {
-                    index: i,
-                    n: view[i].n,
-                    successes: view[i].successes,
-                    mean: view[i].mean,
-                });
-                best_cell(cands).map(|b| (k, b.cell))
-            })
-            .collect()
+        let of = |pred: &dyn Fn(&ClaimCell) -> bool| (0..cells.len()).filter(|&i| pred(&cells[i])).collect();
+        Self {
+            heatmaps,
+            algorithm_pairs: algorithm_pairs.into_values().collect(),
+            repr_pairs: repr_pairs.into_values().collect(),
+            cart_pole: of(&|c| c.system == SystemKind::CartPole),
+            mountain_car: [
+                of(&|c| c.system == SystemKind::MountainCar && c.algorithm == Algorithm::Q0),
+                of(&|c| c.system == SystemKind::MountainCar && c.algorithm == Algorithm::QLambda),
+            ],
+            compact: cells.iter().map(ClaimCell::compact).collect(),
+        }
     }
 }
 
@@ -344,131 +370,151 @@ fn average(v: impl IntoIterator<Item = f64>) -> Option<f64> {
     (n > 0).then(|| s / n as f64)
 }
 
-/// Spearman ρ of state count and mean over the cells of one heatmap.
-fn rho(cells: &[ClaimCell], idx: &[usize], view: &[View]) -> Option<f64> {
-    let (x, y): (Vec<f64>, Vec<f64>) =
-        idx.iter().filter_map(|&i| view[i].mean.map(|m| (cells[i].states(), m))).unzip();
-    spearman(&x, &y)
+/// Fraction of the trials of `idx` that reached the goal.
+fn success_rate(idx: &[usize], view: &[View]) -> Option<f64> {
+    let (ok, n) = idx.iter().fold((0, 0), |(ok, n), &i| (ok + view[i].successes, n + view[i].n));
+    (n > 0).then(|| ok as f64 / n as f64)
 }
 
-/// The `k`-th claim's statistic under `view`.
-fn statistic(k: usize, cells: &[ClaimCell], g: &Groups, view: &[View]) -> Option<f64> {
+/// Every claim's statistic under `view`, in [`CLAIMS`] order.
+fn statistics(cells: &[ClaimCell], g: &Groups, view: &[View]) -> [Option<f64>; CLAIMS.len()] {
     let mean = |i: usize| view[i].mean;
-    match CLAIMS[k].id {
-        "qlambda-beats-q0" => {
-            if g.algorithm_pairs.len() < 3 {
-                return None;
+    // Per heatmap: its best cell (Table III's rule) and ρ(state count, mean).
+    let best: Vec<Option<usize>> = g
+        .heatmaps
+        .iter()
+        .map(|h| {
+            let cands = h.cells.iter().map(|&i| Candidate {
+                index: i,
+                n: view[i].n,
+                successes: view[i].successes,
+                mean: view[i].mean,
+            });
+            best_cell(cands).map(|b| b.cell)
+        })
+        .collect();
+    let rho: Vec<Option<f64>> = g
+        .heatmaps
+        .iter()
+        .map(|h| {
+            let y: Vec<f64> = h.cells.iter().filter_map(|&i| mean(i)).collect();
+            if y.len() == h.cells.len() {
+                pearson(&h.state_ranks, &average_ranks(&y))
+            } else {
+                let (x, y): (Vec<f64>, Vec<f64>) =
+                    h.cells.iter().zip(&h.states).filter_map(|(&i, &s)| mean(i).map(|m| (s, m))).collect();
+                spearman(&x, &y)
             }
-            g.algorithm_pairs
-                .values()
-                .filter_map(|pairs| {
-                    average(pairs.iter().filter_map(|&(q0, ql)| {
-                        let (a, b) = (mean(q0)?, mean(ql)?);
-                        Some(if b < a {
-                            1.0
-                        } else if b == a {
-                            0.5
-                        } else {
-                            0.0
-                        })
-                    }))
-                })
-                .min_by(f64::total_cmp)
-        }
-        "traces-delayed-reward" => {
-            let rate = |a: Algorithm| {
-                let (ok, n) = cells
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, c)| c.system == SystemKind::MountainCar && c.algorithm == a)
-                    .fold((0, 0), |(ok, n), (i, _)| (ok + view[i].successes, n + view[i].n));
-                (n > 0).then(|| ok as f64 / n as f64)
-            };
-            Some(rate(Algorithm::QLambda)? - rate(Algorithm::Q0)?)
-        }
-        "compact-best" => {
-            let best = g.best(view);
-            let with_trials: Vec<usize> = (0..cells.len()).filter(|&i| view[i].n > 0).collect();
-            let all = average(with_trials.iter().map(|&i| f64::from(u8::from(cells[i].compact()))))?;
-            let chosen = average(best.values().map(|&i| f64::from(u8::from(cells[i].compact()))))?;
-            Some(chosen - all)
-        }
-        "excessive-hinders" => average(g.heatmaps.values().filter_map(|idx| rho(cells, idx, view))),
-        "qlambda-robust" => average(g.experiments.keys().filter_map(|&e| {
-            let r0 = rho(cells, g.heatmaps.get(&(e, Algorithm::Q0))?, view)?;
-            let rl = rho(cells, g.heatmaps.get(&(e, Algorithm::QLambda))?, view)?;
-            Some(r0 - rl)
-        })),
-        "fuzzy-qlambda-fastest" => {
-            let best = g.best(view);
-            let systems: Vec<SystemKind> = g.algorithm_pairs.keys().copied().collect();
-            average(systems.into_iter().filter_map(|s| {
-                // The best mean of each (representation, algorithm) over the system's experiments.
-                let combo = |fuzzy: bool, a: Algorithm| {
-                    best.iter()
-                        .filter(|((e, alg), _)| *alg == a && g.experiments[e] == (s, fuzzy))
-                        .filter_map(|(_, &i)| mean(i))
-                        .min_by(f64::total_cmp)
-                };
-                let fl = combo(true, Algorithm::QLambda)?;
-                let others = [
-                    combo(false, Algorithm::Q0)?,
-                    combo(false, Algorithm::QLambda)?,
-                    combo(true, Algorithm::Q0)?,
-                ];
-                let other = others.into_iter().min_by(f64::total_cmp)?;
-                (fl > 0.0 && other > 0.0).then(|| (other / fl).ln())
-            }))
-        }
-        "fuzzy-benefit-low-granularity" => average(g.repr_pairs.values().filter_map(|pairs| {
-            let (x, y): (Vec<f64>, Vec<f64>) = pairs
-                .iter()
-                .filter_map(|&(c, f)| {
-                    let (a, b) = (mean(c)?, mean(f)?);
-                    (a > 0.0 && b > 0.0).then(|| (cells[c].states(), (a / b).ln()))
-                })
-                .unzip();
-            spearman(&x, &y)
-        })),
-        "mountain-car-gap-narrowed" => {
-            let best = g.best(view);
-            let gap = |e: usize| {
-                let a = mean(*best.get(&(e, Algorithm::Q0))?)?;
-                let b = mean(*best.get(&(e, Algorithm::QLambda))?)?;
-                (a > 0.0 && b > 0.0).then(|| (a / b).ln().abs())
-            };
-            let mc = average(
-                g.experiments
-                    .iter()
-                    .filter(|(_, v)| v.0 == SystemKind::MountainCar)
-                    .filter_map(|(&e, _)| gap(e)),
-            )?;
-            let rest = average(
-                g.experiments
-                    .iter()
-                    .filter(|(_, v)| v.0 != SystemKind::MountainCar)
-                    .filter_map(|(&e, _)| gap(e)),
-            )?;
-            Some(mc - rest)
-        }
-        "qlambda-richer-fuzzy" => {
-            let best = g.best(view);
-            average(g.experiments.iter().filter(|(_, v)| v.1).filter_map(|(&e, _)| {
-                let a = cells[*best.get(&(e, Algorithm::Q0))?].states();
-                let b = cells[*best.get(&(e, Algorithm::QLambda))?].states();
-                Some((b / a).ln())
-            }))
-        }
-        "cart-pole-converged" => {
-            let (ok, n) = cells
+        })
+        .collect();
+    // Heatmap index by (experiment, algorithm).
+    let find = |e: usize, a: Algorithm| g.heatmaps.iter().position(|h| h.experiment == e && h.algorithm == a);
+    let experiments: Vec<usize> = {
+        let mut v: Vec<usize> = g.heatmaps.iter().map(|h| h.experiment).collect();
+        v.dedup();
+        v
+    };
+    let best_mean = |k: usize| best[k].and_then(mean);
+    let gap = |e: usize| {
+        let a = best_mean(find(e, Algorithm::Q0)?)?;
+        let b = best_mean(find(e, Algorithm::QLambda)?)?;
+        (a > 0.0 && b > 0.0).then(|| (a / b).ln().abs())
+    };
+    let system_of = |e: usize| g.heatmaps.iter().find(|h| h.experiment == e).map(|h| (h.system, h.fuzzy));
+
+    let qlambda_beats_q0 = if g.algorithm_pairs.len() < 3 {
+        None
+    } else {
+        g.algorithm_pairs
+            .iter()
+            .filter_map(|pairs| {
+                average(pairs.iter().filter_map(|&(q0, ql)| {
+                    let (a, b) = (mean(q0)?, mean(ql)?);
+                    Some(if b < a {
+                        1.0
+                    } else if b == a {
+                        0.5
+                    } else {
+                        0.0
+                    })
+                }))
+            })
+            .min_by(f64::total_cmp)
+    };
+    let traces =
+        (|| Some(success_rate(&g.mountain_car[1], view)? - success_rate(&g.mountain_car[0], view)?))();
+    let compact_best = (|| {
+        let all =
+            average((0..cells.len()).filter(|&i| view[i].n > 0).map(|i| f64::from(u8::from(g.compact[i]))))?;
+        let chosen = average(best.iter().flatten().map(|&i| f64::from(u8::from(g.compact[i]))))?;
+        Some(chosen - all)
+    })();
+    let excessive = average(rho.iter().flatten().copied());
+    let robust = average(
+        experiments
+            .iter()
+            .filter_map(|&e| Some(rho[find(e, Algorithm::Q0)?]? - rho[find(e, Algorithm::QLambda)?]?)),
+    );
+    let systems: Vec<SystemKind> = {
+        let mut v: Vec<SystemKind> = g.heatmaps.iter().map(|h| h.system).collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    let fastest = average(systems.iter().filter_map(|&s| {
+        // The best mean of each (representation, algorithm) over the system's experiments.
+        let combo = |fuzzy: bool, a: Algorithm| {
+            g.heatmaps
                 .iter()
                 .enumerate()
-                .filter(|(_, c)| c.system == SystemKind::CartPole)
-                .fold((0, 0), |(ok, n), (i, _)| (ok + view[i].successes, n + view[i].n));
-            (n > 0).then(|| ok as f64 / n as f64)
-        }
-        other => unreachable!("claim {other} has no statistic"),
-    }
+                .filter(|(_, h)| h.system == s && h.fuzzy == fuzzy && h.algorithm == a)
+                .filter_map(|(k, _)| best_mean(k))
+                .min_by(f64::total_cmp)
+        };
+        let fl = combo(true, Algorithm::QLambda)?;
+        let others =
+            [combo(false, Algorithm::Q0)?, combo(false, Algorithm::QLambda)?, combo(true, Algorithm::Q0)?];
+        let other = others.into_iter().min_by(f64::total_cmp)?;
+        (fl > 0.0 && other > 0.0).then(|| (other / fl).ln())
+    }));
+    let fuzzy_benefit = average(g.repr_pairs.iter().filter_map(|pairs| {
+        let (x, y): (Vec<f64>, Vec<f64>) = pairs
+            .iter()
+            .filter_map(|&(c, f, states)| {
+                let (a, b) = (mean(c)?, mean(f)?);
+                (a > 0.0 && b > 0.0).then(|| (states, (a / b).ln()))
+            })
+            .unzip();
+        spearman(&x, &y)
+    }));
+    let mc = |want: bool| {
+        average(
+            experiments
+                .iter()
+                .filter(|&&e| system_of(e).is_some_and(|s| (s.0 == SystemKind::MountainCar) == want))
+                .filter_map(|&e| gap(e)),
+        )
+    };
+    let narrowed = (|| Some(mc(true)? - mc(false)?))();
+    let richer =
+        average(experiments.iter().filter(|&&e| system_of(e).is_some_and(|s| s.1)).filter_map(|&e| {
+            let a = cells[best[find(e, Algorithm::Q0)?]?].states();
+            let b = cells[best[find(e, Algorithm::QLambda)?]?].states();
+            Some((b / a).ln())
+        }));
+    let converged = success_rate(&g.cart_pole, view);
+    [
+        qlambda_beats_q0,
+        traces,
+        compact_best,
+        excessive,
+        robust,
+        fastest,
+        fuzzy_benefit,
+        narrowed,
+        richer,
+        converged,
+    ]
 }
 
 #[cfg(test)]

@@ -72,6 +72,19 @@ pub fn tost(ours: Moments, paper: Moments) -> Option<Tost> {
     Some(Tost { p, equivalent: p <= ALPHA })
 }
 
+/// A Table III row's TOST under each assumed number of paper runs in [`PAPER_N`]: our best
+/// cell's mean, std and n against the published mean and std.
+pub fn against_paper(
+    mean: f64,
+    std: Option<f64>,
+    n: usize,
+    paper_mean: f64,
+    paper_std: f64,
+) -> [Option<Tost>; 2] {
+    let ours = Moments { mean, std, n };
+    PAPER_N.map(|pn| tost(ours, Moments { mean: paper_mean, std: Some(paper_std), n: pn }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

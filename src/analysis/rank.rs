@@ -4,7 +4,8 @@
 /// Ranks 1..=n of `values`, ties sharing their average rank (`scipy.stats.rankdata`).
 pub fn average_ranks(values: &[f64]) -> Vec<f64> {
     let mut order: Vec<usize> = (0..values.len()).collect();
-    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
+    // A total order (ties by index), so the unstable sort is deterministic.
+    order.sort_unstable_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
     let mut ranks = vec![0.0; values.len()];
     let mut i = 0;
     while i < order.len() {
@@ -25,11 +26,19 @@ pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
     if x.len() != y.len() || x.len() < 3 {
         return None;
     }
-    let (rx, ry) = (average_ranks(x), average_ranks(y));
-    let n = x.len() as f64;
+    pearson(&average_ranks(x), &average_ranks(y))
+}
+
+/// Pearson's correlation of two equally long samples (`None` when either is constant): Spearman's
+/// ρ when they are ranks, so a caller with fixed x ranks them once.
+pub fn pearson(rx: &[f64], ry: &[f64]) -> Option<f64> {
+    if rx.len() != ry.len() || rx.len() < 3 {
+        return None;
+    }
+    let n = rx.len() as f64;
     let (mx, my) = (rx.iter().sum::<f64>() / n, ry.iter().sum::<f64>() / n);
     let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for (a, b) in rx.iter().zip(&ry) {
+    for (a, b) in rx.iter().zip(ry) {
         sxy += (a - mx) * (b - my);
         sxx += (a - mx) * (a - mx);
         syy += (b - my) * (b - my);

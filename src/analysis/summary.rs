@@ -86,6 +86,22 @@ pub fn iqm_sorted(sorted: &[f64]) -> f64 {
     mean(&sorted[cut..sorted.len() - cut])
 }
 
+/// The type-7 quantile `q` of `values` (as [`quantile_sorted`] of the sorted slice), by selection
+/// instead of a full sort: the same two order statistics, so the same value. Reorders `values`.
+pub fn quantile_select(values: &mut [f64], q: f64) -> f64 {
+    let h = (values.len() - 1) as f64 * q.clamp(0.0, 1.0);
+    let lo = h.floor() as usize;
+    let (_, &mut a, rest) = values.select_nth_unstable_by(lo, f64::total_cmp);
+    let b =
+        if h.ceil() as usize == lo { a } else { rest.iter().copied().min_by(f64::total_cmp).unwrap_or(a) };
+    a + (h - lo as f64) * (b - a)
+}
+
+/// The 2.5 % and 97.5 % quantiles of `values` ([`quantile_select`]).
+pub fn interval_95(values: &mut [f64]) -> (f64, f64) {
+    (quantile_select(values, 0.025), quantile_select(values, 0.975))
+}
+
 /// Percentile-bootstrap 95% interval of the mean: `resamples` resamples with replacement drawn
 /// from a [`TrialRng`] seeded with `seed`, then the 2.5% and 97.5% quantiles of their means.
 pub fn bootstrap_ci(values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
@@ -96,8 +112,7 @@ pub fn bootstrap_ci(values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
     let mut rng = TrialRng::new(seed);
     let mut means: Vec<f64> =
         (0..resamples).map(|_| (0..n).map(|_| values[rng.below(n)]).sum::<f64>() / n as f64).collect();
-    means.sort_by(f64::total_cmp);
-    (quantile_sorted(&means, 0.025), quantile_sorted(&means, 0.975))
+    interval_95(&mut means)
 }
 
 /// Percentile-bootstrap 95% interval of `mean(b) − mean(a)`: each resample draws `a` and `b`
@@ -116,8 +131,7 @@ pub fn bootstrap_diff_ci(a: &[f64], b: &[f64], resamples: usize, seed: u64) -> (
             draw(b) - ma
         })
         .collect();
-    diffs.sort_by(f64::total_cmp);
-    (quantile_sorted(&diffs, 0.025), quantile_sorted(&diffs, 0.975))
+    interval_95(&mut diffs)
 }
 
 #[cfg(test)]
@@ -126,6 +140,24 @@ mod tests {
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() < 1e-12
+    }
+
+    #[test]
+    fn selected_quantiles_equal_sorted_ones() {
+        let mut rng = TrialRng::new(3);
+        for n in [1usize, 2, 3, 7, 40, 2000] {
+            let v: Vec<f64> = (0..n).map(|_| (rng.below(50) as f64) * 0.5).collect();
+            let mut sorted = v.clone();
+            sorted.sort_by(f64::total_cmp);
+            for q in [0.0, 0.025, 0.5, 0.975, 1.0] {
+                let mut w = v.clone();
+                assert_eq!(
+                    quantile_select(&mut w, q).to_bits(),
+                    quantile_sorted(&sorted, q).to_bits(),
+                    "{n} {q}"
+                );
+            }
+        }
     }
 
     #[test]

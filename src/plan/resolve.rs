@@ -175,10 +175,27 @@ pub fn plan_variants(
     if let Some(limit) = max_trials {
         // Counted from the spec, before any configuration is built or hashed, so an accidental
         // huge grid is refused at once.
+        // A variant that differs from an earlier one only in `counting` (a report setting) plans
+        // the same trials: counted once.
+        fn trial_set(v: &LoadedVariant) -> Vec<&String> {
+            let mut s: Vec<&String> = v.set.iter().filter(|e| !e.starts_with("counting=")).collect();
+            s.sort();
+            s
+        }
         let n: u128 = if chosen.is_empty() {
             planned_trials(spec)
         } else {
-            chosen.iter().map(|v| planned_trials(&v.spec)).sum()
+            let mut seen = Vec::new();
+            chosen
+                .iter()
+                .filter(|v| {
+                    let s = trial_set(v);
+                    let new = !seen.contains(&s);
+                    seen.push(s);
+                    new
+                })
+                .map(|v| planned_trials(&v.spec))
+                .sum()
         };
         if n > limit as u128 {
             return Err(too_many(&origin, n, limit));
@@ -230,7 +247,8 @@ pub fn plan_variants(
                 .iter()
                 .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter()))
                 .any(|t| !written.contains(&t.key));
-            if !v.set.is_empty() && !changed {
+            // A report setting (`counting`) changes what the trials count, not the trials.
+            if !v.set.is_empty() && !changed && v.spec.counting == spec.counting {
                 warnings.push(format!(
                     "variant `{}` changes no trial (its set gives the same configurations as the pipeline as written)",
                     v.id
@@ -243,6 +261,7 @@ pub fn plan_variants(
                 set: v.set.clone(),
                 seeds: v.spec.seeds.0.clone(),
                 generated: v.generated,
+                exploratory: v.exploratory,
             });
         }
     }
@@ -453,6 +472,7 @@ fn expand_experiment<M: Resolve>(
         algorithms: e.algorithms.clone(),
         axes: e.axes.clone(),
         fixed,
+        counting: spec.counting,
         reference: e.reference.clone(),
         race: e.race.or(spec.race),
         cells,

@@ -72,6 +72,20 @@ pub struct CellData<'a> {
 }
 
 impl CellData<'_> {
+    /// Fraction of the present trials that hit the episode cap without reaching the goal.
+    pub fn censored_fraction(&self) -> Option<f64> {
+        let n = self.trials.len();
+        (n > 0).then(|| (n - self.successes) as f64 / n as f64)
+    }
+
+    /// Kaplan–Meier median of the counted episodes, trials that never reached the goal censored
+    /// at the cap ([`crate::analysis::survival::km_median`]).
+    pub fn km_median(&self) -> Option<f64> {
+        let times: Vec<(f64, bool)> =
+            self.trials.iter().map(|t| (f64::from(t.counted), t.outcome.converged)).collect();
+        crate::analysis::survival::km_median(&times)
+    }
+
     /// Whether some present trial did not reach the goal.
     pub fn any_failed(&self) -> bool {
         self.successes < self.trials.len()
@@ -178,7 +192,7 @@ impl<'a> ReportData<'a> {
                                     outcome: o,
                                     seconds,
                                     cpu_seconds,
-                                    counted: episodes_counted(o, cap),
+                                    counted: episodes_counted(o, cap, exp.counting),
                                 })
                             })
                             .collect();
@@ -225,15 +239,15 @@ impl<'a> ReportData<'a> {
 fn cell_data<'a>(cell: &'a Cell, trials: Vec<TrialData<'a>>) -> CellData<'a> {
     let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
     let successes = trials.iter().filter(|t| t.outcome.converged).count();
-    let summary = Summary::of(&values, bootstrap_seed(trials.iter().map(|t| &t.planned.key)));
+    let summary = Summary::of(&values, seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
     CellData { cell, trials, successes, summary }
 }
 
-/// Bootstrap seed of a cell: derived from the keys of its present trials, so it changes exactly
-/// when the sample does.
-fn bootstrap_seed<'k>(keys: impl Iterator<Item = &'k Key>) -> u64 {
+/// A seed for a cell's resamples: derived from the keys of its present trials (after a `domain`
+/// that keeps two uses' streams apart), so it changes exactly when the sample does.
+pub fn seed_of<'k>(domain: &[u8], keys: impl Iterator<Item = &'k Key>) -> u64 {
     let mut h = blake3::Hasher::new();
-    h.update(b"qsweep-bootstrap\0");
+    h.update(domain);
     for k in keys {
         h.update(&k.0);
     }

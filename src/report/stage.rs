@@ -188,15 +188,25 @@ pub fn write(
         plan.variants
             .iter()
             .map(|v| {
-                (Some(VariantInfo { id: v.id.clone(), title: v.title.clone() }), plan.only_variant(&v.id))
+                (
+                    Some(VariantInfo {
+                        id: v.id.clone(),
+                        title: v.title.clone(),
+                        exploratory: v.exploratory,
+                    }),
+                    plan.only_variant(&v.id),
+                )
             })
             .collect()
     };
     let with_comparison = !plan.variants.is_empty() && !plan.variant_subset;
 
     // In a full report of a pipeline with a grid, only the chosen reading gets a folder, written
-    // after the comparison has chosen it (compare::has_folder); `--variant` writes any on demand.
-    let deferred = |info: &Option<VariantInfo>| with_comparison && info.is_some() && plan.has_grid();
+    // after the comparison has chosen it (compare::has_folder); an exploratory reading gets none;
+    // `--variant` writes any on demand.
+    let deferred = |info: &Option<VariantInfo>| {
+        with_comparison && info.as_ref().is_some_and(|v| plan.has_grid() || v.exploratory)
+    };
     // The guard first, over every folder this report replaces: nothing is written on a refusal.
     let mut targets = Vec::new();
     for (info, sub) in &subs {
@@ -241,7 +251,8 @@ pub fn write(
         }
         out.summary.add(&ReportSummary::of(&data, Vec::new()));
         if let (Some(v), true) = (info, with_comparison) {
-            if formats.has(Format::Cells) {
+            // An exploratory reading's cells are written with its folder, on demand.
+            if formats.has(Format::Cells) && !v.exploratory {
                 cells.push(datasets::cells_batch(&data)?);
             }
             digests.push(VariantDigest::of(v.clone(), sub, &data));
@@ -249,7 +260,7 @@ pub fn write(
     }
 
     // The chosen reading of a grid gets its folder once the comparison has chosen it.
-    let chosen = compare::explore::chosen(plan, &digests).cloned();
+    let chosen = compare::explore::chosen(plan, &digests).filter(|_| plan.has_grid()).cloned();
     if let Some((info, sub)) =
         subs.iter().find(|(i, _)| deferred(i) && i.as_ref().map(|v| &v.id) == chosen.as_ref().map(|c| &c.id))
     {

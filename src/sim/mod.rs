@@ -20,7 +20,7 @@ pub mod rules;
 pub mod trial;
 
 pub use config::{Algorithm, TrialConfig};
-pub use trial::{run_trial, Outcome, StopReason};
+pub use trial::{run_trial, Counting, Outcome, StopReason};
 
 #[cfg(test)]
 mod pinned_tests;

@@ -36,6 +36,28 @@ impl StopReason {
     }
 }
 
+/// How a trial's outcome becomes the episodes Table III averages: a report setting (the pipeline's
+/// `counting:`), never part of a trial's key, so switching it needs no reruns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Counting {
+    /// The episode in which the goal was first reached (`episodes_to_goal`): the paper's text.
+    #[default]
+    Episodes,
+    /// The failed episodes before it (`episodes_to_goal − 1`): an exploratory reading.
+    Failures,
+}
+
+impl Counting {
+    /// YAML name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Episodes => "episodes",
+            Self::Failures => "failures",
+        }
+    }
+}
+
 /// What a trial produced.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Outcome {

@@ -28,6 +28,10 @@ pub struct PipelineSpec {
     /// Where the experiments' `reference:` values come from (shown in reports).
     #[serde(default)]
     pub reference_source: Option<String>,
+    /// How a trial's outcome counts in Table III: `episodes` (the paper's text, default) or the
+    /// exploratory `failures` (`episodes_to_goal − 1`). A report setting: no trial key depends on it.
+    #[serde(default)]
+    pub counting: crate::sim::Counting,
     /// Settings for every system and experiment.
     #[serde(default)]
     pub defaults: Settings,

@@ -35,6 +35,10 @@ pub struct VariantSpec {
     /// Dotted path → value, applied to the pipeline (empty: the pipeline as written).
     #[serde(default)]
     pub set: serde_yaml::Mapping,
+    /// A reading suggested by the data rather than declared before it ran: labelled exploratory,
+    /// ranked after the declared readings, and its folder written only on demand (`--variant ID`).
+    #[serde(default)]
+    pub exploratory: bool,
 }
 
 fn variant_id<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {

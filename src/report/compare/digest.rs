@@ -3,6 +3,7 @@
 
 use super::fit::{rows_of, Fit, RowFit};
 pub use super::info::VariantInfo;
+use crate::analysis::claims::ClaimResult;
 use crate::cache::Key;
 use crate::plan::{Cell, Experiment, Plan};
 use crate::report::model::ReportData;
@@ -60,6 +61,9 @@ pub struct VariantDigest<'p> {
     pub trials_present: usize,
     /// Its experiments.
     pub exps: Vec<ExpDigest<'p>>,
+    /// The paper's claims tested on its cells (empty unless the pipeline has reference values and
+    /// covers every system).
+    pub claims: Vec<ClaimResult>,
 }
 
 impl<'p> VariantDigest<'p> {
@@ -86,6 +90,12 @@ impl<'p> VariantDigest<'p> {
             })
             .collect();
         let rows = rows_of(data);
+        // The claims speak of the paper's whole study: every system, with the published values.
+        let claims = if data.has_reference() && data.systems().len() == SystemKind::ALL.len() {
+            crate::analysis::claims::evaluate(&super::conclusions::claim_cells(data))
+        } else {
+            Vec::new()
+        };
         Self {
             info,
             fit: Fit::from_rows(&rows),
@@ -93,6 +103,7 @@ impl<'p> VariantDigest<'p> {
             trials_planned: data.trials_planned,
             trials_present: data.trials_present,
             exps,
+            claims,
         }
     }
 

@@ -34,9 +34,10 @@ pub fn order(plan: &Plan, variants: &[VariantDigest]) -> Vec<usize> {
     fit_order(&variants.iter().map(|v| ranking_fit(plan, v)).collect::<Vec<_>>())
 }
 
-/// The reading a search chose: the first in the comparison's order.
+/// The reading a search chose: the first declared (not exploratory) reading in the comparison's
+/// order.
 pub fn chosen<'a>(plan: &Plan, variants: &'a [VariantDigest]) -> Option<&'a VariantInfo> {
-    order(plan, variants).first().map(|&i| &variants[i].info)
+    order(plan, variants).into_iter().map(|i| &variants[i].info).find(|v| !v.exploratory)
 }
 
 /// The as-written reading: the first listed variant without a `set`.

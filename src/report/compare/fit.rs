@@ -6,6 +6,7 @@
 use super::super::model::{resolution_columns, ReportData};
 use super::super::table::{Align, Column, Row, Table, Value};
 use super::info::VariantInfo;
+use crate::analysis::equivalence::{against_paper, Tost, EQUIVALENCE_RULE};
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 
@@ -41,6 +42,9 @@ pub struct Fit {
     pub order_experiments: usize,
     /// Geometric mean of ours / reference over the rows (`None` without rows).
     pub geo_mean: Option<f64>,
+    /// Rows equivalent to their reference at the pre-registered margin, for each assumed number
+    /// of paper runs in [`crate::analysis::equivalence::PAPER_N`] (10, 100).
+    pub equivalent: [usize; 2],
 }
 
 /// Verdict of one Table III row against its reference.
@@ -95,6 +99,9 @@ pub struct RowFit {
     pub config_match: bool,
     /// Algorithms of the row's experiment (the order measure needs all of them).
     pub exp_algorithms: usize,
+    /// The equivalence test (TOST) for each assumed number of paper runs (10, 100); `None`
+    /// where undecidable.
+    pub tost: [Option<Tost>; 2],
 }
 
 /// Every Table III row of `data` that has a reference value and a best cell, in report order.
@@ -132,6 +139,7 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
                 verdict: verdict(mean, c.summary.std, c.trials.len(), r.mean, r.std),
                 config_match: ours == theirs,
                 exp_algorithms: e.exp.algorithms.len(),
+                tost: against_paper(mean, c.summary.std, c.trials.len(), r.mean, r.std),
             });
         }
     }
@@ -153,6 +161,9 @@ impl Fit {
                 Verdict::DoesNotReplicate => {}
             }
             f.config_match += usize::from(r.config_match);
+            for (k, t) in r.tost.iter().enumerate() {
+                f.equivalent[k] += usize::from(t.is_some_and(|t| t.equivalent));
+            }
             if r.mean > 0.0 && r.ref_mean > 0.0 {
                 logs.push((r.mean / r.ref_mean).ln());
             }
@@ -207,10 +218,17 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
         Column::new("Order matches", "order_match", Align::Right),
         Column::new("Experiments ordered", "order_experiments", Align::Right),
         Column::new("Geo. mean ours/ref.", "geo_mean_ratio", Align::Right),
+        Column::new("Equivalent (n=10)", "equivalent_n10", Align::Right),
+        Column::new("Equivalent (n=100)", "equivalent_n100", Align::Right),
+        Column::new("Exploratory", "exploratory", Align::Left),
     ];
     let fits: Vec<Fit> = variants.iter().map(|v| v.1).collect();
-    let rows = fit_order(&fits)
+    // Declared readings first, then the exploratory ones, each in fit order.
+    let (declared, exploratory): (Vec<usize>, Vec<usize>) =
+        fit_order(&fits).into_iter().partition(|&i| !variants[i].0.exploratory);
+    let rows = declared
         .into_iter()
+        .chain(exploratory)
         .enumerate()
         .map(|(k, i)| {
             let (v, f) = &variants[i];
@@ -231,6 +249,9 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
                         decimals: 3,
                         signed: false,
                     }),
+                    int(f.equivalent[0]),
+                    int(f.equivalent[1]),
+                    Value::Text(if v.exploratory { "yes" } else { "no" }.into()),
                 ],
                 highlight: k == 0,
             }
@@ -241,7 +262,9 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
          Table III rows that have a reference value and a best cell). {VERDICT_RULE} Config matches: the \
          best cell has the reference's bins or sets per variable and action count. Order matches: of the \
          experiments where every algorithm has a reference, those whose algorithms (Q(0), Q(λ)) rank by \
-         mean as in the reference. Geo. mean: exp of the mean of ln(ours/reference) over the rows. {FIT_ORDER}"
+         mean as in the reference. Geo. mean: exp of the mean of ln(ours/reference) over the rows. {FIT_ORDER} \
+         {EQUIVALENCE_RULE} Exploratory readings (suggested by the data, not declared before they ran) \
+         are ranked after the declared ones."
     );
     Table { title: "Variants".into(), caption, columns, rows }
 }

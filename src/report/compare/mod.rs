@@ -9,6 +9,7 @@
 //! - `index.html` and `README.md` (for repository web pages): links to each variant's own report,
 //!   the table and the difference figures.
 
+pub mod conclusions;
 pub mod diff;
 mod digest;
 pub mod explore;
@@ -53,6 +54,15 @@ pub fn write_comparison(
         put("variants.csv", render(&table, &Csv).as_bytes())?;
     }
     let held_out = plan.exploratory.as_ref().and_then(|x| explore::held_out_table(plan, x, variants));
+    let claims = variants.iter().any(|v| !v.claims.is_empty());
+    let matrix = claims.then(|| conclusions::matrix_table(variants));
+    if claims {
+        // The long table as CSV only: the pages show the matrix.
+        let t = conclusions::conclusions_table(variants);
+        if formats.has(Format::Csv) {
+            put("conclusions.csv", render(&t, &Csv).as_bytes())?;
+        }
+    }
     if let Some(t) = &held_out {
         if formats.has(Format::Md) {
             put("held_out.md", render(t, &Markdown).as_bytes())?;
@@ -86,24 +96,23 @@ pub fn write_comparison(
     }
     let notes = dir.join(NOTES).is_file();
     if formats.has(Format::Html) {
-        put("index.html", page(plan, variants, &table, held_out.as_ref(), &figs, formats, notes).as_bytes())?;
+        let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
+        put("index.html", page(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        put(
-            "README.md",
-            readme(plan, variants, &table, held_out.as_ref(), &figs, formats, notes).as_bytes(),
-        )?;
+        let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
+        put("README.md", readme(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
     }
     Ok(out.files)
 }
 
 /// Whether the report writes the folder of variant `id` (and its difference figures): every
-/// variant of a pipeline without a grid; with a `variant_grid:`, only the chosen reading, so a
+/// declared (not exploratory) variant of a pipeline without a grid; with a `variant_grid:`, only the chosen reading, so a
 /// grid of many readings does not write (or commit) a full report each; the rest are written on
 /// demand with `qsweep report PIPELINE --variant ID`.
 /// `chosen` is [`explore::chosen`]'s id, worked out once per page rather than once per variant.
 pub fn has_folder(plan: &Plan, chosen: Option<&str>, id: &str) -> bool {
-    !plan.has_grid() || chosen == Some(id)
+    (!plan.has_grid() || chosen == Some(id)) && !plan.variants.iter().any(|v| v.id == id && v.exploratory)
 }
 
 /// The heading of the comparison pages: `qsweep variants: NAME`, labelled when exploratory.
@@ -116,6 +125,16 @@ fn heading(plan: &Plan) -> String {
 
 type FigRef<'a> = (&'a VariantInfo, SystemKind, String, (u32, u32));
 
+/// The tables of the comparison pages.
+struct Tables<'a> {
+    /// The fit of every reading.
+    fit: &'a Table,
+    /// An exploratory search's held-out rows.
+    held_out: Option<&'a Table>,
+    /// The reading × claim matrix (pipelines with reference values).
+    matrix: Option<&'a Table>,
+}
+
 /// The hand-written notes a comparison folder may hold beside the report (the paper's
 /// `REPLICATION.md`): never written or removed by qsweep, linked from the page when present.
 pub const NOTES: &str = "REPLICATION.md";
@@ -124,8 +143,7 @@ pub const NOTES: &str = "REPLICATION.md";
 fn page(
     plan: &Plan,
     variants: &[VariantDigest],
-    table: &Table,
-    held_out: Option<&Table>,
+    tables: &Tables,
     figs: &[FigRef],
     formats: Formats,
     notes: bool,
@@ -173,6 +191,7 @@ fn page(
         (Format::Cells, "<a href=\"cells.parquet\">cells.parquet</a> (every variant's cells, with a <code>variant</code> column)"),
     ]
     .into_iter()
+    .chain(tables.matrix.map(|_| (Format::Csv, "<a href=\"conclusions.csv\">conclusions.csv</a>")))
     .filter(|(f, _)| formats.has(*f))
     .map(|(_, l)| l)
     .collect();
@@ -180,9 +199,13 @@ fn page(
         h.push_str(&format!("<p>Data: {}</p>\n", links.join(" · ")));
     }
     h.push_str("<h2 id=\"fit\">Fit to the reference values</h2>\n");
-    h.push_str(&captioned(table));
-    if let Some(t) = held_out {
+    h.push_str(&captioned(tables.fit));
+    if let Some(t) = tables.held_out {
         h.push_str("<h2 id=\"held-out\">Held-out rows</h2>\n");
+        h.push_str(&captioned(t));
+    }
+    if let Some(t) = tables.matrix {
+        h.push_str("<h2 id=\"claims\">The paper's conclusions, per reading</h2>\n");
         h.push_str(&captioned(t));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
@@ -226,8 +249,7 @@ fn captioned(table: &Table) -> String {
 fn readme(
     plan: &Plan,
     variants: &[VariantDigest],
-    table: &Table,
-    held_out: Option<&Table>,
+    tables: &Tables,
     figs: &[FigRef],
     formats: Formats,
     notes: bool,
@@ -261,9 +283,13 @@ fn readme(
         }
     }
     m.push_str("\n## Fit to the reference values\n\n");
-    m.push_str(&render(table, &Markdown));
-    if let Some(t) = held_out {
+    m.push_str(&render(tables.fit, &Markdown));
+    if let Some(t) = tables.held_out {
         m.push_str("\n## Held-out rows\n\n");
+        m.push_str(&render(t, &Markdown));
+    }
+    if let Some(t) = tables.matrix {
+        m.push_str("\n## The paper's conclusions, per reading\n\n");
         m.push_str(&render(t, &Markdown));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
@@ -417,11 +443,15 @@ systems:
         let data = [ReportData::build(&base, &rec_base), ReportData::build(&other, &rec_other)];
         let variants = vec![
             VariantDigest::of(
-                VariantInfo { id: "as-written".into(), title: Some("The text".into()) },
+                VariantInfo { id: "as-written".into(), title: Some("The text".into()), exploratory: false },
                 &base,
                 &data[0],
             ),
-            VariantDigest::of(VariantInfo { id: "fast".into(), title: None }, &other, &data[1]),
+            VariantDigest::of(
+                VariantInfo { id: "fast".into(), title: None, exploratory: false },
+                &other,
+                &data[1],
+            ),
         ];
         let all = Formats::of(&Format::ALL);
         let tmp = tempfile::tempdir().unwrap();
@@ -438,6 +468,8 @@ systems:
                 "README.md"
             ]
         );
+        // The claims speak of all three systems: a Ball-Beam-only pipeline has no conclusions.
+        assert!(variants.iter().all(|v| v.claims.is_empty()));
         let out = files(tmp.path());
         assert_eq!(
             out.keys().cloned().collect::<Vec<_>>().len(),
@@ -462,7 +494,10 @@ systems:
                 "config_match",
                 "order_match",
                 "order_experiments",
-                "geo_mean_ratio"
+                "geo_mean_ratio",
+                "equivalent_n10",
+                "equivalent_n100",
+                "exploratory"
             ]
         );
         let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();

@@ -3,6 +3,8 @@
 //! experiment.
 
 use super::model::{Align, Column, Row, Table, Value};
+use crate::analysis::equivalence::{against_paper, EQUIVALENCE_RULE};
+use crate::analysis::survival::SURVIVAL_RULE;
 use crate::analysis::{BEST_RULE, CENSORING, RACE_RULE};
 use crate::report::model::{resolution_columns, ExpData, ReportData};
 
@@ -49,6 +51,27 @@ pub fn table3(data: &ReportData) -> Table {
             columns.push(Column::new("Paper config tied", "reference_config_tied", Align::Left));
         }
     }
+    // Uncertainty last, so the earlier CSV fields keep their positions.
+    columns.push(Column::new("95% CI", "ci_lo", Align::Right).fields(&["ci_lo", "ci_hi"]));
+    columns.push(Column::new("Censored", "censored", Align::Right));
+    columns.push(Column::new("KM median", "km_median", Align::Right));
+    if reference {
+        columns.push(Column::new("Ours/paper", "ratio", Align::Right));
+        columns.push(
+            Column::new("Ours/paper 95% CI", "ratio_lo", Align::Right).fields(&["ratio_lo", "ratio_hi"]),
+        );
+        for n in crate::analysis::equivalence::PAPER_N {
+            columns.push(Column::new(&format!("TOST p (n={n})"), &format!("tost_p_n{n}"), Align::Right));
+            columns.push(Column::new(
+                &format!("Equivalent (n={n})"),
+                &format!("equivalent_n{n}"),
+                Align::Left,
+            ));
+        }
+    }
+    let num = |v: Option<f64>, decimals: usize| {
+        v.map_or(Value::Missing, |value| Value::Num { value, decimals, signed: false })
+    };
     let mut rows = Vec::new();
     for e in &data.experiments {
         let exp = e.exp;
@@ -112,6 +135,36 @@ pub fn table3(data: &ReportData) -> Table {
                     values.push(tied.map_or(Value::Missing, |t| Value::Text(t.to_string())));
                 }
             }
+            let cell = best.map(|(_, c)| c);
+            values.push(match cell.map(|c| (c.summary.ci_lo, c.summary.ci_hi)) {
+                Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
+                _ => Value::Missing,
+            });
+            values.push(num(cell.and_then(|c| c.censored_fraction()), 2));
+            values.push(num(cell.and_then(|c| c.km_median()), 1));
+            if reference {
+                let r = exp.reference.get(&alg).filter(|r| r.mean > 0.0);
+                match (cell, r) {
+                    (Some(c), Some(r)) => {
+                        let s = &c.summary;
+                        values.push(num(s.mean.map(|m| m / r.mean), 3));
+                        values.push(match (s.ci_lo, s.ci_hi) {
+                            (Some(lo), Some(hi)) => {
+                                Value::Range { lo: lo / r.mean, hi: hi / r.mean, decimals: 3 }
+                            }
+                            _ => Value::Missing,
+                        });
+                        let mean = s.mean.expect("a best cell has trials");
+                        for t in against_paper(mean, s.std, c.trials.len(), r.mean, r.std) {
+                            values.push(num(t.map(|t| t.p), 4));
+                            values.push(t.map_or(Value::Missing, |t| {
+                                Value::Text(if t.equivalent { "yes" } else { "no" }.into())
+                            }));
+                        }
+                    }
+                    _ => values.extend(std::iter::repeat_n(Value::Missing, 6)),
+                }
+            }
             rows.push(Row { values, highlight: false });
         }
     }
@@ -126,6 +179,15 @@ pub fn table3(data: &ReportData) -> Table {
     caption.push_str(CENSORING);
     if reference {
         caption.push_str(" Paper: the published value and configuration; Δ mean = ours − paper.");
+    }
+    caption
+        .push_str(" 95% CI: the best cell's percentile-bootstrap interval of the mean (2,000 resamples). ");
+    caption.push_str(SURVIVAL_RULE);
+    if reference {
+        caption.push_str(
+            " Ours/paper: our mean over the paper's, its interval our interval over the paper's mean. ",
+        );
+        caption.push_str(EQUIVALENCE_RULE);
     }
     if raced {
         caption.push(' ');
@@ -194,8 +256,13 @@ pub fn cell_table(e: &ExpData) -> Table {
                 (Some(lo), Some(hi)) => Value::Range { lo, hi, decimals: 2 },
                 _ => Value::Missing,
             });
-            values.push(num(s.min));
-            values.push(num(s.max));
+            // Counts are whole numbers: min and max print without decimals.
+            let whole = |v: Option<f64>| match v {
+                Some(x) if x.fract() == 0.0 && (0.0..9e15).contains(&x) => Value::Int(x as u64),
+                other => num(other),
+            };
+            values.push(whole(s.min));
+            values.push(whole(s.max));
             if exp.race.is_some() {
                 values.push(match c.cell.contender {
                     Some(true) => Value::Text("yes".into()),
