@@ -45,7 +45,7 @@ pub struct RunArgs {
 pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let start = Instant::now();
     let plan = a.pipeline.plan()?;
-    let store = a.pipeline.store()?;
+    let store = a.pipeline.cache.store()?;
     install_ctrlc();
     let scan = crate::pipeline::scan(&store)?;
     warn_quarantined(&scan);

@@ -26,7 +26,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
     // A dry run before the first run stays useful: a missing cache means every trial is missing,
     // and status (read-only) does not create it.
-    let store = a.pipeline.existing_store()?;
+    let store = a.pipeline.cache.existing_store()?;
     let s = crate::status::status(&plan, store.as_ref(), a.explain)?;
     let v = StatusReport::of(&s);
     if a.json {
@@ -56,7 +56,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             v.trials,
             v.cached,
             v.missing,
-            a.pipeline.cache_dir().display(),
+            a.pipeline.cache.dir().display(),
             if store.is_none() { ", does not exist yet" } else { "" }
         );
         if let Some(race) = &v.race {
