@@ -128,7 +128,7 @@ impl StatusReport {
                         finished: h.finished,
                         contenders: h.contenders,
                         trials: h.trials,
-                        cached: h.present,
+                        cached: h.cached,
                         without_race: h.without_race,
                     }
                 })

@@ -2,7 +2,7 @@
 //! experiment and per raced heatmap, and (on request) why each missing cell is missing. Reads the
 //! cache and runs nothing; `qsweep status` prints it and `formats::StatusReport` is its `--json`.
 
-use crate::cache::store::{Damaged, KeyScan, Store};
+use crate::cache::store::{Damaged, KeySet, Store};
 use crate::cache::{Key, TrialRecord, ENGINE_VERSION};
 use crate::plan::Plan;
 use crate::race::HeatRace;
@@ -94,7 +94,7 @@ impl std::fmt::Display for Reason {
 pub fn status(plan: &Plan, store: Option<&Store>, explain: bool) -> anyhow::Result<Status> {
     let scan = match store {
         Some(store) => store.keys()?,
-        None => KeyScan::default(),
+        None => KeySet::default(),
     };
     let cached = &scan.keys;
     // A race's trials so far come from the cached outcomes of its earlier rounds.

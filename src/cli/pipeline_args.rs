@@ -133,7 +133,7 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
         "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
          that uses it, the distinct trials are the `executed`/`cached` counts)",
         opts.dir.join(page).display(),
-        s.trials_present,
+        s.trials_cached,
         s.trials_planned,
         s.cells_with_trials,
         s.cells

@@ -106,7 +106,7 @@ fn quick_report_is_complete_valid_and_deterministic() {
     let summary = write_report_as(&plan, &recs, &dir, all).unwrap();
     assert_eq!(summary.experiments, 12);
     assert_eq!(summary.trials_planned, plan.trial_count());
-    assert_eq!(summary.trials_present, plan.trial_count());
+    assert_eq!(summary.trials_cached, plan.trial_count());
     assert_eq!(summary.trials_missing, 0);
     assert_eq!(summary.cells_with_trials, summary.cells);
 
@@ -264,7 +264,7 @@ fn missing_trials_are_counted_and_reference_values_compared() {
     let md = std::fs::read_to_string(tmp.path().join("table3.md")).unwrap();
     assert!(md.contains(&format!(
         "Only {} of {} planned trials are present.",
-        summary.trials_present, summary.trials_planned
+        summary.trials_cached, summary.trials_planned
     )));
     assert!(md.contains("| 90.50 ± 25.80 | 5, 3, —, —, 3 |"), "{md}");
     let html = std::fs::read_to_string(tmp.path().join("index.html")).unwrap();
