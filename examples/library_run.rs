@@ -3,7 +3,7 @@
 //! events, then write its report. `cargo run --release --example library_run [CACHE_DIR]`.
 
 use qsweep::exec::{Event, ExecOptions};
-use qsweep::pipeline::{run, scan, Selection};
+use qsweep::pipeline::{run_trials, scan, Selection};
 use qsweep::report::formats::{Format, Formats};
 use qsweep::report::ReportOptions;
 
@@ -16,11 +16,11 @@ fn main() -> anyhow::Result<()> {
     let loaded = qsweep::spec::load(&root.join("tests/fixtures/pipelines/tiny.yaml"), &[])?;
     let plan = qsweep::plan::plan(&loaded, None)?;
     let store = qsweep::cache::Store::open(&work.join("cache"))?;
-    let keys = scan(&store)?.keys;
+    let keys = scan(&store)?.stored;
 
     let mut events: Vec<Event> = Vec::new();
     let sel = Selection { shard: None, force: false };
-    let done = run(&plan, &store, &keys, sel, &ExecOptions::default(), &mut events)?;
+    let done = run_trials(&plan, &store, &keys, sel, &ExecOptions::default(), &mut events)?;
     let finished = events.iter().filter(|e| matches!(e, Event::Finished { .. })).count();
     let flushes = events.iter().filter(|e| matches!(e, Event::Flushed { .. })).count();
     println!(
@@ -32,7 +32,7 @@ fn main() -> anyhow::Result<()> {
         events.last()
     );
 
-    let keys = scan(&store)?.keys;
+    let keys = scan(&store)?.stored;
     let opts = ReportOptions {
         dir: work.join("report"),
         formats: Formats::of(&[Format::Md, Format::Csv]),
@@ -43,7 +43,7 @@ fn main() -> anyhow::Result<()> {
         "report: {} files in {} ({} of {} planned trials present)",
         report.summary.files.len(),
         opts.dir.display(),
-        report.summary.trials_present,
+        report.summary.trials_cached,
         report.summary.trials_planned
     );
     Ok(())

@@ -10,6 +10,7 @@ use crate::bench::BenchResult;
 use crate::sim::env::SystemKind;
 use crate::sim::feasible::Feasibility;
 use crate::sim::{Outcome, TrialConfig};
+use crate::status::Status;
 use serde::{Deserialize, Serialize};
 
 /// `qsweep run --json`: one object, printed after the trials ran (before the report is written).
@@ -92,6 +93,58 @@ pub struct StatusRace {
 impl StatusReport {
     /// The current version of the `status --json` format.
     pub const FORMAT_VERSION: u32 = 1;
+
+    /// The format of a status the library computed.
+    pub fn of(s: &Status) -> Self {
+        let plan = &s.plan;
+        let experiments = plan
+            .experiments
+            .iter()
+            .zip(&s.experiments)
+            .map(|(e, n)| StatusExperiment {
+                variant: e.variant.clone(),
+                system: e.system.name().into(),
+                experiment: e.id.clone(),
+                repr: e.repr.name().into(),
+                cells: e.cells.len(),
+                trials: n.trials,
+                cached: n.cached,
+                missing: n.missing(),
+            })
+            .collect();
+        let race = s.heats.as_ref().map(|heats| {
+            heats
+                .iter()
+                .map(|h| {
+                    let e = &plan.experiments[h.experiment];
+                    StatusRace {
+                        variant: e.variant.clone(),
+                        system: e.system.name().into(),
+                        experiment: e.id.clone(),
+                        algorithm: h.algorithm.name().into(),
+                        cells: h.cells,
+                        rounds_done: h.rounds_done,
+                        rounds_max: h.rounds_max,
+                        finished: h.finished,
+                        contenders: h.contenders,
+                        trials: h.trials,
+                        cached: h.cached,
+                        without_race: h.without_race,
+                    }
+                })
+                .collect()
+        });
+        Self {
+            format_version: Self::FORMAT_VERSION,
+            pipeline: plan.name.clone(),
+            trials: s.total.trials,
+            cached: s.total.cached,
+            missing: s.total.missing(),
+            experiments,
+            damaged_segments: s.damaged.len(),
+            race,
+        }
+    }
 }
 
 /// One experiment of [`StatusReport`].

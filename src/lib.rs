@@ -18,6 +18,7 @@ pub mod report;
 pub mod sim;
 pub mod slurm;
 pub mod spec;
+pub mod status;
 
 pub mod cli;
 pub mod error;

@@ -9,7 +9,7 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = <qsweep::cli::Cli as clap::Parser>::parse();
-    match qsweep::cli::run(cli) {
+    match qsweep::cli::dispatch(cli) {
         Ok(code) => ExitCode::from(code),
         Err(err) => {
             eprintln!("error: {err}");

@@ -1,11 +1,11 @@
 //! The pipeline as the library runs it, the same for every command: scan the cache's keys (and
 //! move damaged segments aside, [`scan`]), choose the trials to run ([`select`]: shard, cached,
-//! `--force`), execute and store them ([`run`]); the report stage is [`crate::report::write`].
+//! `--force`), execute and store them ([`run_trials`]); the report stage is [`crate::report::write`].
 //! A raced plan ([`crate::race`]) is replayed against the cache first
-//! ([`crate::race::replay_cached`]), and `run`
-//! runs its rounds one after another (one round per call under `--shard`).
+//! ([`crate::race::replay_cached`]), and
+//! [`run_trials`] runs its rounds one after another (one round per call under `--shard`).
 
-use crate::cache::store::{Damaged, KeyScan, Store};
+use crate::cache::store::{Damaged, KeySet, Store};
 use crate::cache::Key;
 use crate::exec::shard::{assign, key_owner, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
@@ -16,7 +16,7 @@ use std::path::PathBuf;
 #[derive(Debug, Default)]
 pub struct Scan {
     /// The readable segments' keys.
-    pub keys: KeyScan,
+    pub stored: KeySet,
     /// Each damaged segment and where it went.
     pub quarantined: Vec<(Damaged, PathBuf)>,
 }
@@ -24,13 +24,13 @@ pub struct Scan {
 /// Scan the cache's keys; a segment that cannot be read is never served or kept being read: it
 /// moves to `_quarantine/` and its trials count as missing (so `run` recomputes them).
 pub fn scan(store: &Store) -> anyhow::Result<Scan> {
-    let keys = store.keys()?;
+    let stored = store.keys()?;
     let mut quarantined = Vec::new();
-    for d in &keys.damaged {
+    for d in &stored.damaged {
         let to = store.quarantine(&d.path)?;
         quarantined.push((d.clone(), to));
     }
-    Ok(Scan { keys, quarantined })
+    Ok(Scan { stored, quarantined })
 }
 
 /// What to run of a plan.
@@ -63,13 +63,13 @@ fn in_shard<'p>(plan: &Plan, trials: Vec<Job<'p>>, shard: Option<Shard>) -> Vec<
 }
 
 /// The plan's distinct trials that `sel` keeps (its shard), and of those the ones to run.
-pub fn select<'p>(plan: &'p Plan, scan: &KeyScan, sel: Selection) -> (Vec<Job<'p>>, Vec<Job<'p>>) {
+pub fn select<'p>(plan: &'p Plan, scan: &KeySet, sel: Selection) -> (Vec<Job<'p>>, Vec<Job<'p>>) {
     let unique = in_shard(plan, crate::exec::jobs(plan), sel.shard);
     let jobs = unique.iter().filter(|t| sel.force || !scan.keys.contains(&t.key)).copied().collect();
     (unique, jobs)
 }
 
-/// What [`run`] did.
+/// What [`run_trials`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunOutcome {
     /// The execution's counts.
@@ -83,10 +83,10 @@ pub struct RunOutcome {
 /// under a shard, only the shard's own trials (by key, [`key_owner`]) of the rounds the cache lets
 /// it plan, then it stops (the other shards' parts must be stored before the next round can be
 /// planned).
-pub fn run(
+pub fn run_trials(
     plan: &Plan,
     store: &Store,
-    scan: &KeyScan,
+    scan: &KeySet,
     sel: Selection,
     opts: &ExecOptions,
     reporter: &mut dyn crate::exec::Reporter,

@@ -8,7 +8,7 @@
 //! trials then run one after another on the calling thread, timed by that thread's CPU clock,
 //! which load on the machine does not inflate.
 
-use crate::cache::store::{KeyScan, Store};
+use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
 use crate::exec::{estimated_cost, thread_cpu_seconds};
 use crate::plan::{Cell, Plan};
@@ -78,7 +78,7 @@ pub fn cell_name(plan_variant: Option<&str>, cell: &Cell) -> String {
 /// Without a cache (`None`), the ranking is the estimate.
 pub fn ranked_cells<'p>(
     plan: &'p Plan,
-    cache: Option<(&Store, &KeyScan)>,
+    cache: Option<(&Store, &KeySet)>,
 ) -> anyhow::Result<(Vec<CellCost<'p>>, CostBasis)> {
     let mut seen: HashSet<Vec<Key>> = HashSet::new();
     let mut cells = Vec::new();

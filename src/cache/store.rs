@@ -115,9 +115,9 @@ impl std::fmt::Display for Damaged {
     }
 }
 
-/// The keys present in the cache, and the segments that could not be read.
+/// The cache's keys, where each row lives, and the segments that could not be read.
 #[derive(Debug, Default)]
-pub struct KeyScan {
+pub struct KeySet {
     /// Every stored key.
     pub keys: HashSet<Key>,
     /// Unreadable segments (their rows count as missing).
@@ -189,8 +189,8 @@ impl Store {
     }
 
     /// Every stored key, reading only the `key` column of each segment.
-    pub fn keys(&self) -> anyhow::Result<KeyScan> {
-        let mut scan = KeyScan::default();
+    pub fn keys(&self) -> anyhow::Result<KeySet> {
+        let mut scan = KeySet::default();
         for path in self.segments()? {
             match read_keys(&path) {
                 Ok(keys) => {
@@ -209,7 +209,7 @@ impl Store {
     /// depend on the number of threads.
     pub fn read_outcomes(
         &self,
-        scan: &KeyScan,
+        scan: &KeySet,
         wanted: &HashSet<Key>,
         lengths: bool,
     ) -> anyhow::Result<std::collections::HashMap<Key, StoredOutcome>> {
@@ -585,9 +585,9 @@ mod tests {
         assert_eq!(again.column_by_name("cpu_seconds").unwrap().null_count(), 30);
         // Its outcomes read through the report's projected read too.
         let store = Store { dir: path.parent().unwrap().to_path_buf() };
-        let scan = KeyScan {
+        let scan = KeySet {
             segments: vec![(path.clone(), recs.iter().map(|r| r.key).collect())],
-            ..KeyScan::default()
+            ..KeySet::default()
         };
         let wanted: HashSet<Key> = recs.iter().map(|r| r.key).collect();
         let got = store.read_outcomes(&scan, &wanted, true).unwrap();

@@ -1,6 +1,6 @@
 //! `qsweep bench`: steps per second of the production engine on the standard configurations.
 
-use super::pipeline_args::PipelineArgs;
+use super::pipeline_args::{CacheArgs, PipelineArgs};
 use crate::bench::{self, BenchResult};
 use crate::error::user_error;
 use clap::Args;
@@ -8,6 +8,10 @@ use std::path::PathBuf;
 
 /// Arguments of `qsweep bench`.
 #[derive(Debug, Args)]
+// The shared `--cache`, whose help says what the cache is for here.
+#[command(mut_arg("cache", |a| a.help(
+    "With --pipeline: the cache whose trials rank the cells [env: QSWEEP_CACHE; default: cache]"
+)))]
 pub struct BenchArgs {
     /// Step budget per timed trial (each trial runs at least this many steps, under twice as many).
     #[arg(long, default_value_t = bench::DEFAULT_STEPS)]
@@ -35,9 +39,8 @@ pub struct BenchArgs {
     /// With --pipeline: override a field, as for `run`.
     #[arg(long = "set", value_name = "PATH=VALUE")]
     pub set: Vec<String>,
-    /// With --pipeline: the cache whose trials rank the cells [env: QSWEEP_CACHE; default: cache].
-    #[arg(long, value_name = "DIR")]
-    pub cache: Option<PathBuf>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
 }
 
 /// Run `qsweep bench`.
@@ -88,7 +91,7 @@ fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
     let p = PipelineArgs { pipeline, set: a.set, variant: a.variant, cache: a.cache, yes: true };
     let plan = p.plan()?;
     // The cache only ranks the cells; a missing one is not created (ranking by the estimate).
-    let cache = match p.existing_store()? {
+    let cache = match p.cache.existing_store()? {
         Some(store) => {
             let scan = store.keys()?;
             Some((store, scan))

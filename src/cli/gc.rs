@@ -1,7 +1,6 @@
 //! `qsweep gc`: compact the cache and drop rows no given pipeline references.
 
-use super::pipeline_args::{cache_dir, require_cache};
-use crate::cache::Store;
+use super::pipeline_args::CacheArgs;
 use crate::error::exit;
 use crate::plan::plan;
 use crate::spec::load;
@@ -13,9 +12,8 @@ use std::path::PathBuf;
 pub struct GcArgs {
     /// Keep only the trials of these pipelines (none: keep every row, just compact).
     pub pipelines: Vec<PathBuf>,
-    /// Cache directory [env: QSWEEP_CACHE; default: cache].
-    #[arg(long, value_name = "DIR")]
-    pub cache: Option<PathBuf>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
     /// Say what would be removed and compacted; change nothing.
     #[arg(long)]
     pub dry_run: bool,
@@ -23,9 +21,7 @@ pub struct GcArgs {
 
 /// Run `qsweep gc`.
 pub fn run(a: GcArgs) -> anyhow::Result<u8> {
-    let dir = cache_dir(a.cache.as_ref());
-    require_cache(&dir)?;
-    let store = Store::open(&dir)?;
+    let store = a.cache.required_store()?;
     let keep = if a.pipelines.is_empty() {
         None
     } else {

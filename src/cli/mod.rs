@@ -51,7 +51,7 @@ pub enum Command {
 }
 
 /// Run a parsed command line; returns the process exit code.
-pub fn run(cli: Cli) -> anyhow::Result<u8> {
+pub fn dispatch(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Bench(a) => bench::run(a),
         Command::Feasible(a) => feasible::run(a),

@@ -1,5 +1,6 @@
-//! Arguments shared by the pipeline commands (`run`, `status`, `report`): the pipeline file,
-//! `--set` overrides, the cache directory and the size confirmation.
+//! Arguments shared by the commands: the pipeline file, `--set` overrides and the size
+//! confirmation of the pipeline commands (`run`, `status`, `report`, `slurm`), and the cache
+//! directory of every command that reads or writes a cache (those, `bench`, `verify`, `gc`).
 
 use crate::cache::store::Store;
 use crate::error::user_error;
@@ -22,9 +23,8 @@ pub struct PipelineArgs {
     /// Only this variant of the pipeline's `variants:` (repeatable) [default: all of them].
     #[arg(long = "variant", value_name = "ID")]
     pub variant: Vec<String>,
-    /// Cache directory [env: QSWEEP_CACHE; default: cache].
-    #[arg(long, value_name = "DIR")]
-    pub cache: Option<PathBuf>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
     /// Accept a plan larger than 200,000 trials.
     #[arg(long)]
     pub yes: bool,
@@ -42,29 +42,49 @@ impl PipelineArgs {
         }
         Ok(plan)
     }
+}
 
+/// `--cache DIR`, and how a command opens it.
+#[derive(Debug, Clone, Default, Args)]
+pub struct CacheArgs {
+    /// Cache directory [env: QSWEEP_CACHE; default: cache].
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+}
+
+impl CacheArgs {
     /// The cache directory: `--cache`, else `$QSWEEP_CACHE`, else `cache`.
-    pub fn cache_dir(&self) -> PathBuf {
-        cache_dir(self.cache.as_ref())
+    pub fn dir(&self) -> PathBuf {
+        self.cache
+            .clone()
+            .or_else(|| std::env::var_os("QSWEEP_CACHE").filter(|v| !v.is_empty()).map(PathBuf::from))
+            .unwrap_or_else(|| PathBuf::from("cache"))
     }
 
-    /// Open the cache store.
+    /// Open the cache store, creating its directory if needed (`run`).
     pub fn store(&self) -> anyhow::Result<Store> {
-        let dir = self.cache_dir();
+        let dir = self.dir();
         Store::open(&dir).map_err(|e| anyhow::anyhow!("cache {}: {e}", dir.display()))
     }
 
     /// The cache if its directory exists, else `None` (treated as empty): the rule of the
     /// commands that only read a cache and never create one (`status`, `slurm`, `bench`).
     pub fn existing_store(&self) -> anyhow::Result<Option<Store>> {
-        self.cache_dir().is_dir().then(|| self.store()).transpose()
+        self.dir().is_dir().then(|| self.store()).transpose()
+    }
+
+    /// The cache, which must exist (a usage error otherwise, see [`require_cache`]): the rule of
+    /// the commands that read or rewrite a cache an earlier run made (`report`, `verify`, `gc`).
+    pub fn required_store(&self) -> anyhow::Result<Store> {
+        require_cache(&self.dir())?;
+        self.store()
     }
 }
 
 /// Fail with a usage error (exit 2) unless `dir` is an existing directory: the read-only
 /// commands (`report`, `verify`, `gc`) never create a cache, and a missing one is almost always a
 /// mistyped `--cache`/`QSWEEP_CACHE` or the wrong working directory.
-pub fn require_cache(dir: &Path) -> anyhow::Result<()> {
+fn require_cache(dir: &Path) -> anyhow::Result<()> {
     if dir.is_dir() {
         return Ok(());
     }
@@ -73,13 +93,6 @@ pub fn require_cache(dir: &Path) -> anyhow::Result<()> {
         "cache {} {what}; give the cache of an earlier `qsweep run` with --cache DIR or QSWEEP_CACHE",
         dir.display()
     )))
-}
-
-/// Resolve the cache directory from an explicit flag, the environment, or the default.
-pub fn cache_dir(flag: Option<&PathBuf>) -> PathBuf {
-    flag.cloned()
-        .or_else(|| std::env::var_os("QSWEEP_CACHE").filter(|v| !v.is_empty()).map(PathBuf::from))
-        .unwrap_or_else(|| PathBuf::from("cache"))
 }
 
 /// Where and how to write the report (`run` and `report`).
@@ -120,7 +133,7 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
         "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
          that uses it, the distinct trials are the `executed`/`cached` counts)",
         opts.dir.join(page).display(),
-        s.trials_present,
+        s.trials_cached,
         s.trials_planned,
         s.cells_with_trials,
         s.cells

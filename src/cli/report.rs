@@ -4,7 +4,7 @@
 //! more (a fresh clone's empty cache would otherwise overwrite the committed report) unless told
 //! to with `--force`, and never creates the cache.
 
-use super::pipeline_args::{print_report, require_cache, warn_quarantined, PipelineArgs, ReportFlags};
+use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
 use crate::error::exit;
 use clap::Args;
 
@@ -27,12 +27,11 @@ pub struct ReportArgs {
 /// Run `qsweep report`.
 pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
-    require_cache(&a.pipeline.cache_dir())?;
-    let store = a.pipeline.store()?;
+    let store = a.pipeline.cache.required_store()?;
     let scan = crate::pipeline::scan(&store)?;
     warn_quarantined(&scan);
     let opts = a.report.options(&plan, a.force);
-    let outcome = crate::report::write(&plan, &store, &scan.keys, &opts)?;
+    let outcome = crate::report::write(&plan, &store, &scan.stored, &opts)?;
     if !a.quiet {
         print_report(&outcome, &opts);
     }

@@ -45,7 +45,7 @@ pub struct RunArgs {
 pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let start = Instant::now();
     let plan = a.pipeline.plan()?;
-    let store = a.pipeline.store()?;
+    let store = a.pipeline.cache.store()?;
     install_ctrlc();
     let scan = crate::pipeline::scan(&store)?;
     warn_quarantined(&scan);
@@ -57,7 +57,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();
     let reporter: &mut dyn Reporter = if a.quiet || a.json { &mut () } else { &mut bar };
-    let done = crate::pipeline::run(&plan, &store, &scan.keys, sel, &opts, reporter)?;
+    let done = crate::pipeline::run_trials(&plan, &store, &scan.stored, sel, &opts, reporter)?;
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
@@ -88,7 +88,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         let scan = crate::pipeline::scan(&store)?;
         warn_quarantined(&scan);
         let ropts = a.report.options(&plan, false);
-        let outcome = crate::report::write(&plan, &store, &scan.keys, &ropts)?;
+        let outcome = crate::report::write(&plan, &store, &scan.stored, &ropts)?;
         if !(a.quiet || a.json) {
             print_report(&outcome, &ropts);
         }

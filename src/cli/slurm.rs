@@ -81,7 +81,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         sets: a.pipeline.set.clone(),
         variants: a.pipeline.variant.clone(),
         yes: a.pipeline.yes,
-        cache: abs(&a.pipeline.cache_dir())?,
+        cache: abs(&a.pipeline.cache.dir())?,
         report_dir: abs(&a.out.clone().unwrap_or_else(|| crate::report::default_dir(&plan)))?,
         tasks: a.array,
         max_running: a.max_running,
@@ -100,7 +100,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     print!("{script}");
 
     let unique = crate::exec::jobs(&plan);
-    let cached: HashSet<_> = match a.pipeline.existing_store()? {
+    let cached: HashSet<_> = match a.pipeline.cache.existing_store()? {
         Some(store) => store.keys()?.keys,
         None => HashSet::new(),
     };

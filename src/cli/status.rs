@@ -1,12 +1,11 @@
-//! `qsweep status`: what is cached and what is missing, per system and experiment, without running
-//! anything; `--explain` says why missing cells are missing.
+//! `qsweep status`: prints what is cached and what is missing, per system and experiment, without
+//! running anything, and with `--explain` why missing cells are missing (the diagnosis is
+//! [`crate::status`]).
 
 use super::pipeline_args::PipelineArgs;
-use crate::cache::TrialRecord;
-use crate::formats::{StatusExperiment, StatusRace, StatusReport};
+use crate::formats::{StatusRace, StatusReport};
+use crate::status::{reason_counts, MissingCell};
 use clap::Args;
-use serde_json::Value;
-use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// Arguments of `qsweep status`.
 #[derive(Debug, Args)]
@@ -27,77 +26,15 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
     // A dry run before the first run stays useful: a missing cache means every trial is missing,
     // and status (read-only) does not create it.
-    let store = a.pipeline.existing_store()?;
-    let scan = match &store {
-        Some(store) => store.keys()?,
-        None => crate::cache::store::KeyScan::default(),
-    };
-    let cached = &scan.keys;
-    // A race's trials so far come from the cached outcomes of its earlier rounds.
-    let raced = match &store {
-        Some(store) if plan.has_race() => Some(crate::race::replay_cached(&plan, store, &scan)?),
-        _ if plan.has_race() => Some(crate::race::replay(&plan, cached, &mut |_| Ok(Default::default()))?),
-        _ => None,
-    };
-    let plan = raced.as_ref().map_or(&plan, |r| &r.plan);
-    let race_rows: Vec<StatusRace> = raced
-        .iter()
-        .flat_map(|r| &r.heats)
-        .map(|h| {
-            let e = &plan.experiments[h.experiment];
-            StatusRace {
-                variant: e.variant.clone(),
-                system: e.system.name().into(),
-                experiment: e.id.clone(),
-                algorithm: h.algorithm.name().into(),
-                cells: h.cells,
-                rounds_done: h.rounds_done,
-                rounds_max: h.rounds_max,
-                finished: h.finished,
-                contenders: h.contenders,
-                trials: h.trials,
-                cached: h.present,
-                without_race: h.without_race,
-            }
-        })
-        .collect();
-    let mut rows = Vec::new();
-    for e in &plan.experiments {
-        let keys: HashSet<_> = e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key)).collect();
-        let hit = keys.iter().filter(|k| cached.contains(k)).count();
-        rows.push((e, keys.len(), hit));
-    }
-    let unique: HashSet<_> = plan.trials().map(|(_, _, t)| t.key).collect();
-    let unique_hit = unique.iter().filter(|k| cached.contains(k)).count();
+    let store = a.pipeline.cache.existing_store()?;
+    let s = crate::status::status(&plan, store.as_ref(), a.explain)?;
+    let v = StatusReport::of(&s);
     if a.json {
-        let experiments = rows
-            .iter()
-            .map(|&(e, n, hit)| StatusExperiment {
-                variant: e.variant.clone(),
-                system: e.system.name().into(),
-                experiment: e.id.clone(),
-                repr: e.repr.name().into(),
-                cells: e.cells.len(),
-                trials: n,
-                cached: hit,
-                missing: n - hit,
-            })
-            .collect();
-        let v = StatusReport {
-            format_version: StatusReport::FORMAT_VERSION,
-            pipeline: plan.name.clone(),
-            trials: unique.len(),
-            cached: unique_hit,
-            missing: unique.len() - unique_hit,
-            experiments,
-            damaged_segments: scan.damaged.len(),
-            race: raced.is_some().then_some(race_rows),
-        };
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        let width = plan.variants.iter().map(|v| v.id.len()).max().map_or(0, |w| w.max(7) + 1);
+        let width = s.plan.variants.iter().map(|v| v.id.len()).max().map_or(0, |w| w.max(7) + 1);
         // Experiment ids are usually numbers; a longer id widens its column.
-        let ew = plan.experiments.iter().map(|e| e.id.len()).max().unwrap_or(0).max(4);
+        let ew = s.plan.experiments.iter().map(|e| e.id.len()).max().unwrap_or(0).max(4);
         if width > 0 {
             print!("{:<width$}", "variant");
         }
@@ -105,138 +42,58 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             "{:<13} {:>ew$} {:<6} {:>6} {:>7} {:>7} {:>8}",
             "system", "exp", "repr", "cells", "trials", "cached", "missing"
         );
-        for (e, n, hit) in &rows {
+        for e in &v.experiments {
             if width > 0 {
                 print!("{:<width$}", e.variant.as_deref().unwrap_or_default());
             }
             println!(
                 "{:<13} {:>ew$} {:<6} {:>6} {:>7} {:>7} {:>8}",
-                e.system.name(),
-                e.id,
-                e.repr.name(),
-                e.cells.len(),
-                n,
-                hit,
-                n - hit
+                e.system, e.experiment, e.repr, e.cells, e.trials, e.cached, e.missing
             );
         }
         println!(
             "total: {} trials, {} cached, {} missing (cache: {}{})",
-            unique.len(),
-            unique_hit,
-            unique.len() - unique_hit,
-            a.pipeline.cache_dir().display(),
+            v.trials,
+            v.cached,
+            v.missing,
+            a.pipeline.cache.dir().display(),
             if store.is_none() { ", does not exist yet" } else { "" }
         );
-        if raced.is_some() {
-            print_race(&race_rows, width, ew);
+        if let Some(race) = &v.race {
+            print_race(race, width, ew);
         }
-        for d in &scan.damaged {
+        for d in &s.damaged {
             println!("damaged segment: {d}");
         }
     }
-    if a.explain && unique_hit < unique.len() {
-        let records = match &store {
-            Some(store) => store.read_all()?,
-            None => Vec::new(),
-        };
-        explain(plan, &records, cached);
+    if let Some(cells) = &s.explanation {
+        print_explanation(&s.plan, cells);
     }
     Ok(crate::error::exit::OK)
 }
 
-type Position = (String, String, String, Vec<u32>, u32, u64);
-
-fn position(c: &crate::sim::TrialConfig, seed: u64) -> Position {
-    (
-        c.system().name().to_string(),
-        c.repr.kind.name().to_string(),
-        c.learner.algorithm.name().to_string(),
-        c.repr.resolution.clone(),
-        c.actions,
-        seed,
-    )
-}
-
-fn explain(plan: &crate::plan::Plan, records: &[TrialRecord], cached: &HashSet<crate::cache::Key>) {
-    let mut at: HashMap<Position, Vec<&TrialRecord>> = HashMap::new();
-    for r in records {
-        at.entry(position(&r.config, r.seed)).or_default().push(r);
+/// One line per missing cell, then how many cells each reason explains when there are several.
+fn print_explanation(plan: &crate::plan::Plan, cells: &[MissingCell]) {
+    for m in cells {
+        let e = &plan.experiments[m.experiment];
+        let c = &e.cells[m.cell];
+        let label = format!(
+            "{}{} exp {} {} {}",
+            e.variant.as_deref().map(|v| format!("[{v}] ")).unwrap_or_default(),
+            e.system.name(),
+            e.id,
+            c.algorithm.name(),
+            c.coords.iter().map(|&v| crate::spec::format_value(v)).collect::<Vec<_>>().join("×")
+        );
+        println!("missing {label} ({} of {} seeds): {}", m.missing, m.trials, m.reason);
     }
-    // One line per missing cell: the differences are the same for all its seeds.
-    let mut reasons: BTreeMap<String, usize> = BTreeMap::new();
-    for e in &plan.experiments {
-        for c in &e.cells {
-            let missing: Vec<_> = c.trials.iter().filter(|t| !cached.contains(&t.key)).collect();
-            let Some(t) = missing.first() else { continue };
-            let label = format!(
-                "{}{} exp {} {} {}",
-                e.variant.as_deref().map(|v| format!("[{v}] ")).unwrap_or_default(),
-                e.system.name(),
-                e.id,
-                c.algorithm.name(),
-                c.coords.iter().map(|&v| crate::spec::format_value(v)).collect::<Vec<_>>().join("×")
-            );
-            let why = match at.get(&position(&c.config, t.seed)) {
-                None => "never computed (no cached trial at this grid position and seed)".to_string(),
-                Some(prev) => {
-                    let new = flatten(&serde_json::to_value(&c.config).unwrap_or(Value::Null));
-                    let best = prev
-                        .iter()
-                        .map(|r| {
-                            let old = flatten(&serde_json::to_value(&r.config).unwrap_or(Value::Null));
-                            diff(&old, &new, r.engine_version)
-                        })
-                        // Fewest differences; ties by text, so the answer never depends on segment order.
-                        .min_by(|a, b| a.len().cmp(&b.len()).then_with(|| a.cmp(b)))
-                        .unwrap_or_default();
-                    if best.is_empty() {
-                        "cached under another engine version".to_string()
-                    } else {
-                        best.join(", ")
-                    }
-                }
-            };
-            println!("missing {label} ({} of {} seeds): {why}", missing.len(), c.trials.len());
-            *reasons.entry(why).or_default() += 1;
-        }
-    }
+    let reasons = reason_counts(cells);
     if reasons.len() > 1 {
         println!("summary of reasons:");
         for (why, n) in reasons {
             println!("  {n} cells: {why}");
         }
     }
-}
-
-fn flatten(v: &Value) -> BTreeMap<String, String> {
-    fn go(prefix: &str, v: &Value, out: &mut BTreeMap<String, String>) {
-        match v {
-            Value::Object(m) => {
-                for (k, v) in m {
-                    go(&if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") }, v, out);
-                }
-            }
-            other => {
-                out.insert(prefix.to_string(), other.to_string());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    go("", v, &mut out);
-    out
-}
-
-fn diff(old: &BTreeMap<String, String>, new: &BTreeMap<String, String>, old_version: u32) -> Vec<String> {
-    let mut out: Vec<String> = new
-        .iter()
-        .filter(|(k, v)| old.get(*k) != Some(v))
-        .map(|(k, v)| format!("{k}: {} → {v}", old.get(k).map_or("(unset)", String::as_str)))
-        .collect();
-    if old_version != crate::cache::ENGINE_VERSION {
-        out.push(format!("engine version: {old_version} → {}", crate::cache::ENGINE_VERSION));
-    }
-    out
 }
 
 /// The race section: per heatmap, rounds done and to come, contenders and trials against

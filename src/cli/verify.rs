@@ -1,19 +1,16 @@
 //! `qsweep verify`: read every cache segment in full, like `git fsck`; move damaged ones aside;
 //! with `--recompute N`, run N stored trials again and compare their outcomes with the rows.
 
-use super::pipeline_args::{cache_dir, require_cache};
+use super::pipeline_args::CacheArgs;
 use crate::cache::verify::QUARANTINE;
-use crate::cache::Store;
 use crate::error::exit;
 use clap::Args;
-use std::path::PathBuf;
 
 /// Arguments of `qsweep verify`.
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
-    /// Cache directory [env: QSWEEP_CACHE; default: cache].
-    #[arg(long, value_name = "DIR")]
-    pub cache: Option<PathBuf>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
     /// Only report damage; leave damaged segments where they are.
     #[arg(long)]
     pub no_quarantine: bool,
@@ -30,9 +27,7 @@ pub struct VerifyArgs {
 /// Run `qsweep verify`: exit 0 when every segment is intact, 1 when damage was found, 2 when the
 /// cache does not exist.
 pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
-    let dir = cache_dir(a.cache.as_ref());
-    require_cache(&dir)?;
-    let store = Store::open(&dir)?;
+    let store = a.cache.required_store()?;
     let report = store.verify()?;
     for d in &report.damaged {
         println!("damaged: {d}");

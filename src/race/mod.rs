@@ -27,7 +27,7 @@
 //! is the same on any number of threads or shards, because every decision reads only stored outcomes.
 
 use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
-use crate::cache::store::{KeyScan, Store};
+use crate::cache::store::{KeySet, Store};
 use crate::cache::{Key, ENGINE_VERSION};
 use crate::plan::{Plan, PlannedTrial};
 use crate::sim::{Algorithm, Outcome};
@@ -55,8 +55,8 @@ pub struct HeatRace {
     pub contenders: usize,
     /// Trials planned so far: every decided round's and the pending round's.
     pub trials: usize,
-    /// Of those, present in the cache.
-    pub present: usize,
+    /// Of those, in the cache.
+    pub cached: usize,
     /// Trials of the same heatmap with `max_seeds` seeds in every cell.
     pub without_race: usize,
 }
@@ -113,16 +113,16 @@ struct Heat {
 
 /// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
 /// the trials `scan` lists (the plan itself, with no race).
-pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeyScan) -> anyhow::Result<Raced> {
+pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
     replay(plan, &scan.keys, &mut |wanted| {
         Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
     })
 }
 
-/// Replay every race of `plan`: replay its rounds from the outcomes of the trials in `present`
-/// (`read` fetches the outcomes of some of them), as far as each round's trials are all present,
+/// Replay every race of `plan`: replay its rounds from the outcomes of the trials in `cached`
+/// (`read` fetches the outcomes of some of them), as far as each round's trials are all cached,
 /// and plan the next round's. Without a race the plan comes back as it is.
-pub fn replay(plan: &Plan, present: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
+pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
     let mut out = plan.clone();
     let mut heats: Vec<Heat> = Vec::new();
     for (ei, e) in out.experiments.iter_mut().enumerate() {
@@ -163,7 +163,7 @@ pub fn replay(plan: &Plan, present: &HashSet<Key>, read: &mut ReadOutcomes) -> a
             let live = h.cells.iter().zip(&h.contender).filter(|(_, c)| **c);
             for (&i, _) in live {
                 let keys = e.cells[i].trials.iter().map(|t| t.key);
-                wanted.extend(keys.filter(|key| present.contains(key) && !known.contains_key(key)));
+                wanted.extend(keys.filter(|key| cached.contains(key) && !known.contains_key(key)));
             }
         }
         if !wanted.is_empty() {
@@ -242,7 +242,7 @@ pub fn replay(plan: &Plan, present: &HashSet<Key>, read: &mut ReadOutcomes) -> a
                 finished: h.finished,
                 contenders: h.contender.iter().filter(|&&c| c).count(),
                 trials: trials.len(),
-                present: trials.iter().filter(|t| present.contains(&t.key)).count(),
+                cached: trials.iter().filter(|t| cached.contains(&t.key)).count(),
                 without_race: h.cells.len() * (race.max_seeds as usize).max(h.first as usize),
             }
         })
@@ -349,16 +349,16 @@ mod tests {
         let mut store: HashMap<Key, Outcome> = HashMap::new();
         let mut per_round = Vec::new();
         loop {
-            let present: HashSet<Key> = store.keys().copied().collect();
+            let cached: HashSet<Key> = store.keys().copied().collect();
             let raced =
-                replay(plan, &present, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect()))
+                replay(plan, &cached, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect()))
                     .unwrap();
             let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
                 .cells
                 .iter()
                 .enumerate()
                 .flat_map(|(i, c)| c.trials.iter().map(move |t| (i, t.seed, t.key)))
-                .filter(|(_, _, k)| !present.contains(k))
+                .filter(|(_, _, k)| !cached.contains(k))
                 .collect();
             if missing.is_empty() {
                 return (raced, per_round);
@@ -388,7 +388,7 @@ mod tests {
         assert_eq!(seeds, (0..8).collect::<Vec<_>>(), "extra seeds continue the numbering");
         let h = &raced.heats[0];
         assert_eq!((h.rounds_done, h.rounds_max, h.finished, h.contenders), (4, 4, true, 2));
-        assert_eq!((h.trials, h.present, h.without_race), (19, 19, 24));
+        assert_eq!((h.trials, h.cached, h.without_race), (19, 19, 24));
     }
 
     #[test]
@@ -407,7 +407,7 @@ mod tests {
         let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
         let none = replay(&p, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
         let h = &none.heats[0];
-        assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.present), (0, false, 3, 9, 0));
+        assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.cached), (0, false, 3, 9, 0));
         assert!(none.plan.experiments[0]
             .cells
             .iter()

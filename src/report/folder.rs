@@ -21,7 +21,7 @@ pub struct ReportSummary {
     /// Planned (cell, seed) trials; a trial shared by two cells counts twice.
     pub trials_planned: usize,
     /// Of those, present in the records.
-    pub trials_present: usize,
+    pub trials_cached: usize,
     /// Of those, missing.
     pub trials_missing: usize,
     /// Files written, relative to the report directory, in writing order.
@@ -37,8 +37,8 @@ impl ReportSummary {
             cells: cells.len(),
             cells_with_trials: cells.iter().filter(|c| !c.trials.is_empty()).count(),
             trials_planned: data.trials_planned,
-            trials_present: data.trials_present,
-            trials_missing: data.trials_planned - data.trials_present,
+            trials_cached: data.trials_cached,
+            trials_missing: data.trials_planned - data.trials_cached,
             files,
         }
     }
@@ -49,7 +49,7 @@ impl ReportSummary {
         self.cells += o.cells;
         self.cells_with_trials += o.cells_with_trials;
         self.trials_planned += o.trials_planned;
-        self.trials_present += o.trials_present;
+        self.trials_cached += o.trials_cached;
         self.trials_missing += o.trials_missing;
     }
 }

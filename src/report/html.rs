@@ -67,7 +67,7 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
         h.push_str(&format!("<p>{}</p>\n", esc(d)));
     }
     let cells: usize = data.experiments.iter().map(|e| e.cells.len()).sum();
-    let missing = data.trials_planned - data.trials_present;
+    let missing = data.trials_planned - data.trials_cached;
     h.push_str(&format!(
         "<p class=\"meta\">Pipeline <code>{}</code>: {} experiments, {} cells, {} seeds per cell. \
          Trials present: {} of {} planned{}.",
@@ -75,7 +75,7 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
         data.experiments.len(),
         cells,
         plan.seeds.len(),
-        data.trials_present,
+        data.trials_cached,
         data.trials_planned,
         if missing > 0 {
             format!(" ({missing} missing: their cells show what is present)")

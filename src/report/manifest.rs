@@ -51,8 +51,9 @@ pub struct Counts {
     pub plan_digest: String,
     /// Distinct planned trials.
     pub trials_planned: usize,
-    /// Of those, present in the cache.
-    pub trials_present: usize,
+    /// Of those, in the cache (`trials_present` in the file: the format is stable).
+    #[serde(rename = "trials_present")]
+    pub trials_cached: usize,
     /// Cells of the plan.
     pub cells: usize,
     /// Cells with at least one trial present.
@@ -61,7 +62,7 @@ pub struct Counts {
 
 impl Counts {
     /// The counts of `plan` given the keys present in the cache.
-    pub fn of(plan: &Plan, present: &HashSet<Key>) -> Self {
+    pub fn of(plan: &Plan, cached: &HashSet<Key>) -> Self {
         let mut keys: Vec<Key> = plan.trials().map(|(_, _, t)| t.key).collect();
         keys.sort_unstable();
         keys.dedup();
@@ -74,18 +75,18 @@ impl Counts {
         Self {
             plan_digest: h.finalize().to_hex().to_string(),
             trials_planned: keys.len(),
-            trials_present: keys.iter().filter(|k| present.contains(k)).count(),
+            trials_cached: keys.iter().filter(|k| cached.contains(k)).count(),
             cells: cells.len(),
             cells_with_trials: cells
                 .iter()
-                .filter(|c| c.trials.iter().any(|t| present.contains(&t.key)))
+                .filter(|c| c.trials.iter().any(|t| cached.contains(&t.key)))
                 .count(),
         }
     }
 
     /// Whether every planned trial is present.
     pub fn complete(&self) -> bool {
-        self.trials_present == self.trials_planned
+        self.trials_cached == self.trials_planned
     }
 }
 
@@ -103,7 +104,7 @@ impl Kept {
     /// Distinct trials the kept report holds.
     pub fn trials(&self) -> usize {
         match self {
-            Kept::Manifest(m) => m.counts.trials_present,
+            Kept::Manifest(m) => m.counts.trials_cached,
             Kept::Legacy { trials } => *trials,
         }
     }
@@ -112,7 +113,7 @@ impl Kept {
     pub fn describe(&self) -> String {
         match self {
             Kept::Manifest(m) => {
-                format!("{} trials, {} cells", m.counts.trials_present, m.counts.cells_with_trials)
+                format!("{} trials, {} cells", m.counts.trials_cached, m.counts.cells_with_trials)
             }
             Kept::Legacy { trials } => format!("{trials} trials"),
         }
@@ -158,7 +159,7 @@ pub fn read(dir: &Path) -> anyhow::Result<Option<Kept>> {
 /// The overwrite guard, the one rule: a new report may replace `kept` unless its own plan lacks
 /// trials and the kept report holds more than it would. `Err` carries the refusal's message.
 pub fn guard(target: &Path, kept: &Kept, new: &Counts, cache: &Path) -> Result<(), String> {
-    if new.complete() || kept.trials() <= new.trials_present {
+    if new.complete() || kept.trials() <= new.trials_cached {
         return Ok(());
     }
     Err(format!(
@@ -168,7 +169,7 @@ pub fn guard(target: &Path, kept: &Kept, new: &Counts, cache: &Path) -> Result<(
         target.display(),
         kept.describe(),
         cache.display(),
-        new.trials_present,
+        new.trials_cached,
         new.trials_planned,
     ))
 }
@@ -186,11 +187,11 @@ pub fn write(dir: &Path, m: &Manifest) -> anyhow::Result<PathBuf> {
 mod tests {
     use super::*;
 
-    fn counts(planned: usize, present: usize) -> Counts {
+    fn counts(planned: usize, cached: usize) -> Counts {
         Counts {
             plan_digest: "d".into(),
             trials_planned: planned,
-            trials_present: present,
+            trials_cached: cached,
             cells: 1,
             cells_with_trials: 1,
         }

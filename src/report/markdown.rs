@@ -25,7 +25,7 @@ pub fn page(data: &ReportData, t3: &Table, formats: Formats) -> String {
             .filter(|(f, _)| formats.has(*f))
             .map(|(_, file)| format!("[{file}]({file})"))
             .collect();
-    m.push_str(&format!("Trials present: {} of {} planned.", data.trials_present, data.trials_planned));
+    m.push_str(&format!("Trials present: {} of {} planned.", data.trials_cached, data.trials_planned));
     if !links.is_empty() {
         m.push_str(&format!(" Data: {}", links.join(", ")));
     }

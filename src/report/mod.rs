@@ -10,8 +10,7 @@
 //! - `manifest.json`: what the folder holds ([`manifest`]), read by the overwrite guard.
 //!
 //! [`stage::write`] is the whole stage for a pipeline, one variant at a time ([`compare`] for the
-//! comparison of variants); [`write_report`] writes one report from outcomes already in memory.
-//! Which files are written is chosen by [`formats`]. Trials missing from the records are left
+//! comparison of variants). Which files are written is chosen by [`formats`]. Trials missing from the records are left
 //! out and counted. Every file is written atomically (a temporary file in the same directory,
 //! then a rename), and the output is a pure function of the inputs: no timestamps, no hash-map
 //! order, a seeded bootstrap.
@@ -31,29 +30,7 @@ pub mod stage;
 pub mod svg;
 pub mod table;
 
-use crate::plan::Plan;
-use formats::Formats;
-use std::path::Path;
-
 pub use crate::atomic::write_atomic;
 pub use folder::{existing_trials, write_folder, ReportSummary};
 pub use model::{Outcomes, ReportData};
 pub use stage::{default_dir, write, ReportOptions, ReportOutcome};
-
-/// Write the report of `plan` from `records` (keyed by trial key) into `dir`, creating it, in
-/// the default formats, with its own `trials.parquet`.
-pub fn write_report(plan: &Plan, records: &dyn Outcomes, dir: &Path) -> anyhow::Result<ReportSummary> {
-    write_report_as(plan, records, dir, Formats::default())
-}
-
-/// [`write_report`] in the given formats.
-pub fn write_report_as(
-    plan: &Plan,
-    records: &dyn Outcomes,
-    dir: &Path,
-    formats: Formats,
-) -> anyhow::Result<ReportSummary> {
-    let data = ReportData::build(plan, records);
-    let files = write_folder(&data, dir, formats, true)?;
-    Ok(ReportSummary::of(&data, files))
-}

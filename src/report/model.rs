@@ -164,7 +164,7 @@ pub struct ReportData<'a> {
     /// Planned (cell, seed) trials, counting a trial shared by two cells twice.
     pub trials_planned: usize,
     /// Of those, present in the records.
-    pub trials_present: usize,
+    pub trials_cached: usize,
 }
 
 impl<'a> ReportData<'a> {
@@ -222,7 +222,7 @@ impl<'a> ReportData<'a> {
                 ExpData { exp, cells, best }
             })
             .collect();
-        Self { plan, experiments, trials_planned: planned, trials_present: present }
+        Self { plan, experiments, trials_planned: planned, trials_cached: present }
     }
 
     /// Systems present in the plan, in report order.

@@ -15,7 +15,7 @@ use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
 use super::model::ReportData;
 use crate::atomic::write_atomic;
-use crate::cache::store::{KeyScan, Store};
+use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
 use crate::error::user_error;
 use crate::plan::Plan;
@@ -83,13 +83,13 @@ struct Target {
 
 impl Target {
     /// With `force`, a kept report that cannot be read is replaced like any other.
-    fn new(dir: PathBuf, plan: &Plan, present: &HashSet<Key>, force: bool) -> anyhow::Result<Self> {
+    fn new(dir: PathBuf, plan: &Plan, cached: &HashSet<Key>, force: bool) -> anyhow::Result<Self> {
         let kept = match manifest::read(&dir) {
             Ok(k) => k,
             Err(_) if force => None,
             Err(e) => return Err(e),
         };
-        Ok(Self { counts: Counts::of(plan, present), kept, dir })
+        Ok(Self { counts: Counts::of(plan, cached), kept, dir })
     }
 
     /// Refuse (unless `force`) to replace a kept report that holds more than this one would.
@@ -149,7 +149,7 @@ impl Target {
                 "{}: {} → {} trials, {} cells",
                 self.dir.display(),
                 kept.describe(),
-                self.counts.trials_present,
+                self.counts.trials_cached,
                 self.counts.cells_with_trials
             ));
         }
@@ -163,7 +163,7 @@ impl Target {
 pub fn write(
     plan: &Plan,
     store: &Store,
-    scan: &KeyScan,
+    scan: &KeySet,
     opts: &ReportOptions,
 ) -> anyhow::Result<ReportOutcome> {
     let dir = &opts.dir;

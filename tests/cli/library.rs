@@ -3,7 +3,7 @@
 
 use crate::helpers::repo;
 use qsweep::exec::{Event, ExecOptions};
-use qsweep::pipeline::{run, scan, Selection};
+use qsweep::pipeline::{run_trials, scan, Selection};
 
 #[test]
 fn a_library_user_runs_a_pipeline_and_reads_its_events() {
@@ -14,7 +14,7 @@ fn a_library_user_runs_a_pipeline_and_reads_its_events() {
     let sel = Selection { shard: None, force: false };
     let opts = ExecOptions { jobs: 2, batch_trials: 10, ..Default::default() };
     let mut events: Vec<Event> = Vec::new();
-    let done = run(&plan, &store, &scan(&store).unwrap().keys, sel, &opts, &mut events).unwrap();
+    let done = run_trials(&plan, &store, &scan(&store).unwrap().stored, sel, &opts, &mut events).unwrap();
     assert_eq!((done.exec.executed, done.cached), (56, 0));
     assert_eq!(events.first(), Some(&Event::Started { trials: 56 }));
     assert_eq!(events.last(), Some(&Event::Done { executed: 56, failed: 0 }));
@@ -33,9 +33,9 @@ fn a_library_user_runs_a_pipeline_and_reads_its_events() {
         "batches of at most 10"
     );
     // Every finished key is now in the cache; a rerun runs nothing.
-    let scanned = scan(&store).unwrap().keys;
+    let scanned = scan(&store).unwrap().stored;
     let mut again: Vec<Event> = Vec::new();
-    let done = run(&plan, &store, &scanned, sel, &opts, &mut again).unwrap();
+    let done = run_trials(&plan, &store, &scanned, sel, &opts, &mut again).unwrap();
     assert_eq!((done.exec.executed, done.cached), (0, 56));
     assert!(!again.iter().any(|e| matches!(e, Event::Finished { .. })));
 }

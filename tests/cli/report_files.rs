@@ -1,12 +1,14 @@
 //! The report stage end to end: plan `pipelines/quick.yaml`, give every planned trial a record
-//! (a few computed by the real simulation, the rest synthesised with every kind of outcome), write
-//! the report and check its files: all present, PNGs decode at the expected size, SVGs are XML,
-//! `index.html` links only local files, and a second run is byte-identical.
+//! (a few computed by the real simulation, the rest synthesised with every kind of outcome), store
+//! them in a cache, write the report with the stage `qsweep report` runs ([`report::write`]) and
+//! check its files: all present, PNGs decode at the expected size, SVGs are XML, `index.html`
+//! links only local files, and a second run is byte-identical.
 
+use qsweep::cache::store::Store;
 use qsweep::cache::{Key, TrialRecord};
 use qsweep::plan::Plan;
 use qsweep::report::formats::{Format, Formats};
-use qsweep::report::{curves, figures, write_report, write_report_as};
+use qsweep::report::{self, curves, figures, ReportOptions, ReportSummary};
 use qsweep::sim::env::SystemKind;
 use qsweep::sim::repr::ReprKind;
 use qsweep::sim::{run_trial, Algorithm, Outcome, StopReason};
@@ -66,6 +68,22 @@ fn records(plan: &Plan) -> HashMap<Key, TrialRecord> {
     out
 }
 
+/// A cache in `dir` holding `records`, one segment.
+fn cache_of(records: &HashMap<Key, TrialRecord>, dir: &Path) -> Store {
+    let store = Store::open(dir).unwrap();
+    let mut rows: Vec<TrialRecord> = records.values().cloned().collect();
+    rows.sort_by_key(|r| r.key.0);
+    store.write_segment(&rows).unwrap();
+    store
+}
+
+/// The report of `plan` from `store` into `dir` in `formats`, as `qsweep report` writes it.
+fn write_report(plan: &Plan, store: &Store, dir: &Path, formats: Formats) -> ReportSummary {
+    let scan = qsweep::pipeline::scan(store).unwrap();
+    let opts = ReportOptions { dir: dir.to_path_buf(), formats, force: false };
+    report::write(plan, store, &scan.stored, &opts).unwrap().summary
+}
+
 fn files_under(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     let mut out = BTreeMap::new();
     for entry in std::fs::read_dir(dir).unwrap() {
@@ -101,12 +119,13 @@ fn quick_report_is_complete_valid_and_deterministic() {
     let plan = quick_plan();
     let recs = records(&plan);
     let tmp = tempfile::tempdir().unwrap();
+    let store = cache_of(&recs, &tmp.path().join("cache"));
     let dir = tmp.path().join("quick");
     let all = Formats::of(&Format::ALL);
-    let summary = write_report_as(&plan, &recs, &dir, all).unwrap();
+    let summary = write_report(&plan, &store, &dir, all);
     assert_eq!(summary.experiments, 12);
     assert_eq!(summary.trials_planned, plan.trial_count());
-    assert_eq!(summary.trials_present, plan.trial_count());
+    assert_eq!(summary.trials_cached, plan.trial_count());
     assert_eq!(summary.trials_missing, 0);
     assert_eq!(summary.cells_with_trials, summary.cells);
 
@@ -119,6 +138,7 @@ fn quick_report_is_complete_valid_and_deterministic() {
         "trials.parquet",
         "index.html",
         "README.md",
+        "manifest.json",
     ]
     .iter()
     .map(PathBuf::from)
@@ -207,19 +227,20 @@ fn quick_report_is_complete_valid_and_deterministic() {
     );
 
     // A second run, into the same directory and into another, is byte-identical.
-    write_report_as(&plan, &recs, &dir, all).unwrap();
+    write_report(&plan, &store, &dir, all);
     assert_eq!(files_under(&dir), files);
     let other = tmp.path().join("again");
-    write_report_as(&plan, &recs, &other, all).unwrap();
+    write_report(&plan, &store, &other, all);
     assert_eq!(files_under(&other), files);
 
-    // The default formats: no PNG, the same bytes for everything else.
+    // The default formats: no PNG, the same bytes for everything else (but the manifest, which
+    // lists the formats and files).
     let default = tmp.path().join("default");
-    let s = write_report(&plan, &recs, &default).unwrap();
+    let s = write_report(&plan, &store, &default, Formats::default());
     assert!(s.files.iter().all(|f| f.extension().is_some_and(|e| e != "png")), "{:?}", s.files);
     let d = files_under(&default);
     assert_eq!(d.len() + 6, files.len());
-    for (name, bytes) in &d {
+    for (name, bytes) in d.iter().filter(|(n, _)| n.as_path() != Path::new("manifest.json")) {
         assert_eq!(&files[name], bytes, "{}", name.display());
     }
 }
@@ -239,7 +260,9 @@ fn missing_trials_are_counted_and_reference_values_compared() {
     }
     recs.remove(&plan.experiments[0].cells[0].trials[0].key);
     let tmp = tempfile::tempdir().unwrap();
-    let summary = write_report(&plan, &recs, tmp.path()).unwrap();
+    let store = cache_of(&recs, &tmp.path().join("cache"));
+    let out = tmp.path().join("report");
+    let summary = write_report(&plan, &store, &out, Formats::default());
     // A removed key is missing from every cell that plans it (configurations recur across experiments).
     let missing = plan.trials().filter(|(_, _, t)| !recs.contains_key(&t.key)).count();
     assert!(missing > last.trials.len());
@@ -253,7 +276,7 @@ fn missing_trials_are_counted_and_reference_values_compared() {
     assert!(empty >= 1);
     assert_eq!(summary.cells_with_trials, summary.cells - empty);
 
-    let csv = std::fs::read_to_string(tmp.path().join("table3.csv")).unwrap();
+    let csv = std::fs::read_to_string(out.join("table3.csv")).unwrap();
     let header = csv.lines().next().unwrap();
     assert!(header.ends_with(
         "paper_mean,paper_std,paper_x,paper_x_dot,paper_theta,paper_theta_dot,paper_actions,diff_mean"
@@ -261,12 +284,12 @@ fn missing_trials_are_counted_and_reference_values_compared() {
     let row = csv.lines().nth(1).unwrap();
     assert!(row.starts_with("Ball-Beam,1,Q(0)-learning,"), "{row}");
     assert!(row.contains(",90.5,25.8,5,3,,,3,"), "{row}");
-    let md = std::fs::read_to_string(tmp.path().join("table3.md")).unwrap();
+    let md = std::fs::read_to_string(out.join("table3.md")).unwrap();
     assert!(md.contains(&format!(
         "Only {} of {} planned trials are present.",
-        summary.trials_present, summary.trials_planned
+        summary.trials_cached, summary.trials_planned
     )));
     assert!(md.contains("| 90.50 ± 25.80 | 5, 3, —, —, 3 |"), "{md}");
-    let html = std::fs::read_to_string(tmp.path().join("index.html")).unwrap();
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains(&format!("{} missing", summary.trials_missing)));
 }

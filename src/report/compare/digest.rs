@@ -58,7 +58,7 @@ pub struct VariantDigest<'p> {
     /// Planned (cell, seed) trials.
     pub trials_planned: usize,
     /// Of those, present.
-    pub trials_present: usize,
+    pub trials_cached: usize,
     /// Its experiments.
     pub exps: Vec<ExpDigest<'p>>,
     /// The paper's claims tested on its cells (empty unless the pipeline has reference values and
@@ -101,7 +101,7 @@ impl<'p> VariantDigest<'p> {
             fit: Fit::from_rows(&rows),
             rows,
             trials_planned: data.trials_planned,
-            trials_present: data.trials_present,
+            trials_cached: data.trials_cached,
             exps,
             claims,
         }

@@ -164,7 +164,7 @@ fn page(
             h.push_str(&format!(
                 "<li><a href=\"{0}/index.html\"><code>{0}</code></a>{title} ({1} of {2} planned trials present)</li>\n",
                 esc(&v.info.id),
-                v.trials_present,
+                v.trials_cached,
                 v.trials_planned
             ));
         } else {
@@ -172,7 +172,7 @@ fn page(
                 "<li><code>{0}</code>{title} ({1} of {2} planned trials present; its report on demand: \
                  <code>qsweep report {3} --variant '{0}'</code>)</li>\n",
                 esc(&v.info.id),
-                v.trials_present,
+                v.trials_cached,
                 v.trials_planned,
                 esc(&plan.source.display().to_string())
             ));
@@ -270,13 +270,13 @@ fn readme(
         if has_folder(plan, chosen, &v.info.id) {
             m.push_str(&format!(
                 "- [`{0}`]({0}/README.md){title} ({1} of {2} planned trials present)\n",
-                v.info.id, v.trials_present, v.trials_planned
+                v.info.id, v.trials_cached, v.trials_planned
             ));
         } else {
             m.push_str(&format!(
                 "- `{0}`{title} ({1} of {2} planned trials present; report on demand: `qsweep report {3} --variant '{0}'`)\n",
                 v.info.id,
-                v.trials_present,
+                v.trials_cached,
                 v.trials_planned,
                 plan.source.display()
             ));

@@ -197,10 +197,10 @@ pub fn table3(data: &ReportData) -> Table {
                 .push_str(" Paper config tied: whether the paper's configuration is among the contenders.");
         }
     }
-    if data.trials_present < data.trials_planned {
+    if data.trials_cached < data.trials_planned {
         caption.push_str(&format!(
             " Only {} of {} planned trials are present.",
-            data.trials_present, data.trials_planned
+            data.trials_cached, data.trials_planned
         ));
     }
     Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows }
