@@ -3,16 +3,16 @@
 
 /// Ranks 1..=n of `values`, ties sharing their average rank (`scipy.stats.rankdata`).
 pub fn average_ranks(values: &[f64]) -> Vec<f64> {
-    let mut order: Vec<usize> = (0..values.len()).collect();
+    let mut order: Vec<(f64, usize)> = values.iter().copied().zip(0..).collect();
     // A total order (ties by index), so the unstable sort is deterministic.
-    order.sort_unstable_by(|&a, &b| values[a].total_cmp(&values[b]).then(a.cmp(&b)));
+    order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let mut ranks = vec![0.0; values.len()];
     let mut i = 0;
     while i < order.len() {
-        let tie = order[i..].iter().take_while(|&&j| values[j] == values[order[i]]).count();
+        let tie = order[i..].iter().take_while(|p| p.0 == order[i].0).count();
         // Positions i..i+tie hold ranks i+1..=i+tie; their average.
         let r = i as f64 + (tie as f64 + 1.0) / 2.0;
-        for &j in &order[i..i + tie] {
+        for &(_, j) in &order[i..i + tie] {
             ranks[j] = r;
         }
         i += tie;

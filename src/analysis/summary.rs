@@ -35,12 +35,18 @@ pub struct Summary {
 impl Summary {
     /// Summarise `values`; `seed` seeds the bootstrap (same values and seed, same interval).
     pub fn of(values: &[f64], seed: u64) -> Self {
+        Self::with_interval(values, Some(seed))
+    }
+
+    /// Summarise `values`, with the bootstrap interval only when `seed` is given (a summary that
+    /// no page shows skips its resamples; `ci_lo`/`ci_hi` are then `None`).
+    pub fn with_interval(values: &[f64], seed: Option<u64>) -> Self {
         if values.is_empty() {
             return Self::default();
         }
         let mut sorted = values.to_vec();
         sorted.sort_by(f64::total_cmp);
-        let (lo, hi) = bootstrap_ci(values, BOOTSTRAP_RESAMPLES, seed);
+        let ci = seed.map(|s| bootstrap_ci(values, BOOTSTRAP_RESAMPLES, s));
         Self {
             n: values.len(),
             mean: Some(mean(values)),
@@ -49,8 +55,8 @@ impl Summary {
             median: Some(quantile_sorted(&sorted, 0.5)),
             max: sorted.last().copied(),
             iqm: Some(iqm_sorted(&sorted)),
-            ci_lo: Some(lo),
-            ci_hi: Some(hi),
+            ci_lo: ci.map(|c| c.0),
+            ci_hi: ci.map(|c| c.1),
         }
     }
 }

@@ -5,11 +5,13 @@
 //! The rules it applies (episodes counted, the best cell) and the statistics are
 //! [`crate::analysis`]'s, shared with the race.
 
+use crate::analysis::claims::ClaimCell;
 use crate::analysis::{best_cell, episodes_counted, Best, Candidate, Summary};
 use crate::cache::store::StoredOutcome;
 use crate::cache::{Key, TrialRecord};
 use crate::plan::{Cell, Experiment, Plan, PlannedTrial};
 use crate::sim::env::SystemKind;
+use crate::sim::repr::ReprKind;
 use crate::sim::{Algorithm, Outcome};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -172,6 +174,13 @@ impl<'a> ReportData<'a> {
     /// Each cell's statistics are computed here, once (in parallel; each cell's bootstrap is
     /// seeded by its own trials, so the result does not depend on the threads).
     pub fn build(plan: &'a Plan, records: &'a dyn Outcomes) -> Self {
+        Self::build_as(plan, records, true)
+    }
+
+    /// [`ReportData::build`], with the cells' bootstrap intervals only when `intervals`: a reading
+    /// that writes no folder (an exploratory or not-chosen one) only needs its means for the
+    /// comparison.
+    pub fn build_as(plan: &'a Plan, records: &'a dyn Outcomes, intervals: bool) -> Self {
         let planned = plan.trial_count();
         let mut present = 0;
         let experiments = plan
@@ -196,7 +205,7 @@ impl<'a> ReportData<'a> {
                                 })
                             })
                             .collect();
-                        cell_data(cell, trials)
+                        cell_data(cell, trials, intervals)
                     })
                     .collect();
                 present += cells.iter().map(|c| c.trials.len()).sum::<usize>();
@@ -230,16 +239,40 @@ impl<'a> ReportData<'a> {
         SystemKind::ALL.into_iter().filter(|s| self.experiments.iter().any(|e| e.exp.system == *s)).collect()
     }
 
+    /// Every cell as the claims read it (cells without trials included, with none).
+    pub fn claim_cells(&self) -> Vec<ClaimCell> {
+        let mut out = Vec::new();
+        for (k, e) in self.experiments.iter().enumerate() {
+            for c in &e.cells {
+                let cfg = &c.cell.config;
+                out.push(ClaimCell {
+                    system: e.exp.system,
+                    experiment: k,
+                    experiment_id: e.exp.id.clone(),
+                    fuzzy: e.exp.repr == ReprKind::Fuzzy,
+                    algorithm: c.cell.algorithm,
+                    resolution: cfg.repr.resolution.clone(),
+                    actions: cfg.actions,
+                    counted: c.trials.iter().map(|t| f64::from(t.counted)).collect(),
+                    converged: c.trials.iter().map(|t| t.outcome.converged).collect(),
+                    seed: seed_of(b"qsweep-claims\0", c.trials.iter().map(|t| &t.planned.key)),
+                });
+            }
+        }
+        out
+    }
+
     /// Whether any experiment carries published reference values.
     pub fn has_reference(&self) -> bool {
         self.experiments.iter().any(|e| !e.exp.reference.is_empty())
     }
 }
 
-fn cell_data<'a>(cell: &'a Cell, trials: Vec<TrialData<'a>>) -> CellData<'a> {
+fn cell_data<'a>(cell: &'a Cell, trials: Vec<TrialData<'a>>, intervals: bool) -> CellData<'a> {
     let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
     let successes = trials.iter().filter(|t| t.outcome.converged).count();
-    let summary = Summary::of(&values, seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
+    let seed = intervals.then(|| seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
+    let summary = Summary::with_interval(&values, seed);
     CellData { cell, trials, successes, summary }
 }
 

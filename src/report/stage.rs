@@ -236,12 +236,16 @@ pub fn write(
     for ((info, sub), target) in subs.iter().zip(&targets) {
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
-        let data = ReportData::build(sub, &outcomes);
+        // Intervals where a page or the combined cells.parquet shows them.
+        let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
+        let in_cells = with_comparison && formats.has(Format::Cells) && !exploratory;
+        let data = ReportData::build_as(sub, &outcomes, target.is_some() || in_cells);
         // The folder's files and this variant's rows of the combined trials.parquet at once.
         let (written, pushed) = rayon::join(
             || target.as_ref().map(|t| write_folder(&data, &t.dir, formats, info.is_none())).transpose(),
             || match &mut trials {
-                Some(sink) if info.is_some() => sink.push(&data),
+                // An exploratory reading's rows are its declared twin's: written with its folder.
+                Some(sink) if info.as_ref().is_some_and(|v| !v.exploratory) => sink.push(&data),
                 _ => Ok(()),
             },
         );
@@ -252,7 +256,7 @@ pub fn write(
         out.summary.add(&ReportSummary::of(&data, Vec::new()));
         if let (Some(v), true) = (info, with_comparison) {
             // An exploratory reading's cells are written with its folder, on demand.
-            if formats.has(Format::Cells) && !v.exploratory {
+            if in_cells {
                 cells.push(datasets::cells_batch(&data)?);
             }
             digests.push(VariantDigest::of(v.clone(), sub, &data));

@@ -219,3 +219,11 @@ impl Test {
         Done { sandbox: self.sandbox, stdout, stderr }
     }
 }
+
+/// A CSV file's rows as maps from header name to field (fields hold no commas in our tables
+/// except quoted titles, which these helpers' callers do not read).
+pub fn csv_rows(text: &str) -> Vec<std::collections::BTreeMap<String, String>> {
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap_or_default().split(',').map(str::to_string).collect();
+    lines.map(|l| header.iter().cloned().zip(l.split(',').map(str::to_string)).collect()).collect()
+}

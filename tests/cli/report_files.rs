@@ -278,11 +278,26 @@ fn missing_trials_are_counted_and_reference_values_compared() {
 
     let csv = std::fs::read_to_string(out.join("table3.csv")).unwrap();
     let header = csv.lines().next().unwrap();
-    assert!(header.ends_with(
-        "paper_mean,paper_std,paper_x,paper_x_dot,paper_theta,paper_theta_dot,paper_actions,diff_mean"
+    assert!(header.contains(
+        ",paper_mean,paper_std,paper_x,paper_x_dot,paper_theta,paper_theta_dot,paper_actions,diff_mean,"
     ));
+    // The uncertainty columns come last, so the earlier fields keep their positions.
+    assert!(header.ends_with(
+        ",ci_lo,ci_hi,censored,km_median,ratio,ratio_lo,ratio_hi,tost_p_n10,equivalent_n10,tost_p_n100,equivalent_n100"
+    ), "{header}");
     let row = csv.lines().nth(1).unwrap();
     assert!(row.starts_with("Ball-Beam,1,Q(0)-learning,"), "{row}");
+    // The uncertainty columns agree with the row's own numbers.
+    let r = &crate::helpers::csv_rows(&csv)[0];
+    let f = |k: &str| r[k].parse::<f64>().unwrap_or_else(|_| panic!("{k}: {:?}", r[k]));
+    assert!((f("ratio") - f("mean") / f("paper_mean")).abs() < 1e-12, "{r:?}");
+    assert!((f("ratio_lo") - f("ci_lo") / f("paper_mean")).abs() < 1e-12, "{r:?}");
+    assert!(f("ci_lo") <= f("mean") && f("mean") <= f("ci_hi"), "{r:?}");
+    assert!((f("censored") - (f("n") - f("successes")) / f("n")).abs() < 1e-12, "{r:?}");
+    // 27 against 90.5: far outside the 0.80-1.25 margin, never equivalent, whatever the paper's n.
+    assert!(f("ratio_hi") < 0.8, "{r:?}");
+    assert_eq!((r["equivalent_n10"].as_str(), r["equivalent_n100"].as_str()), ("no", "no"), "{r:?}");
+    assert!(f("tost_p_n10") > 0.05 && f("tost_p_n100") > 0.05, "{r:?}");
     assert!(row.contains(",90.5,25.8,5,3,,,3,"), "{row}");
     let md = std::fs::read_to_string(out.join("table3.md")).unwrap();
     assert!(md.contains(&format!(

@@ -1,5 +1,5 @@
-//! The paper's conclusions tested in every reading ([`crate::analysis::claims`]): the cells a
-//! reading gives the claims, `conclusions.csv` (one row per reading and claim) and the reading ×
+//! The paper's conclusions tested in every reading ([`crate::analysis::claims`]):
+//! `conclusions.csv` (one row per reading and claim) and the reading ×
 //! claim matrix of the comparison pages.
 //!
 //! `conclusions.csv` schema (one row per variant and claim, in pipeline × claim order):
@@ -17,34 +17,9 @@
 //! | `side` | `above` / `below` | where the paper puts the statistic |
 //! | `verdict` | `holds` / `reversed` / `undecided` / `—` | the interval against the null |
 
-use super::super::model::{seed_of, ReportData};
 use super::super::table::{Align, Column, Row, Table, Value};
 use super::digest::VariantDigest;
-use crate::analysis::claims::{ClaimCell, ClaimResult, ClaimVerdict, Side, CLAIMS, CLAIM_RULE};
-use crate::sim::repr::ReprKind;
-
-/// Every cell of `data` as the claims read it (cells without trials included, with none).
-pub fn claim_cells(data: &ReportData) -> Vec<ClaimCell> {
-    let mut out = Vec::new();
-    for (k, e) in data.experiments.iter().enumerate() {
-        for c in &e.cells {
-            let cfg = &c.cell.config;
-            out.push(ClaimCell {
-                system: e.exp.system,
-                experiment: k,
-                experiment_id: e.exp.id.clone(),
-                fuzzy: e.exp.repr == ReprKind::Fuzzy,
-                algorithm: c.cell.algorithm,
-                resolution: cfg.repr.resolution.clone(),
-                actions: cfg.actions,
-                counted: c.trials.iter().map(|t| f64::from(t.counted)).collect(),
-                converged: c.trials.iter().map(|t| t.outcome.converged).collect(),
-                seed: seed_of(b"qsweep-claims\0", c.trials.iter().map(|t| &t.planned.key)),
-            });
-        }
-    }
-    out
-}
+use crate::analysis::claims::{ClaimResult, ClaimVerdict, Side, CLAIMS, CLAIM_RULE};
 
 fn interval(r: &ClaimResult) -> Value {
     r.interval.map_or(Value::Missing, |(lo, hi)| Value::Range { lo, hi, decimals: 3 })

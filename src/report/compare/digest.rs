@@ -92,7 +92,7 @@ impl<'p> VariantDigest<'p> {
         let rows = rows_of(data);
         // The claims speak of the paper's whole study: every system, with the published values.
         let claims = if data.has_reference() && data.systems().len() == SystemKind::ALL.len() {
-            crate::analysis::claims::evaluate(&super::conclusions::claim_cells(data))
+            crate::analysis::claims::evaluate(&data.claim_cells())
         } else {
             Vec::new()
         };
