@@ -3,9 +3,8 @@
 //! estimator gives a median that uses them correctly.
 
 /// The caption's sentence for the censoring columns.
-pub const SURVIVAL_RULE: &str = "Censored: the fraction of the best cell's trials that hit the \
-episode cap without reaching the goal; KM median: the Kaplan–Meier median of episodes to goal with \
-those trials right-censored at the cap (— when the estimated survival stays above 0.5).";
+pub const SURVIVAL_RULE: &str = "Censored: share of trials cut at the episode cap; KM median: \
+Kaplan–Meier median with them right-censored there.";
 
 /// The Kaplan–Meier median of `times`, where `event` says whether the time is an observed event
 /// (true) or a right-censoring (false): the smallest event time at which the estimated survival

@@ -88,15 +88,19 @@ pub fn write_folder(
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = Folder::create(dir)?;
     let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
-    let t3 = table::table3(data);
+    // The CSV holds every column; the pages, Markdown and LaTeX show the uncertainty apart.
+    let t3 = table::table3_parts(data);
+    let both = |w: &dyn table::TableWriter, sep: &str| {
+        format!("{}{sep}{}", table::render(&t3[0], w), table::render(&t3[1], w))
+    };
     if formats.has(Format::Md) {
-        put("table3.md", table::render(&t3, &table::Markdown).as_bytes())?;
+        put("table3.md", both(&table::Markdown, "\n").as_bytes())?;
     }
     if formats.has(Format::Csv) {
-        put("table3.csv", table::render(&t3, &table::Csv).as_bytes())?;
+        put("table3.csv", table::render(&table::table3(data), &table::Csv).as_bytes())?;
     }
     if formats.has(Format::Tex) {
-        put("table3.tex", table::render(&t3, &table::Latex).as_bytes())?;
+        put("table3.tex", both(&table::Latex, "\n").as_bytes())?;
     }
     if formats.has(Format::Cells) {
         put("cells.parquet", &datasets::cells_parquet(data)?)?;

@@ -6,14 +6,14 @@
 use super::curves::CURVE_RULE;
 use super::formats::{Format, Formats};
 use super::model::{ExpData, ReportData};
-use super::table::{cell_table, render, table3, Html};
+use super::table::{cell_table, render, table3_parts, Html};
 use crate::analysis::{BEST_RULE, CENSORING};
 use crate::report::table::html::escape_html as esc;
 
 /// The pages' stylesheet (`.aK`: the tables whose number columns follow the first K, see
 /// [`super::table::html`]).
 pub(crate) const STYLE: &str = "\
-body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1100px;color:#1e1e1e;line-height:1.4;padding:0 1em}
+body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1200px;color:#1e1e1e;line-height:1.4;padding:0 1em}
 h1{margin-bottom:.2em}h2{margin-top:2em;border-bottom:1px solid #ccc}
 table{border-collapse:collapse;margin:1em 0;font-size:.9em}
 caption{caption-side:top;text-align:left;padding:.3em 0;color:#444}
@@ -26,7 +26,7 @@ figure{margin:1em 0}figure svg{display:block;max-width:100%;height:auto;border:1
 .scroll{overflow-x:auto}
 img{max-width:100%;height:auto;border:1px solid #eee}
 .a1 :is(td,th):nth-child(n+2),.a2 :is(td,th):nth-child(n+3),.a3 :is(td,th):nth-child(n+4),.a4 :is(td,th):nth-child(n+5){text-align:right;font-variant-numeric:tabular-nums}
-.caption{color:#444;max-width:100%}.fit td{white-space:normal}.fit td:nth-child(3){min-width:14em}
+.caption{color:#444;max-width:100%}.fit td{white-space:normal}.fit td:nth-child(3){min-width:9em}
 ";
 
 /// Which report a page belongs to, as its heading and first paragraph say: the pipeline, and for
@@ -119,7 +119,10 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
     h.push_str("</nav>\n");
 
     h.push_str("<h2 id=\"table3\">Table III: best configurations</h2>\n<div class=\"scroll\">\n");
-    h.push_str(&render(&table3(data), &Html));
+    let [main, uncertainty] = table3_parts(data);
+    h.push_str(&render(&main, &Html));
+    h.push_str("</div>\n<div class=\"scroll\" id=\"uncertainty\">\n");
+    h.push_str(&render(&uncertainty, &Html));
     h.push_str("</div>\n");
 
     for s in systems {

@@ -8,8 +8,8 @@ use super::model::ReportData;
 use super::table::{render, Markdown, Table};
 use crate::analysis::CENSORING;
 
-/// The Markdown page of one report; `t3` is its Table III.
-pub fn page(data: &ReportData, t3: &Table, formats: Formats) -> String {
+/// The Markdown page of one report; `t3` is its Table III in its two parts.
+pub fn page(data: &ReportData, t3: &[Table; 2], formats: Formats) -> String {
     let (name, notes) = identity(data);
     let mut m = format!("# qsweep report: {name}\n\n");
     if data.plan.report_variant().is_some() {
@@ -39,7 +39,9 @@ pub fn page(data: &ReportData, t3: &Table, formats: Formats) -> String {
         m.push('.');
     }
     m.push_str("\n\n");
-    m.push_str(&render(t3, &Markdown));
+    m.push_str(&render(&t3[0], &Markdown));
+    m.push('\n');
+    m.push_str(&render(&t3[1], &Markdown));
     if let Some(ext) = formats.figure_ext() {
         for s in data.systems() {
             m.push_str(&format!("\n## {}\n\n", s.title()));

@@ -28,6 +28,14 @@ impl Algorithm {
         }
     }
 
+    /// Short label, `Q(0)` or `Q(λ)` (for tables whose caption names the representation).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Self::Q0 => "Q(0)",
+            Self::QLambda => "Q(λ)",
+        }
+    }
+
     /// Label as the paper writes it.
     pub fn label(self, repr: ReprKind) -> &'static str {
         match (repr, self) {

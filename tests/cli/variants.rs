@@ -230,3 +230,67 @@ fn trial_and_a_pipeline_cell_resolve_to_the_same_configuration() {
     assert_eq!(from_trial, stored[0].config);
     assert_eq!(qsweep::cache::Key::of(&from_trial, 3), stored[0].key);
 }
+
+/// `counting: failures` is a report setting: an exploratory variant that only sets it runs no
+/// trial, counts one episode fewer for every trial that reached the goal, is ranked after the
+/// declared readings, and gets its folder only on demand.
+#[test]
+fn an_exploratory_counting_variant_reruns_nothing_and_counts_one_fewer() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let cut = text[..text.find("  - id: fast-crisp").unwrap()].to_string();
+    let with = sb.write(
+        "counting.yaml",
+        &format!("{cut}  - id: failures\n    exploratory: true\n    set: {{ counting: failures }}\n"),
+    );
+    let ws = with.to_str().unwrap();
+    let out_dir = sb.path("rep");
+    let od = out_dir.to_str().unwrap();
+    let first = sb
+        .qsweep(&["run", ws, "--json", "--out", od, "--formats", "csv,md"])
+        .assert()
+        .success()
+        .get_output()
+        .clone();
+    let v: Value = serde_json::from_slice(&first.stdout).unwrap();
+    assert_eq!(counts(&v), (24, 0), "the counting variant shares every trial");
+    let err = String::from_utf8(first.stderr).unwrap();
+    assert!(!err.contains("changes no trial"), "a report setting is not a no-op: {err}");
+
+    // Ranked after the declared reading, labelled; no folder of its own.
+    let variants = std::fs::read_to_string(out_dir.join("variants.csv")).unwrap();
+    let rows = crate::helpers::csv_rows(&variants);
+    assert_eq!(rows.len(), 2, "{variants}");
+    assert_eq!((rows[1]["variant"].as_str(), rows[1]["exploratory"].as_str()), ("failures", "yes"));
+    assert_eq!(rows[0]["exploratory"], "no");
+    assert!(out_dir.join("as-written/table3.csv").is_file());
+    assert!(!out_dir.join("failures").exists(), "an exploratory reading's folder is on demand");
+
+    // On demand: its Table III counts one episode fewer wherever every trial converged.
+    sb.qsweep(&["report", ws, "--variant", "failures", "--out", od, "--formats", "csv"]).assert().success();
+    let base =
+        crate::helpers::csv_rows(&std::fs::read_to_string(out_dir.join("as-written/table3.csv")).unwrap());
+    let fail =
+        crate::helpers::csv_rows(&std::fs::read_to_string(out_dir.join("failures/table3.csv")).unwrap());
+    assert_eq!(base.len(), fail.len());
+    let mut checked = 0;
+    for (b, f) in base.iter().zip(&fail) {
+        if b["n"] == b["successes"]
+            && f["n"] == f["successes"]
+            && b["x"] == f["x"]
+            && b["actions"] == f["actions"]
+        {
+            let (mb, mf): (f64, f64) = (b["mean"].parse().unwrap(), f["mean"].parse().unwrap());
+            assert!((mb - 1.0 - mf).abs() < 1e-9, "{b:?} {f:?}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 0, "some row converged everywhere: {base:?}");
+
+    // A value that does not exist names the file, the line and the choices.
+    let bad = sb.write("bad.yaml", &format!("{cut}  - id: failures\n    set: {{ counting: fail }}\n"));
+    let err = fails_with(&mut sb.qsweep(&["status", bad.to_str().unwrap()]), 2);
+    assert!(err.contains("bad.yaml:"), "{err}");
+    assert!(err.contains("episodes") && err.contains("failures"), "{err}");
+}

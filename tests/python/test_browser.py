@@ -275,10 +275,11 @@ def test_report_page_renders_in_chromium(quick_report: Path) -> None:
     for img in page["images"]:
         assert shapes(quick_report / img["src"]) > 50, f"figure has no heatmap: {img}"
     check_fits(page, 1200, screenshot)
-    # Table III, then one cell table per experiment; none empty.
+    # Table III and its uncertainty (the same rows), then one cell table per experiment; none empty.
     assert page["h3"] == len(experiments)
-    assert len(page["tables"]) == 1 + len(experiments), page["tables"]
+    assert len(page["tables"]) == 2 + len(experiments), page["tables"]
     assert page["tables"][0]["rows"] == 2 * len(experiments), "Table III: one row per experiment and algorithm"
+    assert page["tables"][1]["rows"] == 2 * len(experiments), "its uncertainty: the same rows"
     assert all(t["rows"] > 0 and t["width"] > 0 for t in page["tables"]), page["tables"]
 
 

@@ -218,8 +218,8 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
         Column::new("Order matches", "order_match", Align::Right),
         Column::new("Experiments ordered", "order_experiments", Align::Right),
         Column::new("Geo. mean ours/ref.", "geo_mean_ratio", Align::Right),
-        Column::new("Equivalent (n=10)", "equivalent_n10", Align::Right),
-        Column::new("Equivalent (n=100)", "equivalent_n100", Align::Right),
+        Column::new("Equiv. n=10", "equivalent_n10", Align::Right),
+        Column::new("Equiv. n=100", "equivalent_n100", Align::Right),
         Column::new("Exploratory", "exploratory", Align::Left),
     ];
     let fits: Vec<Fit> = variants.iter().map(|v| v.1).collect();

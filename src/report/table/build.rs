@@ -180,14 +180,11 @@ pub fn table3(data: &ReportData) -> Table {
     if reference {
         caption.push_str(" Paper: the published value and configuration; Δ mean = ours − paper.");
     }
-    caption
-        .push_str(" 95% CI: the best cell's percentile-bootstrap interval of the mean (2,000 resamples). ");
-    caption.push_str(SURVIVAL_RULE);
+    let mut uncertainty = String::from("95% CI: bootstrap interval of the best cell's mean. ");
+    uncertainty.push_str(SURVIVAL_RULE);
     if reference {
-        caption.push_str(
-            " Ours/paper: our mean over the paper's, its interval our interval over the paper's mean. ",
-        );
-        caption.push_str(EQUIVALENCE_RULE);
+        uncertainty.push(' ');
+        uncertainty.push_str(EQUIVALENCE_RULE);
     }
     if raced {
         caption.push(' ');
@@ -203,7 +200,41 @@ pub fn table3(data: &ReportData) -> Table {
             data.trials_cached, data.trials_planned
         ));
     }
+    caption.push(' ');
+    caption.push_str(&uncertainty);
     Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows }
+}
+
+/// Table III as the pages show it, in two tables of the same rows: the best configurations (the
+/// paper's columns, and a race's), then their uncertainty (the rows' keys and the interval,
+/// censoring and equivalence columns), which side by side would be too wide to read. The CSV is
+/// the whole [`table3`].
+pub fn table3_parts(data: &ReportData) -> [Table; 2] {
+    let full = table3(data);
+    let split = full.columns.iter().position(|c| c.csv[0] == "ci_lo").unwrap_or(full.columns.len());
+    let (main_caption, unc_caption) = match full.caption.find(" 95% CI: bootstrap interval") {
+        Some(i) => (full.caption[..i].to_string(), full.caption[i + 1..].to_string()),
+        None => (full.caption.clone(), String::new()),
+    };
+    let keep = |cols: &[usize], title: String, caption: String| Table {
+        title,
+        caption,
+        columns: cols.iter().map(|&i| full.columns[i].clone()).collect(),
+        rows: full
+            .rows
+            .iter()
+            .map(|r| Row {
+                values: cols.iter().map(|&i| r.values[i].clone()).collect(),
+                highlight: r.highlight,
+            })
+            .collect(),
+    };
+    let main: Vec<usize> = (0..split).collect();
+    let unc: Vec<usize> = (0..3).chain(split..full.columns.len()).collect();
+    [
+        keep(&main, full.title.clone(), main_caption),
+        keep(&unc, format!("{}: uncertainty", full.title), unc_caption),
+    ]
 }
 
 /// Every cell of one experiment with its statistics; the best cell of each algorithm highlighted.
@@ -234,7 +265,8 @@ pub fn cell_table(e: &ExpData) -> Table {
         .enumerate()
         .map(|(i, c)| {
             let s = &c.summary;
-            let mut values = vec![Value::Text(c.cell.algorithm.label(exp.repr).into())];
+            // The caption names the representation; the rows only need the algorithm.
+            let mut values = vec![Value::Text(c.cell.algorithm.symbol().into())];
             values.extend(c.cell.coords.iter().map(|&v| {
                 if v.fract() == 0.0 && (0.0..9e15).contains(&v) {
                     Value::Int(v as u64)
