@@ -150,6 +150,36 @@ impl ExpData<'_> {
         )
     }
 
+    /// A raced experiment's cells tested against their algorithm's best cell by the one-sided
+    /// Mann–Whitney U test ([`crate::analysis::rank::mann_whitney_p_greater`]), Holm-corrected
+    /// over the other cells of the heatmap at the race's level: per cell, its p and whether it is
+    /// significantly worse (`None`: no race, the best cell itself, or no trials). A label beside
+    /// the race, not its rule: the race decides by Welch's t.
+    pub fn rank_tests(&self) -> Vec<Option<(f64, bool)>> {
+        let mut out = vec![None; self.cells.len()];
+        let Some(race) = self.exp.race else { return out };
+        let values =
+            |i: usize| -> Vec<f64> { self.cells[i].trials.iter().map(|t| f64::from(t.counted)).collect() };
+        for &(alg, best) in &self.best {
+            let Some(best) = best else { continue };
+            let b = values(best.cell);
+            let others: Vec<usize> = (0..self.cells.len())
+                .filter(|&i| {
+                    i != best.cell && self.cells[i].cell.algorithm == alg && !self.cells[i].trials.is_empty()
+                })
+                .collect();
+            let p: Vec<f64> = others
+                .iter()
+                .map(|&i| crate::analysis::rank::mann_whitney_p_greater(&values(i), &b))
+                .collect();
+            let worse = crate::analysis::welch::holm_reject(&p, 1.0 - race.confidence.0);
+            for (k, &i) in others.iter().enumerate() {
+                out[i] = Some((p[k], worse[k]));
+            }
+        }
+        out
+    }
+
     /// The index of the cell with this algorithm and coordinates.
     pub fn find(&self, algorithm: Algorithm, coords: &[f64]) -> Option<usize> {
         self.cells.iter().position(|c| c.cell.algorithm == algorithm && c.cell.coords == coords)

@@ -256,7 +256,10 @@ pub fn cell_table(e: &ExpData) -> Table {
     ]);
     if exp.race.is_some() {
         columns.push(Column::new("Contender", "contender", Align::Left));
+        columns.push(Column::new("Rank test p", "rank_p", Align::Right));
+        columns.push(Column::new("Rank: worse", "rank_worse", Align::Left));
     }
+    let ranks = e.rank_tests();
     let num =
         |v: Option<f64>| v.map_or(Value::Missing, |value| Value::Num { value, decimals: 2, signed: false });
     let rows = e
@@ -296,11 +299,14 @@ pub fn cell_table(e: &ExpData) -> Table {
             values.push(whole(s.min));
             values.push(whole(s.max));
             if exp.race.is_some() {
-                values.push(match c.cell.contender {
-                    Some(true) => Value::Text("yes".into()),
-                    Some(false) => Value::Text("no".into()),
-                    None => Value::Missing,
-                });
+                let yes_no = |b: bool| Value::Text(if b { "yes" } else { "no" }.into());
+                values.push(c.cell.contender.map_or(Value::Missing, yes_no));
+                values.push(ranks[i].map_or(Value::Missing, |r| Value::Num {
+                    value: r.0,
+                    decimals: 4,
+                    signed: false,
+                }));
+                values.push(ranks[i].map_or(Value::Missing, |r| yes_no(r.1)));
             }
             Row { values, highlight: e.is_best(i) }
         })
@@ -323,7 +329,11 @@ pub fn cell_table(e: &ExpData) -> Table {
     caption.push_str(". Highlighted: the best cell of each algorithm (Table III). ");
     if exp.race.is_some() {
         caption.push_str(RACE_RULE);
-        caption.push(' ');
+        caption.push_str(
+            " Rank test (a label beside the race, not its rule): the one-sided Mann–Whitney U test \
+             of each cell against its algorithm's best, Holm-corrected over the heatmap at the race's \
+             level; Rank: worse = significantly worse by ranks. ",
+        );
     }
     caption.push_str(CENSORING);
     Table { title: format!("{} Exp. {}", exp.system.title(), exp.id), caption, columns, rows }
