@@ -7,7 +7,8 @@
 
 use super::key::Key;
 use super::record::TrialRecord;
-use super::store::{read_segment, Store};
+use super::rows::read_segment;
+use super::store::Store;
 use std::collections::HashSet;
 
 /// Rows per compacted segment.

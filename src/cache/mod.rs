@@ -3,6 +3,7 @@
 pub mod gc;
 pub mod key;
 pub mod record;
+pub mod rows;
 pub mod store;
 pub mod verify;
 

@@ -15,7 +15,8 @@
 
 use super::key::{Key, ENGINE_VERSION};
 use super::record::TrialRecord;
-use super::store::{read_segment, Damaged, Store};
+use super::rows::read_segment;
+use super::store::{Damaged, Store};
 use crate::sim::{run_trial, Outcome};
 use rayon::prelude::*;
 use std::collections::HashSet;

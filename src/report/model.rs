@@ -7,7 +7,7 @@
 
 use crate::analysis::claims::ClaimCell;
 use crate::analysis::{best_cell, episodes_counted, Best, Candidate, Summary};
-use crate::cache::store::StoredOutcome;
+use crate::cache::rows::StoredOutcome;
 use crate::cache::{Key, TrialRecord};
 use crate::plan::{Cell, Experiment, Plan, PlannedTrial};
 use crate::sim::env::SystemKind;

@@ -12,7 +12,7 @@ fn truncated_and_garbage_segments_are_quarantined_and_their_trials_recomputed() 
     let segs = sb.segment_paths();
     assert!(segs.len() >= 5);
     // Truncate one real segment (its trials are lost) and add garbage.
-    let lost = qsweep::cache::store::read_segment(&segs[0], &|_| true).unwrap().len();
+    let lost = qsweep::cache::rows::read_segment(&segs[0], &|_| true).unwrap().len();
     let bytes = std::fs::read(&segs[0]).unwrap();
     std::fs::write(&segs[0], &bytes[..bytes.len() / 2]).unwrap();
     std::fs::write(sb.cache().join("seg-garbage.parquet"), b"PAR1 not really").unwrap();
@@ -261,7 +261,7 @@ fn verify_recompute_finds_a_planted_wrong_row() {
     assert!(all.contains("recomputed 56 of 56") && all.contains("all 56 agree"), "{all}");
 
     let segs = sb.segment_paths();
-    let mut rows = qsweep::cache::store::read_segment(&segs[0], &|_| true).unwrap();
+    let mut rows = qsweep::cache::rows::read_segment(&segs[0], &|_| true).unwrap();
     let mut wrong = rows.remove(0);
     wrong.outcome.episodes += 1;
     wrong.outcome.episode_lengths.push(1);
@@ -287,7 +287,7 @@ fn verify_recompute_with_nothing_to_check_fails() {
     let segs = sb.segment_paths();
     let mut rows = Vec::new();
     for s in &segs {
-        rows.extend(qsweep::cache::store::read_segment(s, &|_| true).unwrap());
+        rows.extend(qsweep::cache::rows::read_segment(s, &|_| true).unwrap());
         std::fs::remove_file(s).unwrap();
     }
     for r in &mut rows {
