@@ -44,6 +44,9 @@ pub struct Claim {
     pub null: f64,
     /// The claimed side.
     pub side: Side,
+    /// Whether the null itself is on the claimed side (a threshold to reach, like "at least 95 %
+    /// converged"), rather than the boundary of a strict inequality.
+    pub at_null_holds: bool,
 }
 
 /// The ten claims, in the order of `docs/preregistration.md`.
@@ -54,6 +57,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "smallest over systems of P(Q(λ) cell mean < Q(0) cell mean), paired cells",
         null: 0.5,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "traces-delayed-reward",
@@ -61,6 +65,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "Mountain Car: success rate of Q(λ) trials − of Q(0) trials",
         null: 0.0,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "compact-best",
@@ -68,6 +73,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "fraction of the best cells that are compact − fraction of all cells",
         null: 0.0,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "excessive-hinders",
@@ -75,6 +81,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "mean over heatmaps of Spearman ρ(state count, cell mean)",
         null: 0.0,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "qlambda-robust",
@@ -82,6 +89,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "mean over experiments of ρ(Q(0)) − ρ(Q(λ))",
         null: 0.0,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "fuzzy-qlambda-fastest",
@@ -89,6 +97,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "mean over systems of ln(best of the other three ÷ best fuzzy Q(λ))",
         null: 0.0,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "fuzzy-benefit-low-granularity",
@@ -96,6 +105,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "mean over systems and algorithms of ρ(state count, ln(crisp ÷ fuzzy)), Exp. 1 vs 3",
         null: 0.0,
         side: Side::Below,
+        at_null_holds: false,
     },
     Claim {
         id: "mountain-car-gap-narrowed",
@@ -103,6 +113,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "mean |ln(best Q(0) ÷ best Q(λ))|: Mountain Car − the other systems",
         null: 0.0,
         side: Side::Below,
+        at_null_holds: false,
     },
     Claim {
         id: "qlambda-richer-fuzzy",
@@ -110,6 +121,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "mean over fuzzy experiments of ln(states of best Q(λ) ÷ of best Q(0))",
         null: 0.0,
         side: Side::Above,
+        at_null_holds: false,
     },
     Claim {
         id: "cart-pole-converged",
@@ -117,6 +129,7 @@ pub const CLAIMS: [Claim; 10] = [
         statistic: "fraction of Cart-Pole trials that reached the goal",
         null: 0.95,
         side: Side::Above,
+        at_null_holds: true,
     },
 ];
 
@@ -260,12 +273,8 @@ pub fn evaluate(cells: &[ClaimCell]) -> Vec<ClaimResult> {
 /// The verdict rule ([`CLAIM_RULE`]) for one interval.
 fn verdict(claim: &Claim, interval: Option<(f64, f64)>) -> ClaimVerdict {
     let Some((lo, hi)) = interval else { return ClaimVerdict::Missing };
-    let (above, below) = if claim.id == "cart-pole-converged" {
-        // "All converged": at or above the threshold counts as the claim.
-        (lo >= claim.null, hi < claim.null)
-    } else {
-        (lo > claim.null, hi < claim.null)
-    };
+    let above = if claim.at_null_holds { lo >= claim.null } else { lo > claim.null };
+    let below = hi < claim.null;
     match (claim.side, above, below) {
         (Side::Above, true, _) | (Side::Below, _, true) => ClaimVerdict::Holds,
         (Side::Above, _, true) | (Side::Below, true, _) => ClaimVerdict::Reversed,
@@ -300,8 +309,11 @@ struct Groups {
     /// Cart-Pole cells; Mountain Car cells of Q(0) and of Q(λ).
     cart_pole: Vec<usize>,
     mountain_car: [Vec<usize>; 2],
-    /// Cells with a compact configuration, and the cells counted.
+    /// Cells with a compact configuration.
     compact: Vec<bool>,
+    /// The experiments and the systems present, in order.
+    experiments: Vec<usize>,
+    systems: Vec<SystemKind>,
 }
 
 impl Groups {
@@ -316,7 +328,7 @@ impl Groups {
             by_config.insert((c.experiment, cfg.clone(), c.algorithm), i);
             by_exp_id.insert((c.system, c.experiment_id.clone(), cfg, c.algorithm), i);
         }
-        let heatmaps = by_heatmap
+        let heatmaps: Vec<Heatmap> = by_heatmap
             .into_iter()
             .map(|((experiment, algorithm), idx)| Heatmap {
                 system: cells[idx[0]].system,
@@ -346,6 +358,12 @@ impl Groups {
                 }
             }
         }
+        // Heatmaps are in (experiment, algorithm) order, so one experiment's are adjacent.
+        let mut experiments: Vec<usize> = heatmaps.iter().map(|h| h.experiment).collect();
+        experiments.dedup();
+        let mut systems: Vec<SystemKind> = heatmaps.iter().map(|h| h.system).collect();
+        systems.sort();
+        systems.dedup();
         let of = |pred: &dyn Fn(&ClaimCell) -> bool| (0..cells.len()).filter(|&i| pred(&cells[i])).collect();
         Self {
             heatmaps,
@@ -357,6 +375,8 @@ impl Groups {
                 of(&|c| c.system == SystemKind::MountainCar && c.algorithm == Algorithm::QLambda),
             ],
             compact: cells.iter().map(ClaimCell::compact).collect(),
+            experiments,
+            systems,
         }
     }
 }
@@ -409,11 +429,7 @@ fn statistics(cells: &[ClaimCell], g: &Groups, view: &[View]) -> [Option<f64>; C
         .collect();
     // Heatmap index by (experiment, algorithm).
     let find = |e: usize, a: Algorithm| g.heatmaps.iter().position(|h| h.experiment == e && h.algorithm == a);
-    let experiments: Vec<usize> = {
-        let mut v: Vec<usize> = g.heatmaps.iter().map(|h| h.experiment).collect();
-        v.dedup();
-        v
-    };
+    let experiments = &g.experiments;
     let best_mean = |k: usize| best[k].and_then(mean);
     let gap = |e: usize| {
         let a = best_mean(find(e, Algorithm::Q0)?)?;
@@ -422,7 +438,7 @@ fn statistics(cells: &[ClaimCell], g: &Groups, view: &[View]) -> [Option<f64>; C
     };
     let system_of = |e: usize| g.heatmaps.iter().find(|h| h.experiment == e).map(|h| (h.system, h.fuzzy));
 
-    let qlambda_beats_q0 = if g.algorithm_pairs.len() < 3 {
+    let qlambda_beats_q0 = if g.algorithm_pairs.len() < SystemKind::ALL.len() {
         None
     } else {
         g.algorithm_pairs
@@ -455,13 +471,7 @@ fn statistics(cells: &[ClaimCell], g: &Groups, view: &[View]) -> [Option<f64>; C
             .iter()
             .filter_map(|&e| Some(rho[find(e, Algorithm::Q0)?]? - rho[find(e, Algorithm::QLambda)?]?)),
     );
-    let systems: Vec<SystemKind> = {
-        let mut v: Vec<SystemKind> = g.heatmaps.iter().map(|h| h.system).collect();
-        v.sort();
-        v.dedup();
-        v
-    };
-    let fastest = average(systems.iter().filter_map(|&s| {
+    let fastest = average(g.systems.iter().filter_map(|&s| {
         // The best mean of each (representation, algorithm) over the system's experiments.
         let combo = |fuzzy: bool, a: Algorithm| {
             g.heatmaps

@@ -175,10 +175,10 @@ pub fn plan_variants(
     if let Some(limit) = max_trials {
         // Counted from the spec, before any configuration is built or hashed, so an accidental
         // huge grid is refused at once.
-        // A variant that differs from an earlier one only in `counting` (a report setting) plans
-        // the same trials: counted once.
+        // A variant that differs from an earlier one only in report settings plans the same
+        // trials: counted once.
         fn trial_set(v: &LoadedVariant) -> Vec<&String> {
-            let mut s: Vec<&String> = v.set.iter().filter(|e| !e.starts_with("counting=")).collect();
+            let mut s: Vec<&String> = v.set.iter().filter(|e| !crate::spec::is_report_setting(e)).collect();
             s.sort();
             s
         }
@@ -247,8 +247,8 @@ pub fn plan_variants(
                 .iter()
                 .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter()))
                 .any(|t| !written.contains(&t.key));
-            // A report setting (`counting`) changes what the trials count, not the trials.
-            if !v.set.is_empty() && !changed && v.spec.counting == spec.counting {
+            // A report setting changes what the trials count, not the trials: no warning for it.
+            if !changed && v.set.iter().any(|e| !crate::spec::is_report_setting(e)) {
                 warnings.push(format!(
                     "variant `{}` changes no trial (its set gives the same configurations as the pipeline as written)",
                     v.id

@@ -48,16 +48,6 @@ pub enum Counting {
     Failures,
 }
 
-impl Counting {
-    /// YAML name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Episodes => "episodes",
-            Self::Failures => "failures",
-        }
-    }
-}
-
 /// What a trial produced.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Outcome {

@@ -46,7 +46,7 @@ pub use fields::{safe_folder_name, suggest, variable_index};
 pub use load::{load, load_str, load_value, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
-pub use pipeline::{PipelineSpec, Systems};
+pub use pipeline::{is_report_setting, PipelineSpec, Systems};
 pub use race::RaceSpec;
 pub use readings::LoadedVariant;
 pub use settings::{

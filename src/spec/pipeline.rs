@@ -10,6 +10,15 @@ use super::variants::VariantSpec;
 use serde::de::{self, Deserializer};
 use serde::Deserialize;
 
+/// Top-level fields that only change how the report counts, never a trial: a variant whose `set`
+/// touches only these plans the same trials as the pipeline as written.
+pub const REPORT_SETTINGS: [&str; 1] = ["counting"];
+
+/// Whether a variant's `set` entry (`PATH=VALUE`) is one of the [`REPORT_SETTINGS`].
+pub fn is_report_setting(entry: &str) -> bool {
+    entry.split_once('=').is_some_and(|(path, _)| REPORT_SETTINGS.contains(&path))
+}
+
 /// A whole pipeline file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

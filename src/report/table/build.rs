@@ -24,6 +24,15 @@ fn opt_int(v: Option<u32>) -> Value {
 
 /// Table III: one row per system, experiment and algorithm.
 pub fn table3(data: &ReportData) -> Table {
+    let (mut t, _, uncertainty) = table3_built(data);
+    t.caption.push(' ');
+    t.caption.push_str(&uncertainty);
+    t
+}
+
+/// Table III with the caption of its first part, the index of its first uncertainty column and
+/// the caption of the uncertainty part.
+fn table3_built(data: &ReportData) -> (Table, usize, String) {
     let reference = data.has_reference();
     let mut columns = vec![
         Column::new("System", "system", Align::Left),
@@ -52,6 +61,7 @@ pub fn table3(data: &ReportData) -> Table {
         }
     }
     // Uncertainty last, so the earlier CSV fields keep their positions.
+    let split = columns.len();
     columns.push(Column::new("95% CI", "ci_lo", Align::Right).fields(&["ci_lo", "ci_hi"]));
     columns.push(Column::new("Censored", "censored", Align::Right));
     columns.push(Column::new("KM median", "km_median", Align::Right));
@@ -200,9 +210,11 @@ pub fn table3(data: &ReportData) -> Table {
             data.trials_cached, data.trials_planned
         ));
     }
-    caption.push(' ');
-    caption.push_str(&uncertainty);
-    Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows }
+    (
+        Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows },
+        split,
+        uncertainty,
+    )
 }
 
 /// Table III as the pages show it, in two tables of the same rows: the best configurations (the
@@ -210,12 +222,7 @@ pub fn table3(data: &ReportData) -> Table {
 /// censoring and equivalence columns), which side by side would be too wide to read. The CSV is
 /// the whole [`table3`].
 pub fn table3_parts(data: &ReportData) -> [Table; 2] {
-    let full = table3(data);
-    let split = full.columns.iter().position(|c| c.csv[0] == "ci_lo").unwrap_or(full.columns.len());
-    let (main_caption, unc_caption) = match full.caption.find(" 95% CI: bootstrap interval") {
-        Some(i) => (full.caption[..i].to_string(), full.caption[i + 1..].to_string()),
-        None => (full.caption.clone(), String::new()),
-    };
+    let (full, split, unc_caption) = table3_built(data);
     let keep = |cols: &[usize], title: String, caption: String| Table {
         title,
         caption,
@@ -232,9 +239,14 @@ pub fn table3_parts(data: &ReportData) -> [Table; 2] {
     let main: Vec<usize> = (0..split).collect();
     let unc: Vec<usize> = (0..3).chain(split..full.columns.len()).collect();
     [
-        keep(&main, full.title.clone(), main_caption),
+        keep(&main, full.title.clone(), full.caption.clone()),
         keep(&unc, format!("{}: uncertainty", full.title), unc_caption),
     ]
+}
+
+/// `v` as an integer value when it is a whole number a `u64` holds exactly.
+fn whole(v: f64) -> Option<Value> {
+    (v.fract() == 0.0 && (0.0..9e15).contains(&v)).then_some(Value::Int(v as u64))
 }
 
 /// Every cell of one experiment with its statistics; the best cell of each algorithm highlighted.
@@ -270,13 +282,12 @@ pub fn cell_table(e: &ExpData) -> Table {
             let s = &c.summary;
             // The caption names the representation; the rows only need the algorithm.
             let mut values = vec![Value::Text(c.cell.algorithm.symbol().into())];
-            values.extend(c.cell.coords.iter().map(|&v| {
-                if v.fract() == 0.0 && (0.0..9e15).contains(&v) {
-                    Value::Int(v as u64)
-                } else {
-                    Value::Text(crate::spec::format_value(v))
-                }
-            }));
+            values.extend(
+                c.cell
+                    .coords
+                    .iter()
+                    .map(|&v| whole(v).unwrap_or_else(|| Value::Text(crate::spec::format_value(v)))),
+            );
             values.push(Value::Int(c.trials.len() as u64));
             values.push(Value::Int(c.successes as u64));
             values.push(s.mean.map_or(Value::Missing, |mean| Value::MeanStd {
@@ -292,12 +303,8 @@ pub fn cell_table(e: &ExpData) -> Table {
                 _ => Value::Missing,
             });
             // Counts are whole numbers: min and max print without decimals.
-            let whole = |v: Option<f64>| match v {
-                Some(x) if x.fract() == 0.0 && (0.0..9e15).contains(&x) => Value::Int(x as u64),
-                other => num(other),
-            };
-            values.push(whole(s.min));
-            values.push(whole(s.max));
+            values.push(s.min.and_then(whole).unwrap_or_else(|| num(s.min)));
+            values.push(s.max.and_then(whole).unwrap_or_else(|| num(s.max)));
             if exp.race.is_some() {
                 let yes_no = |b: bool| Value::Text(if b { "yes" } else { "no" }.into());
                 values.push(c.cell.contender.map_or(Value::Missing, yes_no));
