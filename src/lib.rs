@@ -10,6 +10,7 @@ pub mod analysis;
 pub mod atomic;
 pub mod bench;
 pub mod cache;
+pub mod fresh;
 pub mod parquet_io;
 pub mod pipeline;
 pub mod plan;

@@ -1,9 +1,9 @@
 //! The pipeline as the library runs it, the same for every command: scan the cache's keys (and
 //! move damaged segments aside, [`scan`]), choose the trials to run ([`select`]: shard, cached,
 //! `--force`), execute and store them ([`run_trials`]); the report stage is [`crate::report::write`].
-//! A raced plan ([`crate::race`]) is replayed against the cache first
-//! ([`crate::race::replay_cached`]), and
-//! [`run_trials`] runs its rounds one after another (one round per call under `--shard`).
+//! A staged plan (a race, [`crate::race`], or fresh seeds, [`crate::fresh`]) is replayed against
+//! the cache first ([`crate::race::replay_cached`]), and [`run_trials`] runs its stages one after
+//! another (one stage per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeySet, Store};
 use crate::cache::Key;
@@ -50,6 +50,16 @@ pub struct Selection {
 pub fn shard_owners(plan: &Plan, trials: &[Job], count: u32) -> Vec<u32> {
     if plan.has_race() {
         trials.iter().map(|t| key_owner(&t.key, count)).collect()
+    } else if plan.has_fresh() {
+        // The grid is split cost-balanced as planned (it does not depend on the cache); the fresh
+        // trials, planned once the grid is stored, by key.
+        let grid = crate::exec::jobs(plan);
+        let owner: std::collections::HashMap<Key, u32> =
+            grid.iter().map(|t| t.key).zip(assign(&grid, count)).collect();
+        trials
+            .iter()
+            .map(|t| owner.get(&t.key).copied().unwrap_or_else(|| key_owner(&t.key, count)))
+            .collect()
     } else {
         assign(trials, count)
     }
@@ -95,7 +105,7 @@ pub fn run_trials(
         store.write_segment(batch)?;
         Ok(())
     };
-    if !plan.has_race() {
+    if !plan.is_staged() {
         let (unique, jobs) = select(plan, scan, sel);
         let exec = execute(&jobs, opts, flush, reporter)?;
         return Ok(RunOutcome { exec, cached: unique.len() - jobs.len() });
@@ -130,13 +140,13 @@ pub fn run_trials(
 }
 
 /// Every key the given plans reference (what `qsweep gc PIPELINES` keeps): all their trials,
-/// and for a race every round it has run, replayed from the cache (its later rounds are planned
-/// from the outcomes stored).
+/// and for a race every round it has run and for fresh seeds the best cells' fresh trials,
+/// replayed from the cache (they are planned from the outcomes stored).
 pub fn referenced_keys(plans: &[Plan], store: &Store) -> anyhow::Result<std::collections::HashSet<Key>> {
     let mut keep = std::collections::HashSet::new();
     let mut scan = None;
     for planned in plans {
-        if planned.has_race() {
+        if planned.is_staged() {
             if scan.is_none() {
                 scan = Some(store.keys()?);
             }

@@ -98,19 +98,23 @@ pub fn status(plan: &Plan, store: Option<&Store>, explain: bool) -> anyhow::Resu
     };
     let cached = &scan.keys;
     // A race's trials so far come from the cached outcomes of its earlier rounds.
+    // So do the fresh seeds of the best cells the grid has decided.
     let raced = match store {
-        Some(store) if plan.has_race() => Some(crate::race::replay_cached(plan, store, &scan)?),
-        _ if plan.has_race() => Some(crate::race::replay(plan, cached, &mut |_| Ok(Default::default()))?),
+        Some(store) if plan.is_staged() => Some(crate::race::replay_cached(plan, store, &scan)?),
+        _ if plan.is_staged() => Some(crate::race::replay(plan, cached, &mut |_| Ok(Default::default()))?),
         _ => None,
     };
     let (plan, heats) = match raced {
-        Some(r) => (r.plan, Some(r.heats)),
+        Some(r) if plan.has_race() => (r.plan, Some(r.heats)),
+        Some(r) => (r.plan, None),
         None => (plan.clone(), None),
     };
     let experiments = plan
         .experiments
         .iter()
-        .map(|e| Count::of(e.cells.iter().flat_map(|c| c.trials.iter().map(|t| &t.key)), cached))
+        .map(|e| {
+            Count::of(e.cells.iter().flat_map(|c| c.trials.iter().chain(&c.fresh).map(|t| &t.key)), cached)
+        })
         .collect();
     let total = Count::of(plan.trials().map(|(_, _, t)| &t.key), cached);
     let explanation = match store {
@@ -143,7 +147,8 @@ fn missing_cells(plan: &Plan, records: &[TrialRecord], cached: &HashSet<Key>) ->
     let mut out = Vec::new();
     for (ei, e) in plan.experiments.iter().enumerate() {
         for (ci, c) in e.cells.iter().enumerate() {
-            let missing: Vec<_> = c.trials.iter().filter(|t| !cached.contains(&t.key)).collect();
+            let missing: Vec<_> =
+                c.trials.iter().chain(&c.fresh).filter(|t| !cached.contains(&t.key)).collect();
             let Some(t) = missing.first() else { continue };
             let reason = match at.get(&position(&c.config, t.seed)) {
                 None => Reason::NeverComputed,
@@ -169,7 +174,7 @@ fn missing_cells(plan: &Plan, records: &[TrialRecord], cached: &HashSet<Key>) ->
                 experiment: ei,
                 cell: ci,
                 missing: missing.len(),
-                trials: c.trials.len(),
+                trials: c.trials.len() + c.fresh.len(),
                 reason,
             });
         }

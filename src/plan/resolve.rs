@@ -350,9 +350,19 @@ fn planned_trials(spec: &PipelineSpec) -> u128 {
             })
             .collect()
     }
+    // A `fresh:` block adds its seeds to one cell per heatmap (experiment × algorithm).
+    let heatmaps = |s: Vec<u128>| -> u128 { s.into_iter().sum() };
+    fn algorithms<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> Vec<u128> {
+        s.iter().flat_map(|s| &s.experiments).map(|e| e.algorithms.len() as u128).collect()
+    }
+    let fresh = spec.fresh.map_or(0, |f| u128::from(f.seeds))
+        * (heatmaps(algorithms(&spec.systems.ball_beam))
+            + heatmaps(algorithms(&spec.systems.cart_pole))
+            + heatmaps(algorithms(&spec.systems.mountain_car)));
     system(cells(&spec.systems.ball_beam))
         + system(cells(&spec.systems.cart_pole))
         + system(cells(&spec.systems.mountain_car))
+        + fresh
 }
 
 fn expand<M: Resolve>(
@@ -460,7 +470,7 @@ fn expand_experiment<M: Resolve>(
                     key: Key::from_canonical(&canonical, seed, crate::cache::ENGINE_VERSION),
                 })
                 .collect();
-            cells.push(Cell { algorithm, coords, config: c, trials, contender: None });
+            cells.push(Cell { algorithm, coords, config: c, trials, contender: None, fresh: Vec::new() });
         }
     }
     Ok(Experiment {
@@ -475,6 +485,7 @@ fn expand_experiment<M: Resolve>(
         counting: spec.counting,
         reference: e.reference.clone(),
         race: e.race.or(spec.race),
+        fresh: spec.fresh.and_then(|f| f.seed_list()),
         cells,
     })
 }

@@ -8,6 +8,13 @@ use crate::spec::{Axis, RaceSpec, Reference, Target};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+/// Fetches the stored outcomes of some trial keys (all of them present in the cache): how a
+/// plan's stages (a race's rounds, the fresh seeds) read what earlier stages produced.
+pub type ReadOutcomes<'a> = dyn FnMut(
+        &std::collections::HashSet<Key>,
+    ) -> anyhow::Result<std::collections::HashMap<Key, crate::sim::Outcome>>
+    + 'a;
+
 /// A pipeline, expanded.
 #[derive(Debug, Clone)]
 pub struct Plan {
@@ -86,6 +93,9 @@ pub struct Experiment {
     /// Its race, if any: seeds go round by round to the cells that can still be the best
     /// ([`crate::race`]); the cells' trials then hold every round resolved so far.
     pub race: Option<RaceSpec>,
+    /// The fresh seeds each heatmap's best cell is re-estimated on, once the grid has chosen it
+    /// ([`crate::fresh`]); `None` without a `fresh:` block.
+    pub fresh: Option<Vec<u64>>,
     /// Cells: every algorithm × every grid point, algorithm-major, grid in axis order.
     pub cells: Vec<Cell>,
 }
@@ -104,6 +114,9 @@ pub struct Cell {
     /// In a raced experiment, once its race is replayed against the cache: whether the cell is
     /// still a contender (not significantly worse than the best); `None` without a race.
     pub contender: Option<bool>,
+    /// Its trials on the fresh seeds, planned once the cell is known to be its heatmap's best
+    /// ([`crate::fresh`]): never part of the cell's own statistics. Empty for every other cell.
+    pub fresh: Vec<PlannedTrial>,
 }
 
 /// A trial: a seed and its key.
@@ -116,16 +129,29 @@ pub struct PlannedTrial {
 }
 
 impl Plan {
-    /// Every (experiment, cell, trial) of the plan, in plan order.
+    /// Every (experiment, cell, trial) of the plan, in plan order: each cell's trials, then its
+    /// fresh-seed trials.
     pub fn trials(&self) -> impl Iterator<Item = (&Experiment, &Cell, &PlannedTrial)> {
-        self.experiments
-            .iter()
-            .flat_map(|e| e.cells.iter().flat_map(move |c| c.trials.iter().map(move |t| (e, c, t))))
+        self.experiments.iter().flat_map(|e| {
+            e.cells.iter().flat_map(move |c| c.trials.iter().chain(&c.fresh).map(move |t| (e, c, t)))
+        })
     }
 
-    /// Number of trials, counting a trial shared by two cells twice.
+    /// Number of trials (fresh-seed ones included), counting a trial shared by two cells twice.
     pub fn trial_count(&self) -> usize {
-        self.experiments.iter().flat_map(|e| &e.cells).map(|c| c.trials.len()).sum()
+        self.experiments.iter().flat_map(|e| &e.cells).map(|c| c.trials.len() + c.fresh.len()).sum()
+    }
+
+    /// Whether some experiment re-estimates its best cells on fresh seeds.
+    pub fn has_fresh(&self) -> bool {
+        self.experiments.iter().any(|e| e.fresh.is_some())
+    }
+
+    /// Whether part of the plan is decided from stored outcomes (a race's rounds, the fresh
+    /// seeds of the best cells): such a plan is replayed against the cache
+    /// ([`crate::race::replay_cached`]) before it is run, counted or reported.
+    pub fn is_staged(&self) -> bool {
+        self.has_race() || self.has_fresh()
     }
 
     /// Distinct trials by key, first occurrence wins, in plan order: each with its cell's

@@ -33,8 +33,7 @@ use crate::plan::{Plan, PlannedTrial};
 use crate::sim::{Algorithm, Outcome};
 use std::collections::{HashMap, HashSet};
 
-/// Fetches the stored outcomes of some trial keys (all of them present in the cache).
-pub type ReadOutcomes<'a> = dyn FnMut(&HashSet<Key>) -> anyhow::Result<HashMap<Key, Outcome>> + 'a;
+pub use crate::plan::ReadOutcomes;
 
 /// How one heatmap's race stands.
 #[derive(Debug, Clone, PartialEq)]
@@ -121,7 +120,8 @@ pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Resul
 
 /// Replay every race of `plan`: replay its rounds from the outcomes of the trials in `cached`
 /// (`read` fetches the outcomes of some of them), as far as each round's trials are all cached,
-/// and plan the next round's. Without a race the plan comes back as it is.
+/// and plan the next round's; then plan the fresh-seed trials of every decided best cell
+/// ([`crate::fresh::plan_fresh`]). Without a race or a `fresh:` block the plan comes back as it is.
 pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
     let mut out = plan.clone();
     let mut heats: Vec<Heat> = Vec::new();
@@ -226,6 +226,10 @@ pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> an
         if !advanced {
             break;
         }
+    }
+    // The best cells are decided only once the races are: fresh seeds come last.
+    if out.has_fresh() {
+        crate::fresh::plan_fresh(&mut out, cached, &mut known, read)?;
     }
     let heats = heats
         .into_iter()

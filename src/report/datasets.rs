@@ -33,6 +33,9 @@
 //! | `iqm` | float64, null | interquartile mean: mean after dropping ⌊n/4⌋ values at each end |
 //! | `ci_lo`, `ci_hi` | float64, null | 95% percentile-bootstrap interval of the mean (2000 resamples, seeded by the cell's trial keys) |
 //! | `contender` | bool, null | only in pipelines with a `race:`: the cell is still in its heatmap's race (not significantly worse than the best); null in experiments without a race. `planned` and `n` are then the seeds the race gave the cell |
+//! | `fresh_n` | int64 | only in pipelines with a `fresh:` block: the best cell's trials present on the fresh seeds (0 for every other cell); not in `n`, `mean` or any other column above |
+//! | `fresh_mean`, `fresh_std` | float64, null | their mean and sample std of `episodes_counted` (the winner's-curse-free estimate of the best cell) |
+//! | `fresh_ci_lo`, `fresh_ci_hi` | float64, null | their 95% percentile-bootstrap interval (2000 resamples, seeded by the fresh trials' keys) |
 //!
 //! `trials.parquet`, one row per present trial of each cell (a trial shared by two cells, e.g. the
 //! same configuration in two experiments, appears once per cell), then:
@@ -52,6 +55,7 @@
 //! | `epsilon`, `gamma`, `alpha`, `lambda` | float64 | hyperparameters (λ = 0 for Q(0)) |
 //! | `seconds` | float64 | wall-clock seconds the trial took when computed (informational) |
 //! | `cpu_seconds` | float64, null | CPU seconds of the thread that ran it (load does not inflate them); null for trials cached before qsweep recorded them |
+//! | `fresh` | bool | only in pipelines with a `fresh:` block: a trial on a fresh seed of its heatmap's best cell (`fresh_n` of `cells.parquet`), not one of the cell's own; filter it out to recompute `mean`, keep only it to recompute `fresh_mean` |
 
 use super::model::{resolution_columns, CellData, ExpData, ReportData, TrialData};
 use crate::parquet_io::Cols;
@@ -125,6 +129,17 @@ pub fn cells_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::Rec
     if data.plan.raced {
         cols.bool_opt("contender", &ids, |r| r.1.cell.contender);
     }
+    // Likewise only pipelines with a `fresh:` block have the fresh-seed columns.
+    if data.plan.has_fresh() {
+        fn fresh<'a>(r: &Id<'a>) -> Option<&'a crate::analysis::Summary> {
+            r.1.fresh_summary.as_ref()
+        }
+        cols.i64("fresh_n", &ids, |r| r.1.fresh.len() as i64);
+        cols.f64_opt("fresh_mean", &ids, |r| fresh(r).and_then(|s| s.mean));
+        cols.f64_opt("fresh_std", &ids, |r| fresh(r).and_then(|s| s.std));
+        cols.f64_opt("fresh_ci_lo", &ids, |r| fresh(r).and_then(|s| s.ci_lo));
+        cols.f64_opt("fresh_ci_hi", &ids, |r| fresh(r).and_then(|s| s.ci_hi));
+    }
     cols.into_batch()
 }
 
@@ -143,14 +158,18 @@ pub fn trials_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::Re
 pub fn trials_batch_of(experiments: &[ExpData]) -> anyhow::Result<arrow::record_batch::RecordBatch> {
     let mut ids: Vec<Id> = Vec::new();
     let mut trials: Vec<(&TrialData, &LearnerConfig)> = Vec::new();
+    let mut fresh: Vec<bool> = Vec::new();
     for e in experiments {
         for c in &e.cells {
-            for t in &c.trials {
+            for (t, is_fresh) in c.trials.iter().map(|t| (t, false)).chain(c.fresh.iter().map(|t| (t, true)))
+            {
                 ids.push((e, c));
                 trials.push((t, &c.cell.config.learner));
+                fresh.push(is_fresh);
             }
         }
     }
+    let with_fresh = experiments.iter().any(|e| e.exp.fresh.is_some());
     fn out<'a>(t: &(&'a TrialData, &LearnerConfig)) -> &'a Outcome {
         t.0.outcome
     }
@@ -172,5 +191,8 @@ pub fn trials_batch_of(experiments: &[ExpData]) -> anyhow::Result<arrow::record_
     cols.f64("lambda", &trials, |t| t.1.lambda);
     cols.f64("seconds", &trials, |t| t.0.seconds);
     cols.f64_opt("cpu_seconds", &trials, |t| t.0.cpu_seconds);
+    if with_fresh {
+        cols.bool("fresh", &fresh, |f| *f);
+    }
     cols.into_batch()
 }

@@ -28,6 +28,7 @@ pub mod markdown;
 pub mod model;
 pub mod stage;
 pub mod svg;
+pub mod svg_grid;
 pub mod table;
 
 pub use crate::atomic::write_atomic;

@@ -71,21 +71,53 @@ pub struct CellData<'a> {
     pub successes: usize,
     /// Statistics of the counted episodes.
     pub summary: Summary,
+    /// Its present trials on the fresh seeds (only a best cell of a pipeline with `fresh:` has
+    /// any: [`crate::fresh`]); never part of [`CellData::summary`].
+    pub fresh: Vec<TrialData<'a>>,
+    /// Statistics of those, with their bootstrap interval; `None` without fresh trials present.
+    pub fresh_summary: Option<Summary>,
 }
 
-impl CellData<'_> {
-    /// Fraction of the present trials that hit the episode cap without reaching the goal.
-    pub fn censored_fraction(&self) -> Option<f64> {
-        let n = self.trials.len();
-        (n > 0).then(|| (n - self.successes) as f64 / n as f64)
+/// The sample a Table III row is judged on: the fresh-seed trials of its best cell where it has
+/// them, else the cell's own (the selection estimate).
+#[derive(Debug, Clone, Copy)]
+pub struct Estimate<'c, 'a> {
+    /// Its statistics.
+    pub summary: &'c Summary,
+    /// Its trials.
+    pub trials: &'c [TrialData<'a>],
+    /// Whether it is the fresh-seed estimate.
+    pub fresh: bool,
+}
+
+impl Estimate<'_, '_> {
+    /// Trials in the sample.
+    pub fn n(&self) -> usize {
+        self.trials.len()
     }
 
-    /// Kaplan–Meier median of the counted episodes, trials that never reached the goal censored
-    /// at the cap ([`crate::analysis::survival::km_median`]).
+    /// Fraction of the sample's trials that hit the episode cap without reaching the goal.
+    pub fn censored_fraction(&self) -> Option<f64> {
+        let n = self.trials.len();
+        (n > 0).then(|| self.trials.iter().filter(|t| !t.outcome.converged).count() as f64 / n as f64)
+    }
+
+    /// Kaplan–Meier median of the sample's counted episodes, trials that never reached the goal
+    /// censored at the cap ([`crate::analysis::survival::km_median`]).
     pub fn km_median(&self) -> Option<f64> {
         let times: Vec<(f64, bool)> =
             self.trials.iter().map(|t| (f64::from(t.counted), t.outcome.converged)).collect();
         crate::analysis::survival::km_median(&times)
+    }
+}
+
+impl<'a> CellData<'a> {
+    /// The sample a Table III row of this cell is judged on ([`Estimate`]).
+    pub fn estimate(&self) -> Estimate<'_, 'a> {
+        match &self.fresh_summary {
+            Some(summary) => Estimate { summary, trials: &self.fresh, fresh: true },
+            None => Estimate { summary: &self.summary, trials: &self.trials, fresh: false },
+        }
     }
 
     /// Whether some present trial did not reach the goal.
@@ -222,23 +254,24 @@ impl<'a> ReportData<'a> {
                     .par_iter()
                     .map(|cell| {
                         let cap = cell.config.limits.max_episodes;
-                        let trials: Vec<TrialData> = cell
-                            .trials
-                            .iter()
-                            .filter_map(|t| {
-                                records.outcome(&t.key).map(|(o, seconds, cpu_seconds)| TrialData {
-                                    planned: t,
-                                    outcome: o,
-                                    seconds,
-                                    cpu_seconds,
-                                    counted: episodes_counted(o, cap, exp.counting),
+                        let present = |planned: &'a [PlannedTrial]| -> Vec<TrialData<'a>> {
+                            planned
+                                .iter()
+                                .filter_map(|t| {
+                                    records.outcome(&t.key).map(|(o, seconds, cpu_seconds)| TrialData {
+                                        planned: t,
+                                        outcome: o,
+                                        seconds,
+                                        cpu_seconds,
+                                        counted: episodes_counted(o, cap, exp.counting),
+                                    })
                                 })
-                            })
-                            .collect();
-                        cell_data(cell, trials, intervals)
+                                .collect()
+                        };
+                        cell_data(cell, present(&cell.trials), present(&cell.fresh), intervals)
                     })
                     .collect();
-                present += cells.iter().map(|c| c.trials.len()).sum::<usize>();
+                present += cells.iter().map(|c| c.trials.len() + c.fresh.len()).sum::<usize>();
                 let best = exp
                     .algorithms
                     .iter()
@@ -298,12 +331,21 @@ impl<'a> ReportData<'a> {
     }
 }
 
-fn cell_data<'a>(cell: &'a Cell, trials: Vec<TrialData<'a>>, intervals: bool) -> CellData<'a> {
-    let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
+fn cell_data<'a>(
+    cell: &'a Cell,
+    trials: Vec<TrialData<'a>>,
+    fresh: Vec<TrialData<'a>>,
+    intervals: bool,
+) -> CellData<'a> {
+    let summarize = |trials: &[TrialData]| {
+        let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
+        let seed = intervals.then(|| seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
+        Summary::with_interval(&values, seed)
+    };
     let successes = trials.iter().filter(|t| t.outcome.converged).count();
-    let seed = intervals.then(|| seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
-    let summary = Summary::with_interval(&values, seed);
-    CellData { cell, trials, successes, summary }
+    let summary = summarize(&trials);
+    let fresh_summary = (!fresh.is_empty()).then(|| summarize(&fresh));
+    CellData { cell, trials, successes, summary, fresh, fresh_summary }
 }
 
 /// A seed for a cell's resamples: derived from the keys of its present trials (after a `domain`

@@ -173,9 +173,10 @@ pub fn write(
             dir.display()
         )));
     }
-    // A raced plan is reported as far as its races have run: each cell with the seeds it got.
+    // A raced plan is reported as far as its races have run: each cell with the seeds it got;
+    // the best cells with the fresh seeds they got.
     let raced;
-    let plan = if plan.has_race() {
+    let plan = if plan.is_staged() {
         raced = crate::race::replay_cached(plan, store, scan)?;
         &raced.plan
     } else {

@@ -8,11 +8,12 @@
 //! - consecutive polylines with the same stroke become one `<path>` of the same segments;
 //! - consecutive rectangles with the same stroke share it through a `<g>`;
 //! - the texts, all drawn after every shape (they never overlap one another), are grouped by
-//!   anchor, size and colour, which their `<g>` sets once.
+//!   anchor, size and colour, which their `<g>` sets once;
+//! - every complete heatmap grid of cells becomes one image ([`super::svg_grid`]).
 
 /// Rewrite plotters' SVG text as described in the module documentation.
 pub fn compact(svg: &str) -> String {
-    group(&merge(svg))
+    group(&super::svg_grid::grid_images(&merge(svg)))
 }
 
 /// The per-element rewrites: defaults dropped, outlines merged, polylines joined.

@@ -168,8 +168,66 @@ pub fn check_exploratory(spec: &PipelineSpec) -> Result<(), Problem> {
     Ok(())
 }
 
-/// The rules that need the whole pipeline: races and the exploratory block.
+/// Check the `fresh:` block against the seeds the grid and its races use: a fresh seed that also
+/// chose the best cell would not be fresh.
+pub fn check_fresh(spec: &PipelineSpec) -> Result<(), Problem> {
+    let Some(f) = &spec.fresh else { return Ok(()) };
+    let at = |field: &str| vec!["fresh".to_string(), field.to_string()];
+    let Some(fresh) = f.seed_list() else {
+        return Err(Problem {
+            path: at("first_seed"),
+            message: format!(
+                "{} fresh seeds from {} run past the largest seed; use a smaller first_seed",
+                f.seeds, f.first_seed
+            ),
+        });
+    };
+    let (lo, hi) = (fresh[0], fresh[fresh.len() - 1]);
+    let seeds = &spec.seeds.0;
+    if let Some(s) = seeds.iter().find(|s| (lo..=hi).contains(*s)) {
+        return Err(Problem {
+            path: at("first_seed"),
+            message: format!(
+                "fresh seeds {lo}..{hi} include seed {s}, which the grid uses to choose the best cells; \
+                 start them after the grid's seeds, e.g. `first_seed: {}`",
+                seeds.iter().max().map_or(0, |m| m + 1)
+            ),
+        });
+    }
+    // A race numbers its extra seeds on from the largest first-round seed.
+    let races = race_blocks(spec);
+    if let Some(max_seeds) = races.iter().map(|r| u64::from(r.max_seeds)).max() {
+        let first = seeds.iter().max().map_or(0, |m| m + 1);
+        let last = first.saturating_add(max_seeds.saturating_sub(seeds.len() as u64 + 1));
+        if lo <= last && first <= hi && seeds.len() < max_seeds as usize {
+            return Err(Problem {
+                path: at("first_seed"),
+                message: format!(
+                    "fresh seeds {lo}..{hi} overlap the race's extra seeds {first}..{last}; \
+                     start them after, e.g. `first_seed: {}`",
+                    last + 1
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn race_blocks(spec: &PipelineSpec) -> Vec<RaceSpec> {
+    fn of<M: SystemMarker>(s: Option<&SystemSpec<M>>) -> Vec<RaceSpec> {
+        s.iter().flat_map(|s| &s.experiments).filter_map(|e| e.race).collect()
+    }
+    let s = &spec.systems;
+    let mut out: Vec<RaceSpec> = spec.race.into_iter().collect();
+    out.extend(of(s.ball_beam.as_ref()));
+    out.extend(of(s.cart_pole.as_ref()));
+    out.extend(of(s.mountain_car.as_ref()));
+    out
+}
+
+/// The rules that need the whole pipeline: races, fresh seeds and the exploratory block.
 pub(crate) fn check_whole(spec: &PipelineSpec) -> Result<(), Problem> {
     check_races(spec)?;
+    check_fresh(spec)?;
     check_exploratory(spec)
 }

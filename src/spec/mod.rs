@@ -20,6 +20,7 @@
 //!         vary: { x == theta: 2..10, x_dot == theta_dot: 2..10 }   # Table I: v(x == θ), v(ẋ == θ̇)
 //!         fixed: { actions: 2 }                                     # Table I: c(Actions)
 //!         race: { confidence: 0.95, batch: 5, max_seeds: 40 }       # optional (or pipeline-wide)
+//! fresh: { first_seed: 1000, seeds: 20 }  # optional: best cells re-estimated on fresh seeds
 //! ```
 
 // Files from the bottom up: each imports only the ones above it in this list (a test checks
@@ -28,6 +29,7 @@ mod check;
 mod experiment;
 pub mod explore;
 mod fields;
+mod fresh;
 pub mod grid;
 mod load;
 pub mod locate;
@@ -43,6 +45,7 @@ mod variants;
 pub use check::Problem;
 pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference, Target, AXIS_SETTINGS};
 pub use fields::{safe_folder_name, suggest, variable_index};
+pub use fresh::FreshSpec;
 pub use load::{load, load_str, load_value, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;

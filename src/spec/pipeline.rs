@@ -1,4 +1,4 @@
-//! A whole pipeline file: name, seeds, systems, race, variants, exploratory block.
+//! A whole pipeline file: name, seeds, systems, race, fresh seeds, variants, exploratory block.
 
 use super::explore::Exploratory;
 use super::fields::safe_folder_name;
@@ -34,6 +34,9 @@ pub struct PipelineSpec {
     /// Race seeds into the cells that can still be the best (every experiment; see [`race`]).
     #[serde(default)]
     pub race: Option<RaceSpec>,
+    /// Re-estimate every heatmap's best cell on fresh seeds (see [`super::fresh`]).
+    #[serde(default)]
+    pub fresh: Option<super::fresh::FreshSpec>,
     /// Where the experiments' `reference:` values come from (shown in reports).
     #[serde(default)]
     pub reference_source: Option<String>,

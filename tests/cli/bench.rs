@@ -89,5 +89,6 @@ fn cell_of(rec: &qsweep::cache::TrialRecord) -> qsweep::plan::Cell {
         config: rec.config.clone(),
         trials: vec![],
         contender: None,
+        fresh: vec![],
     }
 }

@@ -11,6 +11,7 @@ const LAYERS: &[&[&str]] = &[
     &["sim", "atomic", "parquet_io", "error"],
     &["analysis", "cache", "spec"],
     &["plan"],
+    &["fresh"],
     &["race"],
     &["exec"],
     &["report"],

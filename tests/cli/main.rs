@@ -7,6 +7,7 @@ mod error_locations;
 mod exit_codes;
 mod explore;
 mod feasible;
+mod fresh;
 mod helpers;
 mod json_formats;
 mod layering;

@@ -6,7 +6,8 @@
   `cells.parquet` with SciPy's Spearman and our own pairing, and agrees;
 - the TOST p-values and verdicts of `table3.csv` are recomputed with `scipy.stats.ttest_ind_from_stats`;
 - on a fixture run, the bootstrap intervals of Table III agree with NumPy's percentile bootstrap of
-  the same trials from `trials.parquet` (different random streams, so within Monte Carlo error).
+  the same trials from `trials.parquet` (different random streams, so within Monte Carlo error);
+- on a fixture with a `fresh:` block, the fresh-seed estimates are recomputed from the flagged trials.
 """
 
 from __future__ import annotations
@@ -154,18 +155,65 @@ def test_tost_columns_recomputed_with_scipy() -> None:
     for t3 in sorted(PAPER.glob("*/table3.csv")):
         t = pd.read_csv(t3)
         for r in t.itertuples():
-            if pd.isna(r.std) or r.n < 2:
+            # A row with fresh-seed trials is judged on them (the winner's curse), else on its cell.
+            fresh = "fresh_n" in t.columns and r.fresh_n > 0
+            mean, std, n_ours, lo = (
+                (r.fresh_mean, r.fresh_std, r.fresh_n, r.fresh_ci_lo) if fresh else (r.mean, r.std, r.n, r.ci_lo)
+            )
+            if pd.isna(std) or n_ours < 2:
                 assert pd.isna(r.tost_p_n10), r
                 continue
             for n, p_col, v_col in [(10, "tost_p_n10", "equivalent_n10"), (100, "tost_p_n100", "equivalent_n100")]:
-                p = _tost(r.mean, r.std, r.n, r.paper_mean, r.paper_std, n)
+                p = _tost(mean, std, n_ours, r.paper_mean, r.paper_std, n)
                 assert getattr(r, p_col) == pytest.approx(p, rel=1e-6, abs=1e-12), (t3, r)
                 assert getattr(r, v_col) == ("yes" if p <= 0.05 else "no"), (t3, r)
                 checked += 1
-            assert r.ratio == pytest.approx(r.mean / r.paper_mean)
-            assert r.ratio_lo == pytest.approx(r.ci_lo / r.paper_mean)
-            assert r.censored == pytest.approx((r.n - r.successes) / r.n)
+            assert r.ratio == pytest.approx(mean / r.paper_mean)
+            assert r.ratio_lo == pytest.approx(lo / r.paper_mean)
+            if not fresh:
+                assert r.censored == pytest.approx((r.n - r.successes) / r.n)
     assert checked >= 8 * 24 * 2
+
+
+def test_fresh_estimates_recomputed_from_trials_parquet(qsweep_bin: Path, tmp_path: Path) -> None:
+    """The fresh columns of Table III (and cells.parquet) from the fixture's `trials.parquet`, with
+    NumPy: the mean and std of the flagged fresh trials, their bootstrap interval (within Monte
+    Carlo error), their censored share, and the TOST of the row against the paper on them."""
+    pipeline = REPO_ROOT / "tests" / "fixtures" / "pipelines" / "fresh.yaml"
+    out = tmp_path / "rep"
+    subprocess.run(
+        [str(qsweep_bin), "run", str(pipeline), "--cache", str(tmp_path / "cache"), "--out", str(out), "-q"],
+        check=True,
+    )
+    trials = pd.read_parquet(out / "trials.parquet")
+    cells = pl.read_parquet(out / "cells.parquet")
+    t3 = pd.read_csv(out / "table3.csv")
+    rng = np.random.default_rng(11)
+    for r in t3.itertuples():
+        mask = (trials["label"] == r.algorithm) & (trials["x"] == r.x) & (trials["x_dot"] == r.x_dot)
+        fresh = trials[mask & trials["fresh"]]
+        own = trials[mask & ~trials["fresh"]]
+        assert len(fresh) == r.fresh_n == 5 and len(own) == r.n == 3, r
+        x = fresh["episodes_counted"].to_numpy(dtype=float)
+        assert r.fresh_mean == pytest.approx(x.mean()) and r.mean == pytest.approx(own["episodes_counted"].mean())
+        if len(x) > 1 and x.std() > 0:
+            assert r.fresh_std == pytest.approx(x.std(ddof=1), rel=1e-3)
+            means = rng.choice(x, size=(20000, len(x)), replace=True).mean(axis=1)
+            lo, hi = np.quantile(means, [0.025, 0.975])
+            assert abs(r.fresh_ci_lo - lo) <= 0.2 * (hi - lo) + 1e-9 and abs(r.fresh_ci_hi - hi) <= 0.2 * (hi - lo) + 1e-9
+        assert r.censored == pytest.approx((~fresh["converged"]).mean())
+        row = cells.filter((pl.col("label") == r.algorithm) & (pl.col("x") == r.x) & (pl.col("x_dot") == r.x_dot))
+        assert row["best"].to_list() == [True] and row["fresh_n"].to_list() == [5]
+        assert row["fresh_mean"][0] == pytest.approx(r.fresh_mean)
+    assert cells.filter(~pl.col("best"))["fresh_n"].sum() == 0
+    q0 = t3.iloc[0]
+    if q0.fresh_std > 0:
+        p = _tost(q0.fresh_mean, q0.fresh_std, 5, q0.paper_mean, q0.paper_std, 10)
+        assert q0.tost_p_n10 == pytest.approx(p, rel=1e-6, abs=1e-12)
+    # DuckDB reads the flag too.
+    con = duckdb.connect()
+    n = con.execute(f"select count(*) from '{out / 'trials.parquet'}' where fresh").fetchone()[0]
+    assert n == 10
 
 
 def test_bootstrap_intervals_agree_with_numpy_on_a_fixture(qsweep_bin: Path, tmp_path: Path) -> None:

@@ -45,6 +45,9 @@ pub struct Fit {
     /// Rows equivalent to their reference at the pre-registered margin, for each assumed number
     /// of paper runs in [`crate::analysis::equivalence::PAPER_N`] (10, 100).
     pub equivalent: [usize; 2],
+    /// Rows judged on a fresh-seed estimate, and over those the geometric mean of fresh ÷
+    /// selection mean (above 1: the grid's choice flattered the row; `None` without such rows).
+    pub fresh: (usize, Option<f64>),
 }
 
 /// Verdict of one Table III row against its reference.
@@ -83,7 +86,7 @@ pub struct RowFit {
     pub experiment: String,
     /// The algorithm.
     pub algorithm: Algorithm,
-    /// Our best cell's mean.
+    /// Our best cell's mean (the fresh-seed estimate where there is one).
     pub mean: f64,
     /// Its std (none for a single trial).
     pub std: Option<f64>,
@@ -102,6 +105,11 @@ pub struct RowFit {
     /// The equivalence test (TOST) for each assumed number of paper runs (10, 100); `None`
     /// where undecidable.
     pub tost: [Option<Tost>; 2],
+    /// Whether `mean`, `std` and `n` are the fresh-seed estimate ([`crate::fresh`]) rather than
+    /// the selection estimate.
+    pub fresh: bool,
+    /// The selection estimate: the best cell's mean over the grid's seeds that chose it.
+    pub selection_mean: f64,
 }
 
 /// Every Table III row of `data` that has a reference value and a best cell, in report order.
@@ -112,7 +120,11 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
         for &alg in &e.exp.algorithms {
             let Some(r) = e.exp.reference.get(&alg) else { continue };
             let Some(c) = e.best_of(alg).map(|b| &e.cells[b.cell]) else { continue };
-            let Some(mean) = c.summary.mean else { continue };
+            // Judged on the fresh-seed estimate where the row has one (the winner's curse).
+            let est = c.estimate();
+            let Some(mean) = est.summary.mean else { continue };
+            let Some(selection_mean) = c.summary.mean else { continue };
+            let (std, n) = (est.summary.std, est.n());
             let cfg = &c.cell.config;
             let ours: Vec<u32> = resolution_columns(system, &cfg.repr.resolution)
                 .into_iter()
@@ -132,14 +144,16 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
                 experiment: e.exp.id.clone(),
                 algorithm: alg,
                 mean,
-                std: c.summary.std,
-                n: c.trials.len(),
+                std,
+                n,
                 ref_mean: r.mean,
                 ref_std: r.std,
-                verdict: verdict(mean, c.summary.std, c.trials.len(), r.mean, r.std),
+                verdict: verdict(mean, std, n, r.mean, r.std),
                 config_match: ours == theirs,
                 exp_algorithms: e.exp.algorithms.len(),
-                tost: against_paper(mean, c.summary.std, c.trials.len(), r.mean, r.std),
+                tost: against_paper(mean, std, n, r.mean, r.std),
+                fresh: est.fresh,
+                selection_mean,
             });
         }
     }
@@ -153,7 +167,11 @@ impl Fit {
         let rows: Vec<&RowFit> = rows.into_iter().collect();
         let mut f = Self::default();
         let mut logs = Vec::new();
+        let mut curse = Vec::new();
         for r in &rows {
+            if r.fresh && r.mean > 0.0 && r.selection_mean > 0.0 {
+                curse.push((r.mean / r.selection_mean).ln());
+            }
             f.rows += 1;
             match r.verdict {
                 Verdict::Replicates => f.replicating += 1,
@@ -175,9 +193,10 @@ impl Fit {
                     usize::from(rank(group.iter().map(|r| r.mean)) == rank(group.iter().map(|r| r.ref_mean)));
             }
         }
-        if !logs.is_empty() {
-            f.geo_mean = Some((logs.iter().sum::<f64>() / logs.len() as f64).exp());
-        }
+        let geo =
+            |logs: &[f64]| (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp());
+        f.geo_mean = geo(&logs);
+        f.fresh = (rows.iter().filter(|r| r.fresh).count(), geo(&curse));
         f
     }
 }
@@ -207,7 +226,8 @@ pub fn fit_order(fits: &[Fit]) -> Vec<usize> {
 
 /// The comparison table: one row per variant, in [`FIT_ORDER`].
 pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
-    let columns = vec![
+    let fresh = variants.iter().any(|(_, f)| f.fresh.0 > 0);
+    let mut columns = vec![
         Column::new("Rank", "rank", Align::Right),
         Column::new("Variant", "variant", Align::Left),
         Column::new("Title", "title", Align::Left),
@@ -222,6 +242,11 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
         Column::new("Equiv. n=100", "equivalent_n100", Align::Right),
         Column::new("Exploratory", "exploratory", Align::Left),
     ];
+    // Only pipelines with fresh seeds have these columns, so other comparisons keep their bytes.
+    if fresh {
+        columns.push(Column::new("Rows on fresh seeds", "fresh_rows", Align::Right));
+        columns.push(Column::new("Geo. mean fresh/selection", "fresh_over_selection", Align::Right));
+    }
     let fits: Vec<Fit> = variants.iter().map(|v| v.1).collect();
     // Declared readings first, then the exploratory ones, each in fit order.
     let (declared, exploratory): (Vec<usize>, Vec<usize>) =
@@ -233,28 +258,28 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
         .map(|(k, i)| {
             let (v, f) = &variants[i];
             let int = |n: usize| Value::Int(n as u64);
-            Row {
-                values: vec![
-                    int(k + 1),
-                    Value::Text(v.id.clone()),
-                    v.title.clone().map_or(Value::Missing, Value::Text),
-                    int(f.rows),
-                    int(f.replicating),
-                    int(f.within_2x),
-                    int(f.config_match),
-                    int(f.order_match),
-                    int(f.order_experiments),
-                    f.geo_mean.map_or(Value::Missing, |value| Value::Num {
-                        value,
-                        decimals: 3,
-                        signed: false,
-                    }),
-                    int(f.equivalent[0]),
-                    int(f.equivalent[1]),
-                    Value::Text(if v.exploratory { "yes" } else { "no" }.into()),
-                ],
-                highlight: k == 0,
+            let ratio = |v: Option<f64>| {
+                v.map_or(Value::Missing, |value| Value::Num { value, decimals: 3, signed: false })
+            };
+            let mut values = vec![
+                int(k + 1),
+                Value::Text(v.id.clone()),
+                v.title.clone().map_or(Value::Missing, Value::Text),
+                int(f.rows),
+                int(f.replicating),
+                int(f.within_2x),
+                int(f.config_match),
+                int(f.order_match),
+                int(f.order_experiments),
+                ratio(f.geo_mean),
+                int(f.equivalent[0]),
+                int(f.equivalent[1]),
+                Value::Text(if v.exploratory { "yes" } else { "no" }.into()),
+            ];
+            if fresh {
+                values.extend([int(f.fresh.0), ratio(f.fresh.1)]);
             }
+            Row { values, highlight: k == 0 }
         })
         .collect();
     let caption = format!(
@@ -266,5 +291,14 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)]) -> Table {
          {EQUIVALENCE_RULE} Exploratory readings (suggested by the data, not declared before they ran) \
          are ranked after the declared ones."
     );
+    let caption = if fresh {
+        format!(
+            "{caption} Where a row's best cell was re-run on fresh seeds, every verdict above uses that \
+             fresh estimate; Geo. mean fresh/selection: exp of the mean of ln(fresh ÷ selection mean) over \
+             those rows (above 1: the winner's curse)."
+        )
+    } else {
+        caption
+    };
     Table { title: "Variants".into(), caption, columns, rows }
 }

@@ -63,6 +63,14 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
     // Uncertainty last, so the earlier CSV fields keep their positions.
     let split = columns.len();
     columns.push(Column::new("95% CI", "ci_lo", Align::Right).fields(&["ci_lo", "ci_hi"]));
+    let fresh = data.plan.has_fresh();
+    if fresh {
+        columns.push(Column::new("Fresh", "fresh_mean", Align::Right).fields(&["fresh_mean", "fresh_std"]));
+        columns.push(Column::new("Fresh n", "fresh_n", Align::Right));
+        columns.push(
+            Column::new("Fresh 95% CI", "fresh_ci_lo", Align::Right).fields(&["fresh_ci_lo", "fresh_ci_hi"]),
+        );
+    }
     columns.push(Column::new("Censored", "censored", Align::Right));
     columns.push(Column::new("KM median", "km_median", Align::Right));
     if reference {
@@ -150,13 +158,32 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
                 Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
                 _ => Value::Missing,
             });
-            values.push(num(cell.and_then(|c| c.censored_fraction()), 2));
-            values.push(num(cell.and_then(|c| c.km_median()), 1));
+            if fresh {
+                let f = cell.and_then(|c| c.fresh_summary.as_ref().map(|s| (s, c.fresh.len())));
+                values.push(match f {
+                    Some((s, _)) => Value::MeanStd {
+                        mean: s.mean.expect("fresh trials are present"),
+                        std: s.std,
+                        decimals: 2,
+                        marked: false,
+                    },
+                    None => Value::Missing,
+                });
+                values.push(Value::Int(f.map_or(0, |(_, n)| n as u64)));
+                values.push(match f.map(|(s, _)| (s.ci_lo, s.ci_hi)) {
+                    Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
+                    _ => Value::Missing,
+                });
+            }
+            // The row is judged on the fresh-seed estimate where it has one.
+            let est = cell.map(|c| c.estimate());
+            values.push(num(est.and_then(|e| e.censored_fraction()), 2));
+            values.push(num(est.and_then(|e| e.km_median()), 1));
             if reference {
                 let r = exp.reference.get(&alg).filter(|r| r.mean > 0.0);
-                match (cell, r) {
-                    (Some(c), Some(r)) => {
-                        let s = &c.summary;
+                match (est, r) {
+                    (Some(est), Some(r)) => {
+                        let s = est.summary;
                         values.push(num(s.mean.map(|m| m / r.mean), 3));
                         values.push(match (s.ci_lo, s.ci_hi) {
                             (Some(lo), Some(hi)) => {
@@ -165,7 +192,7 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
                             _ => Value::Missing,
                         });
                         let mean = s.mean.expect("a best cell has trials");
-                        for t in against_paper(mean, s.std, c.trials.len(), r.mean, r.std) {
+                        for t in against_paper(mean, s.std, est.n(), r.mean, r.std) {
                             values.push(num(t.map(|t| t.p), 4));
                             values.push(t.map_or(Value::Missing, |t| {
                                 Value::Text(if t.equivalent { "yes" } else { "no" }.into())
@@ -191,6 +218,10 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
         caption.push_str(" Paper: the published value and configuration; Δ mean = ours − paper.");
     }
     let mut uncertainty = String::from("95% CI: bootstrap interval of the best cell's mean. ");
+    if fresh {
+        uncertainty.push_str(crate::fresh::FRESH_RULE);
+        uncertainty.push(' ');
+    }
     uncertainty.push_str(SURVIVAL_RULE);
     if reference {
         uncertainty.push(' ');
