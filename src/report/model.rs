@@ -221,7 +221,7 @@ impl<'a> ReportData<'a> {
                     .cells
                     .par_iter()
                     .map(|cell| {
-                        let cap = cell.config.limits.max_episodes;
+                        let limits = &cell.config.limits;
                         let trials: Vec<TrialData> = cell
                             .trials
                             .iter()
@@ -231,7 +231,7 @@ impl<'a> ReportData<'a> {
                                     outcome: o,
                                     seconds,
                                     cpu_seconds,
-                                    counted: episodes_counted(o, cap, exp.counting),
+                                    counted: episodes_counted(o, limits, exp.counting),
                                 })
                             })
                             .collect();
