@@ -84,10 +84,10 @@ fn best_of(e: &Experiment, algorithm: Algorithm, known: &HashMap<Key, Outcome>) 
     let cands: Vec<Candidate> = candidates(e, algorithm)
         .map(|i| {
             let cell = &e.cells[i];
-            let cap = cell.config.limits.max_episodes;
+            let limits = &cell.config.limits;
             let outcomes: Vec<&Outcome> = cell.trials.iter().filter_map(|t| known.get(&t.key)).collect();
             let values: Vec<f64> =
-                outcomes.iter().map(|o| f64::from(episodes_counted(o, cap, e.counting))).collect();
+                outcomes.iter().map(|o| f64::from(episodes_counted(o, limits, e.counting))).collect();
             Candidate {
                 index: i,
                 n: values.len(),

@@ -2,10 +2,13 @@
 //! which cell of a heatmap is best.
 //!
 //! Episodes counted: a converged trial counts its `episodes_to_goal` (or, under the exploratory
-//! `counting: failures`, the `episodes_to_goal − 1` failed episodes before it); a trial that never
-//! reached the goal is kept and counted at the episode cap `max_episodes` (right-censored), so
-//! failures raise a cell's mean instead of vanishing from it.
+//! `counting: failures`, the `episodes_to_goal − 1` failed episodes before it; under
+//! `counting: window-start` and Gym's solved rule, the window's first episode
+//! `episodes_to_goal − window + 1`); a trial that never reached the goal is kept and counted at
+//! the episode cap `max_episodes` (right-censored), so failures raise a cell's mean instead of
+//! vanishing from it.
 
+use crate::sim::config::Limits;
 use crate::sim::{Counting, Outcome};
 
 /// The Table III rule, as stated in every caption.
@@ -23,13 +26,17 @@ pub const CENSORING: &str = "Trials that never reached the goal are not dropped:
 episode cap (max_episodes), so those means are lower bounds. std is the sample standard deviation \
 (n − 1).";
 
-/// Episodes a trial contributes to its cell's statistics, under the episode cap `max_episodes`
-/// and the pipeline's `counting`.
-pub fn episodes_counted(outcome: &Outcome, max_episodes: u32, counting: Counting) -> u32 {
+/// Episodes a trial contributes to its cell's statistics, under its `limits` (the episode cap
+/// `max_episodes`, and the success criterion's window) and the pipeline's `counting`.
+pub fn episodes_counted(outcome: &Outcome, limits: &Limits, counting: Counting) -> u32 {
     match (outcome.converged, outcome.episodes_to_goal, counting) {
         (true, Some(e), Counting::Episodes) => e,
         (true, Some(e), Counting::Failures) => e.saturating_sub(1),
-        _ => max_episodes,
+        // The solved rule's goal episode ends a full window, so e ≥ window; window 1 otherwise.
+        (true, Some(e), Counting::WindowStart) => {
+            e.saturating_sub(limits.success.solved_window().unwrap_or(1) - 1)
+        }
+        _ => limits.max_episodes,
     }
 }
 
@@ -85,6 +92,43 @@ pub fn best_cell(candidates: impl IntoIterator<Item = Candidate>) -> Option<Best
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_counting_counts_a_converged_trial_its_way_and_a_failed_one_at_the_cap() {
+        use crate::sim::config::{Success, Truncation};
+        use crate::sim::StopReason;
+        let outcome = |goal: Option<u32>| Outcome {
+            converged: goal.is_some(),
+            episodes_to_goal: goal,
+            episodes: goal.unwrap_or(500),
+            total_steps: 0,
+            stop: if goal.is_some() { StopReason::Goal } else { StopReason::MaxEpisodes },
+            failure: None,
+            episode_lengths: Vec::new(),
+        };
+        let limits = |success| Limits {
+            success,
+            max_episodes: 500,
+            max_total_steps: 1,
+            truncation: Truncation::Bootstrap,
+        };
+        let solved = limits(Success::Solved { window: 100, mean_length: 195.0, episode_steps: 200 });
+        let balance = limits(Success::Balance { steps: 200 });
+        let reach = limits(Success::Reach { within: 200, streak: 3, max_episode_steps: 200 });
+        let count = |goal, l: &Limits, c| episodes_counted(&outcome(goal), l, c);
+        // Solved at episode 130: the window is episodes 31..=130.
+        assert_eq!(count(Some(130), &solved, Counting::Episodes), 130);
+        assert_eq!(count(Some(130), &solved, Counting::Failures), 129);
+        assert_eq!(count(Some(130), &solved, Counting::WindowStart), 31);
+        assert_eq!(count(Some(100), &solved, Counting::WindowStart), 1, "the earliest possible");
+        // Any other criterion has a window of 1 (a streak is not a solved window).
+        assert_eq!(count(Some(130), &balance, Counting::WindowStart), 130);
+        assert_eq!(count(Some(130), &reach, Counting::WindowStart), 130);
+        for c in [Counting::Episodes, Counting::Failures, Counting::WindowStart] {
+            assert_eq!(count(None, &solved, c), 500);
+            assert_eq!(count(None, &balance, c), 500);
+        }
+    }
 
     fn c(index: usize, n: usize, successes: usize, mean: Option<f64>) -> Candidate {
         Candidate { index, n, successes, mean }

@@ -85,6 +85,10 @@ pub fn with_budget(mut cfg: TrialConfig, steps: u64) -> TrialConfig {
         Success::Balance { .. } => Success::Balance { steps },
         // Reaching the goal in one step is impossible and an endless streak never completes.
         Success::Reach { .. } => Success::Reach { within: 1, streak: u32::MAX, max_episode_steps: steps },
+        // A window of u32::MAX episodes is never full.
+        Success::Solved { mean_length, .. } => {
+            Success::Solved { window: u32::MAX, mean_length, episode_steps: steps }
+        }
     };
     cfg
 }

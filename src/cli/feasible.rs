@@ -6,7 +6,7 @@ use super::simulate::env_params;
 use crate::error::user_error;
 use crate::formats::FeasibleReport as Report;
 use crate::sim::config::TrialConfig;
-use crate::sim::env::{EnvParams, StartKind, State, SystemKind};
+use crate::sim::env::{BeamControl, EnvParams, StartKind, State, SystemKind};
 use crate::sim::feasible::{first_start, policy_cells, search};
 use crate::sim::repr::{Binning, ReprKind};
 use crate::sim::Algorithm;
@@ -33,6 +33,10 @@ pub struct FeasibleArgs {
     /// Override a physical parameter, e.g. --param gravity=9.8 (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = args::param)]
     pub params: Vec<(String, f64)>,
+    /// Ball-Beam only: what an action sets, the beam angle or its rate (the parameter `control`)
+    /// [default: angle].
+    #[arg(long, value_enum)]
+    pub control: Option<BeamControl>,
     /// Bin range of one variable, e.g. --range x_dot=-3,3 (repeatable) [default: the pipeline defaults].
     #[arg(long = "range", value_name = "VAR=LO,HI", allow_hyphen_values = true)]
     pub ranges: Vec<String>,
@@ -105,7 +109,7 @@ pub fn run(a: FeasibleArgs) -> anyhow::Result<u8> {
     };
     let actions = a.actions.unwrap_or(system.default_actions());
     let mut c = TrialConfig::paper(system, ReprKind::Crisp, Algorithm::Q0, resolution, actions);
-    c.env = env_params(system, &a.params)?;
+    c.env = env_params(system, &a.params, a.control)?;
     for r in &a.ranges {
         let (j, lohi) = parse_range(system, r)?;
         c.repr.ranges[j] = lohi;

@@ -37,17 +37,24 @@ impl Resolve for MountainCarM {
         let Success::Reach { within, streak, max_episode_steps } = default_success(Self::SYSTEM) else {
             unreachable!("mountain car is goal-reaching")
         };
-        let s = s.cloned().unwrap_or(ReachSpec { within: None, streak: None, max_episode_steps: None });
+        let s = s.cloned().unwrap_or_default();
+        let max_episode_steps = s.max_episode_steps.unwrap_or(max_episode_steps);
+        if let (Some(window), Some(mean_length)) = (s.window, s.mean_length) {
+            return Success::Solved { window, mean_length: mean_length.0, episode_steps: max_episode_steps };
+        }
         Success::Reach {
             within: s.within.unwrap_or(within),
             streak: s.streak.map_or(streak, |v| v.min(u64::from(u32::MAX)) as u32),
-            max_episode_steps: s.max_episode_steps.unwrap_or(max_episode_steps),
+            max_episode_steps,
         }
     }
 }
 
 fn balance(system: SystemKind, s: Option<&BalanceSpec>) -> Success {
     match s {
+        Some(BalanceSpec { steps, window: Some(window), mean_length: Some(mean_length) }) => {
+            Success::Solved { window: *window, mean_length: mean_length.0, episode_steps: *steps }
+        }
         Some(b) => Success::Balance { steps: b.steps },
         None => default_success(system),
     }

@@ -182,11 +182,11 @@ pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> an
                     continue;
                 }
                 let cell = &e.cells[i];
-                let (cap, counting) = (cell.config.limits.max_episodes, e.counting);
+                let (limits, counting) = (&cell.config.limits, e.counting);
                 let outcomes: Option<Vec<&Outcome>> = cell.trials.iter().map(|t| known.get(&t.key)).collect();
                 match outcomes {
                     Some(os) => samples.push(Some(Sample {
-                        values: os.iter().map(|o| f64::from(episodes_counted(o, cap, counting))).collect(),
+                        values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
                         successes: os.iter().filter(|o| o.converged).count(),
                     })),
                     None => {

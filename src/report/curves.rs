@@ -117,6 +117,9 @@ pub fn goal(success: &Success) -> (f64, String) {
                 if *streak == 1 { "an episode".to_string() } else { format!("{streak} episodes in a row") };
             (*within as f64, format!("goal: {n} within {within} steps"))
         }
+        Success::Solved { window, mean_length, .. } => {
+            (*mean_length, format!("goal: a mean of {mean_length} steps over {window} episodes"))
+        }
     }
 }
 

@@ -253,7 +253,7 @@ impl<'a> ReportData<'a> {
                     .cells
                     .par_iter()
                     .map(|cell| {
-                        let cap = cell.config.limits.max_episodes;
+                        let limits = &cell.config.limits;
                         let present = |planned: &'a [PlannedTrial]| -> Vec<TrialData<'a>> {
                             planned
                                 .iter()
@@ -263,7 +263,7 @@ impl<'a> ReportData<'a> {
                                         outcome: o,
                                         seconds,
                                         cpu_seconds,
-                                        counted: episodes_counted(o, cap, exp.counting),
+                                        counted: episodes_counted(o, limits, exp.counting),
                                     })
                                 })
                                 .collect()

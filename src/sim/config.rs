@@ -1,7 +1,7 @@
 //! The fully resolved configuration of one trial: every value the simulation reads, nothing
 //! implicit. Pipelines expand to these; the cache key hashes their canonical JSON encoding.
 
-use super::env::{EnvParams, StartKind, SystemKind, TaskKind};
+use super::env::{BeamControl, EnvParams, StartKind, SystemKind, TaskKind, BALL_BEAM_DEFAULT_RATE_MAX};
 use super::repr::{Binning, ReprKind};
 use super::rules;
 use serde::{Deserialize, Serialize};
@@ -129,6 +129,30 @@ pub enum Success {
         /// Episodes still short of the goal after this many steps are cut off.
         max_episode_steps: u64,
     },
+    /// Gym's "solved" rule, either task kind ([`super::solved`]): the goal is the first episode
+    /// E ≥ `window` whose last `window` episodes have a mean length ≥ `mean_length` (survival
+    /// tasks: CartPole's return is the episode length) or ≤ `mean_length` (goal tasks:
+    /// MountainCar's return is −length, a cut-off episode counting at its cut length). Episodes
+    /// are cut at `episode_steps`, an ordinary truncated episode: reaching the cut does not end
+    /// the trial.
+    Solved {
+        /// Consecutive episodes the mean is taken over (Gym: 100).
+        window: u32,
+        /// The threshold on the window's mean episode length (CartPole-v0: 195; MountainCar-v0: 110).
+        mean_length: f64,
+        /// Episodes are cut off after this many steps (CartPole-v0 and MountainCar-v0: 200).
+        episode_steps: u64,
+    },
+}
+
+impl Success {
+    /// The solved rule's window, `None` under any other criterion.
+    pub fn solved_window(&self) -> Option<u32> {
+        match self {
+            Self::Solved { window, .. } => Some(*window),
+            _ => None,
+        }
+    }
 }
 
 /// What the learner does with the last transition of an episode cut off by the episode step limit
@@ -171,6 +195,7 @@ impl Limits {
         match self.success {
             Success::Balance { steps } => steps,
             Success::Reach { max_episode_steps, .. } => max_episode_steps,
+            Success::Solved { episode_steps, .. } => episode_steps,
         }
     }
 }
@@ -303,14 +328,19 @@ impl TrialConfig {
 
     /// Reset settings that cannot affect the outcome to fixed values, so they never change a key:
     /// Q(0) has no traces, crisp bins have no width, fuzzy sets have no bin edges, a survival
-    /// task's episode cut is its goal (the trial ends right after, so how the cut step is learned
-    /// from never matters), and Ball-Beam has no Gymnasium start distribution.
+    /// task's episode cut under `Balance` is its goal (the trial ends right after, so how the cut
+    /// step is learned from never matters; under `Solved` it is an ordinary cut and does matter),
+    /// Ball-Beam has no Gymnasium start distribution, and its `rate_max` is unused under angle
+    /// control.
     pub fn normalize(&mut self) {
-        if TaskKind::of(self.system()) == TaskKind::Survival {
+        if matches!(self.limits.success, Success::Balance { .. }) {
             self.limits.truncation = Truncation::Bootstrap;
         }
-        if self.system() == SystemKind::BallBeam {
+        if let EnvParams::BallBeam(p) = &mut self.env {
             self.start = StartKind::Fixed;
+            if p.control == BeamControl::Angle {
+                p.rate_max = BALL_BEAM_DEFAULT_RATE_MAX;
+            }
         }
         if self.learner.algorithm == Algorithm::Q0 {
             self.learner.lambda = 0.0;
@@ -385,6 +415,13 @@ impl TrialConfig {
                 rules::at_least_one(*within).map_err(|e| format!("success.within: {e}"))?;
                 rules::at_least_one(u64::from(*streak)).map_err(|e| format!("success.streak: {e}"))?;
                 rules::steps(*max_episode_steps).map_err(|e| format!("success.max_episode_steps: {e}"))?;
+            }
+            (Success::Solved { window, mean_length, episode_steps }, task) => {
+                rules::at_least_one(u64::from(*window)).map_err(|e| format!("success.window: {e}"))?;
+                rules::POSITIVE.check(*mean_length).map_err(|e| format!("success.mean_length: {e}"))?;
+                let steps_name =
+                    if task == TaskKind::Survival { "success.steps" } else { "success.max_episode_steps" };
+                rules::steps(*episode_steps).map_err(|e| format!("{steps_name}: {e}"))?;
             }
             (_, TaskKind::Survival) => {
                 return Err(format!("success: {system} is a survival task; use `{}`", rules::BALANCE_SYNTAX))

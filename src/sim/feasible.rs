@@ -9,6 +9,9 @@
 //! episode, so the longest leaf episode is the longest over all policies. It stops early when a
 //! branch survives `max_steps` (a policy reaches the survival goal), and after `max_nodes`
 //! assignments (the answer is then a lower bound).
+//!
+//! A policy sees only the observed state (the cell), but the search follows the whole one: under
+//! Ball-Beam's rate control the beam angle is hidden state, saved and restored at branch points.
 
 use super::actions::action_set;
 use super::config::TrialConfig;
@@ -183,7 +186,9 @@ fn rollout<E: Environment>(
     max_steps: u64,
     steps: &mut u64,
 ) -> End {
-    env.set_state(&state[..E::DIM]);
+    // The whole padded state: a hidden variable (Ball-Beam's rate-controlled beam angle) is part
+    // of where a branch point's trajectory continues from.
+    env.set_state(state);
     loop {
         if len >= max_steps {
             return End::Survived;
@@ -286,6 +291,33 @@ mod tests {
         c.repr.ranges[3] = [-2.4, 1.6];
         let f = search(&c, &ZERO, 100_000, u64::MAX).unwrap();
         assert_eq!((f.best, f.survives, f.complete), (12_438, false, true), "{f:?}");
+    }
+
+    #[test]
+    fn under_rate_control_the_search_agrees_with_brute_force_over_every_policy() {
+        // ballbeam-gym's discrete mode over 2 × 2 cells and two rates: the beam angle is hidden
+        // state the search must carry through its branch points. All 2^4 policies by brute force.
+        use crate::sim::env::BeamControl;
+        let mut c = TrialConfig::paper(SystemKind::BallBeam, ReprKind::Crisp, Algorithm::Q0, vec![2, 2], 2);
+        let EnvParams::BallBeam(p) = &mut c.env else { unreachable!() };
+        (p.control, p.tau, p.beam_length, p.angle_max) = (BeamControl::Rate, 0.1, 1.0, 0.2);
+        let mut bests = Vec::new();
+        for start in [ZERO, [0.1, -0.05, 0.0, 0.0], [0.3, 0.4, 0.0, 0.0], [0.2, 0.6, 0.0, 0.0]] {
+            let brute = (0u32..16)
+                .map(|bits| {
+                    let policy: Vec<u32> = (0..4).map(|cell| (bits >> cell) & 1).collect();
+                    episode_length(&c, &policy, &start, 5_000)
+                })
+                .max()
+                .unwrap();
+            let f = search(&c, &start, 5_000, u64::MAX).unwrap();
+            assert_eq!(f.best, brute, "{f:?}");
+            let policy: Vec<u32> = f.policy.iter().map(|a| a.unwrap_or(0)).collect();
+            assert_eq!(episode_length(&c, &policy, &start, 5_000), brute, "the reported policy achieves it");
+            bests.push(brute);
+        }
+        // Some starts are saved by some policy, others by none (the search is exhaustive there).
+        assert_eq!(bests, [5_000, 5_000, 22, 24]);
     }
 
     #[test]

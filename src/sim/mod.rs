@@ -17,6 +17,7 @@ pub mod math;
 pub mod repr;
 pub mod rng;
 pub mod rules;
+pub mod solved;
 pub mod trial;
 
 pub use config::{Algorithm, TrialConfig};
@@ -24,6 +25,8 @@ pub use trial::{run_trial, Counting, Outcome, StopReason};
 
 #[cfg(test)]
 mod pinned_tests;
+#[cfg(test)]
+mod readings_tests;
 #[cfg(test)]
 mod reference_tests;
 #[cfg(test)]

@@ -46,6 +46,7 @@ fn cases() -> Vec<(String, TrialConfig)> {
                         Success::Reach { .. } => {
                             (25, Success::Reach { within: 400, streak: 2, max_episode_steps: 6_000 })
                         }
+                        Success::Solved { .. } => unreachable!("the paper's criteria"),
                     };
                     c
                 };
@@ -88,6 +89,7 @@ fn cases() -> Vec<(String, TrialConfig)> {
                     Success::Reach { .. } => {
                         (12, Success::Reach { within: 400, streak: 2, max_episode_steps: 4_000 })
                     }
+                    Success::Solved { .. } => unreachable!("the paper's criteria"),
                 };
                 c
             };

@@ -119,6 +119,10 @@ pub fn seed_count(n: u64) -> Result<u64, String> {
 pub const BALANCE_SYNTAX: &str = "success: { steps: N }";
 /// The goal-reaching form, for messages.
 pub const REACH_SYNTAX: &str = "success: { within: N, streak: K, max_episode_steps: M }";
+/// Gym's solved rule on a survival task (CartPole-v0), for messages.
+pub const SOLVED_BALANCE_SYNTAX: &str = "success: { steps: 200, window: 100, mean_length: 195 }";
+/// Gym's solved rule on a goal-reaching task (MountainCar-v0), for messages.
+pub const SOLVED_REACH_SYNTAX: &str = "success: { max_episode_steps: 200, window: 100, mean_length: 110 }";
 
 #[cfg(test)]
 mod tests {

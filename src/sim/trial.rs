@@ -1,4 +1,5 @@
-//! One trial: a configuration and a seed, run episode after episode until the learning goal or a
+//! One trial: a configuration and a seed, run episode after episode until the learning goal (one
+//! long enough episode, a streak of quick ones, or Gym's solved rule, [`super::solved`]) or a
 //! cap. Everything random comes from one ChaCha stream seeded by the seed, so a trial's outcome is a
 //! pure function of its inputs, on any thread.
 
@@ -8,6 +9,7 @@ use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartK
 use super::learner::Learner;
 use super::repr::{Crisp, Encode, Fuzzy, ReprKind};
 use super::rng::TrialRng;
+use super::solved::SolvedWindow;
 use serde::{Deserialize, Serialize};
 
 /// Why a trial stopped.
@@ -46,6 +48,9 @@ pub enum Counting {
     Episodes,
     /// The failed episodes before it (`episodes_to_goal − 1`): an exploratory reading.
     Failures,
+    /// Under Gym's solved rule, the window's first episode (`episodes_to_goal − window + 1`), as
+    /// "solved after N episodes" is sometimes read; like `episodes` under any other criterion.
+    WindowStart,
 }
 
 /// What a trial produced.
@@ -154,6 +159,10 @@ fn episodes<E: Environment, R: Encode>(
     let mut lengths = Vec::new();
     let mut total_steps = 0u64;
     let mut streak = 0u32;
+    let mut window = match cfg.limits.success {
+        Success::Solved { window, mean_length, .. } => Some(SolvedWindow::new(window, mean_length, E::TASK)),
+        _ => None,
+    };
 
     let finish = |stop, lengths: Vec<u32>, total_steps, failure| Outcome {
         converged: stop == StopReason::Goal,
@@ -216,6 +225,8 @@ fn episodes<E: Environment, R: Encode>(
                 streak = if terminal && len <= *within { streak + 1 } else { 0 };
                 streak >= *need
             }
+            // A cut episode is an ordinary one here: only the window's mean length counts.
+            (Success::Solved { .. }, _) => window.as_mut().expect("built for Solved").push(&lengths),
             _ => unreachable!("validated: success criterion matches the task kind"),
         };
         if success {

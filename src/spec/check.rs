@@ -1,5 +1,6 @@
-//! The rules that need the whole pipeline: races against the seeds and the experiments, and the
-//! exploratory block against the references.
+//! The rules that need the whole pipeline: races against the seeds and the experiments, the
+//! exploratory block against the references, and the rules across a success section's fields
+//! (checked on the whole section, so a variant may set its fields one `set` entry at a time).
 
 use super::experiment::Target;
 use super::pipeline::PipelineSpec;
@@ -225,8 +226,34 @@ fn race_blocks(spec: &PipelineSpec) -> Vec<RaceSpec> {
     out
 }
 
-/// The rules that need the whole pipeline: races, fresh seeds and the exploratory block.
+/// Every success section (a system's and its experiments') against the rules across its fields
+/// (`SystemMarker::check_success`: the solved rule's `window` and `mean_length` come together).
+pub fn check_successes(spec: &PipelineSpec) -> Result<(), Problem> {
+    fn of<M: SystemMarker>(sys: Option<&SystemSpec<M>>, name: &str) -> Result<(), Problem> {
+        let Some(sys) = sys else { return Ok(()) };
+        let at =
+            |path: &[&str], message| Problem { path: path.iter().map(|s| s.to_string()).collect(), message };
+        if let Some(s) = &sys.success {
+            M::check_success(s).map_err(|m| at(&["systems", name, "success"], m))?;
+        }
+        for (i, e) in sys.experiments.iter().enumerate() {
+            if let Some(s) = &e.success {
+                let i = i.to_string();
+                M::check_success(s).map_err(|m| at(&["systems", name, "experiments", &i, "success"], m))?;
+            }
+        }
+        Ok(())
+    }
+    let s = &spec.systems;
+    of(s.ball_beam.as_ref(), "ball-beam")?;
+    of(s.cart_pole.as_ref(), "cart-pole")?;
+    of(s.mountain_car.as_ref(), "mountain-car")
+}
+
+/// The rules that need the whole pipeline: success sections, races, fresh seeds and the
+/// exploratory block.
 pub(crate) fn check_whole(spec: &PipelineSpec) -> Result<(), Problem> {
+    check_successes(spec)?;
     check_races(spec)?;
     check_fresh(spec)?;
     check_exploratory(spec)

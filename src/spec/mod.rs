@@ -10,7 +10,8 @@
 //!   cart-pole:
 //!     params: { gravity: 9.81 }   # physical parameters (defaults: the paper's)
 //!     ranges: { x_dot: [-2, 2] }  # bin range / first and last fuzzy centre per variable
-//!     success: { steps: 100000 }  # survival: steps; mountain-car: {within, streak, max_episode_steps}
+//!     success: { steps: 100000 }  # survival: steps; mountain-car: {within, streak, max_episode_steps};
+//!                                 # either, with {window, mean_length}: Gym's solved rule
 //!     crisp: { epsilon: 0.01 }    # settings for crisp experiments of this system (Table II)
 //!     fuzzy: { width: 0.4247 }    # settings for fuzzy experiments of this system
 //!     experiments:

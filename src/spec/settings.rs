@@ -22,6 +22,8 @@ pub trait SystemMarker: fmt::Debug + Clone + 'static {
     type Success: DeserializeOwned + Serialize + Clone + fmt::Debug;
     /// The parameters as the simulation's tagged form.
     fn env(p: &Self::Params) -> EnvParams;
+    /// The success section's rules across its fields (`Err`: what is wrong and the fix).
+    fn check_success(s: &Self::Success) -> Result<(), String>;
 }
 
 /// Physical parameters, validated together inside deserialisation; an error names the parameter.
@@ -52,6 +54,9 @@ impl SystemMarker for BallBeamM {
     fn env(p: &BallBeamParams) -> EnvParams {
         EnvParams::BallBeam(p.clone())
     }
+    fn check_success(s: &Self::Success) -> Result<(), String> {
+        s.check()
+    }
 }
 
 impl SystemMarker for CartPoleM {
@@ -60,6 +65,9 @@ impl SystemMarker for CartPoleM {
     type Success = BalanceSpec;
     fn env(p: &CartPoleParams) -> EnvParams {
         EnvParams::CartPole(p.clone())
+    }
+    fn check_success(s: &Self::Success) -> Result<(), String> {
+        s.check()
     }
 }
 
@@ -70,22 +78,43 @@ impl SystemMarker for MountainCarM {
     fn env(p: &MountainCarParams) -> EnvParams {
         EnvParams::MountainCar(p.clone())
     }
+    fn check_success(s: &Self::Success) -> Result<(), String> {
+        s.check()
+    }
 }
 
-/// Survival success criterion.
+/// Survival success criterion: `steps` alone (one episode that long without failure), or with
+/// `window` and `mean_length` Gym's solved rule, episodes cut at `steps` (`sim::solved`). Each
+/// value is range-checked at its own key; the rule across them is [`BalanceSpec::check`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BalanceSpec {
-    /// Steps without failure that reach the learning goal.
+    /// Steps without failure that reach the learning goal (under the solved rule: the episode cut).
     #[serde(deserialize_with = "step_count")]
     pub steps: u64,
+    /// The solved rule's window of consecutive episodes (given with `mean_length`).
+    #[serde(default, deserialize_with = "opt_at_least_one_u32", skip_serializing_if = "Option::is_none")]
+    pub window: Option<u32>,
+    /// The solved rule's threshold: the window's mean episode length must reach it (≥).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_length: Option<Positive>,
 }
 
-/// Goal-reaching success criterion; unset fields keep their defaults.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+impl BalanceSpec {
+    /// The rule across the fields: the solved rule's two values come together.
+    pub fn check(&self) -> Result<(), String> {
+        solved_pair(self.window, self.mean_length, rules::SOLVED_BALANCE_SYNTAX)
+    }
+}
+
+/// Goal-reaching success criterion; unset fields keep their defaults. With `window` and
+/// `mean_length` it is Gym's solved rule instead of `within`/`streak`, episodes cut at
+/// `max_episode_steps`. Each value is range-checked at its own key; the rule across them is
+/// [`ReachSpec::check`].
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReachSpec {
-    /// An episode reaching the goal within this many steps is a success.
+    /// An episode reaching the goal within this many steps is a success (unused by the solved rule).
     #[serde(default, deserialize_with = "opt_at_least_one_u64")]
     pub within: Option<u64>,
     /// Consecutive successful episodes needed.
@@ -94,6 +123,39 @@ pub struct ReachSpec {
     /// Episodes are cut off after this many steps.
     #[serde(default, deserialize_with = "opt_step_count")]
     pub max_episode_steps: Option<u64>,
+    /// The solved rule's window of consecutive episodes (given with `mean_length`).
+    #[serde(default, deserialize_with = "opt_at_least_one_u32", skip_serializing_if = "Option::is_none")]
+    pub window: Option<u32>,
+    /// The solved rule's threshold: the window's mean episode length must reach it (≤).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_length: Option<Positive>,
+}
+
+impl ReachSpec {
+    /// The rules across the fields: the solved rule's two values come together, and replace the
+    /// streak rule rather than join it.
+    pub fn check(&self) -> Result<(), String> {
+        solved_pair(self.window, self.mean_length, rules::SOLVED_REACH_SYNTAX)?;
+        if self.window.is_some() && self.streak.is_some() {
+            return Err("`streak` and `window` are two different goals (`streak` episodes in a row \
+                        within `within` steps, or Gym's solved rule over `window` episodes); remove one"
+                .into());
+        }
+        Ok(())
+    }
+}
+
+/// The solved rule's two values come together: `Err` says which is missing and how to write it.
+fn solved_pair(window: Option<u32>, mean_length: Option<Positive>, syntax: &str) -> Result<(), String> {
+    let (given, missing) = match (window, mean_length) {
+        (Some(_), None) => ("window", "mean_length"),
+        (None, Some(_)) => ("mean_length", "window"),
+        _ => return Ok(()),
+    };
+    Err(format!(
+        "`{given}` needs `{missing}`: Gym's solved rule takes both (the mean episode length over \
+         `window` episodes must reach `mean_length`), e.g. `{syntax}`; or give neither"
+    ))
 }
 
 /// Learner, representation and cap settings; every field optional so levels can be layered:

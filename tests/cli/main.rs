@@ -16,6 +16,7 @@ mod mutations;
 mod no_overwrite;
 mod pipeline;
 mod race;
+mod readings;
 mod report_files;
 mod report_guard;
 mod schemas;

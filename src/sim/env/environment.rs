@@ -6,7 +6,7 @@ use crate::sim::rng::TrialRng;
 /// Largest number of state variables of any system (Cart-Pole's four).
 pub const MAX_DIM: usize = 4;
 
-/// A state vector, padded with zeros beyond the system's dimension.
+/// A state vector, padded beyond the system's dimension (with zeros, or a hidden variable).
 pub type State = [f64; MAX_DIM];
 
 /// What one step of a system returns besides the new state.
@@ -41,11 +41,12 @@ pub trait Environment {
         let _ = rng;
         self.reset();
     }
-    /// Overwrite the current state (first `DIM` entries are used).
+    /// Overwrite the current state: the first `DIM` entries, and a hidden entry beyond them where
+    /// the system has one (Ball-Beam's beam angle under rate control; 0 when `state` is shorter).
     fn set_state(&mut self, state: &[f64]);
     /// The current state.
     fn state(&self) -> &State;
-    /// Advance one time step under the action value (force, tilt angle or throttle).
+    /// Advance one time step under the action value (force, tilt angle or rate, or throttle).
     fn step(&mut self, action: f64) -> Transition;
 }
 

@@ -2,14 +2,15 @@
 //!
 //! Each system is a plain struct of named physical parameters (defaults are the paper's values) plus
 //! its current state. States are fixed-size arrays padded to [`MAX_DIM`] so the per-step loop never
-//! allocates; only the first [`Environment::DIM`] entries are meaningful.
+//! allocates; only the first [`Environment::DIM`] entries are observed (the representation sees
+//! them). A system may keep hidden state in the padding: Ball-Beam's beam angle under rate control.
 
 mod ball_beam;
 mod cart_pole;
 mod environment;
 mod mountain_car;
 
-pub use ball_beam::{BallBeam, BallBeamParams};
+pub use ball_beam::{BallBeam, BallBeamParams, BeamControl, DEFAULT_RATE_MAX as BALL_BEAM_DEFAULT_RATE_MAX};
 pub use cart_pole::{CartPole, CartPoleParams, GYM_START as CART_POLE_GYM_START};
 pub use environment::{Environment, State, TaskKind, Transition, MAX_DIM};
 pub use mountain_car::{MountainCar, MountainCarParams, GYM_START_X as MOUNTAIN_CAR_GYM_START_X};
@@ -144,10 +145,11 @@ impl EnvParams {
         }
     }
 
-    /// The symmetric action bounds of eq. (22): A_n spans `[-max, max]`.
+    /// The symmetric action bounds of eq. (22): A_n spans `[-max, max]` (Ball-Beam: its angle, or
+    /// its rate under `control: rate`).
     pub fn action_max(&self) -> f64 {
         match self {
-            Self::BallBeam(p) => p.angle_max,
+            Self::BallBeam(p) => p.action_max(),
             Self::CartPole(p) => p.force,
             Self::MountainCar(p) => p.action_max,
         }
@@ -202,7 +204,7 @@ impl EnvParams {
         type Fields = Vec<(&'static str, f64)>;
         let (positive, finite): (Fields, Fields) = match self {
             Self::BallBeam(p) => (
-                vec![("tau", p.tau), ("beam_length", p.beam_length)],
+                vec![("tau", p.tau), ("beam_length", p.beam_length), ("rate_max", p.rate_max)],
                 vec![
                     ("gravity", p.gravity),
                     ("angle_max", p.angle_max),
