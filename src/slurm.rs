@@ -54,7 +54,8 @@ pub struct Submission {
     pub log_dir: PathBuf,
     /// Further sbatch options for both jobs.
     pub sbatch_args: Vec<String>,
-    /// Job arrays to submit one after another: 1, or a race's most rounds.
+    /// Job arrays to submit one after another: 1, or the plan's most stages (a race's rounds,
+    /// then the fresh seeds: `Plan::stages_max`).
     pub rounds: u32,
 }
 
@@ -128,9 +129,9 @@ impl Submission {
         );
         sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
         writeln!(s)?;
-        // A race: one array per round, each starting when the one before has succeeded, since a
-        // round's trials are planned from the outcomes of the rounds before. Each task runs its
-        // shard of the first round whose trials are missing (nothing once the race is over).
+        // A staged plan (a race, fresh seeds): one array per stage, each starting when the one
+        // before has ended, since a stage's trials are planned from the outcomes of the stages
+        // before. Each task runs its shard of the first stage whose trials are missing.
         for round in 2..=self.rounds {
             let mut opts = opts.clone();
             opts[0] = format!("--job-name={}", quote(&format!("{}-round{round}", self.job_name)));
@@ -138,7 +139,7 @@ impl Submission {
             // after it; they plan from what is stored and run whatever is missing.
             opts.insert(1, "--dependency=afterany:\"$array_job\"".to_string());
             opts.insert(2, "--kill-on-invalid-dep=yes".to_string());
-            writeln!(s, "# Race round {round} of at most {}.", self.rounds)?;
+            writeln!(s, "# Stage {round} of at most {} (a race round, or the fresh seeds).", self.rounds)?;
             sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
             writeln!(s)?;
         }
@@ -160,7 +161,7 @@ impl Submission {
         if self.rounds > 1 {
             writeln!(
                 s,
-                "echo \"submitted {} chained array jobs of {n} tasks, one per race round (the last is $array_job), and report job $report_job (starts when all succeed)\"",
+                "echo \"submitted {} chained array jobs of {n} tasks, one per stage (race rounds, fresh seeds; the last is $array_job), and report job $report_job (starts when all succeed)\"",
                 self.rounds
             )?;
         } else {

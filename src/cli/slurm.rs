@@ -93,7 +93,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         job_name: a.job_name.unwrap_or_else(|| format!("qsweep-{}", plan.name)),
         log_dir: abs(&a.log_dir)?,
         sbatch_args: a.sbatch_arg,
-        rounds: plan.race_rounds_max(),
+        rounds: plan.stages_max(),
         workdir,
     };
     let script = submission.render()?;
@@ -120,8 +120,9 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     );
     if submission.rounds > 1 {
         eprintln!(
-            "race: up to {} rounds, one job array each, each after the one before (afterany); the counts above \
-             are the first round's (each later round is planned from the outcomes of the rounds before)",
+            "staged plan: up to {} stages (race rounds, fresh seeds), one job array each, each after the one \
+             before (afterany); the counts above are the first stage's (each later one is planned from the \
+             outcomes of the stages before)",
             submission.rounds
         );
     }

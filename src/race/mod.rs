@@ -90,6 +90,14 @@ impl Plan {
     }
 }
 
+impl Plan {
+    /// The most stages the plan can take, each planned from the outcomes of those before: a
+    /// race's rounds ([`Plan::race_rounds_max`]), then one more for the fresh seeds.
+    pub fn stages_max(&self) -> u32 {
+        self.race_rounds_max() + u32::from(self.has_fresh())
+    }
+}
+
 fn rounds_max(first: u32, batch: u32, max_seeds: u32) -> u32 {
     1 + max_seeds.saturating_sub(first).div_ceil(batch)
 }

@@ -226,7 +226,9 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         .map(|(_, c, _)| {
             let s = &c.cell.config.limits.success;
             let (v, text) = goal(s);
-            (v, text, matches!(s, Success::Reach { .. }))
+            let reaching = crate::sim::env::TaskKind::of(c.cell.config.system())
+                == crate::sim::env::TaskKind::GoalReaching;
+            (v, text, reaching)
         })
         .collect();
     goals.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -47,7 +47,7 @@
 //! | `converged` | bool | the learning goal was reached |
 //! | `episodes_to_goal` | uint32, null | episodes up to and including the goal; null if never reached |
 //! | `episodes` | uint32 | episodes run |
-//! | `episodes_counted` | uint32 | what enters the cell's statistics: `episodes_to_goal`, or `max_episodes` if the goal was never reached |
+//! | `episodes_counted` | uint32 | what enters the cell's statistics: `episodes_to_goal` (with `counting: failures`, one less; with `counting: window-start` under the solved rule, the window's first episode, `episodes_to_goal − window + 1`), or `max_episodes` if the goal was never reached |
 //! | `total_steps` | uint64 | steps over all episodes |
 //! | `stop` | utf8 | `goal`, `max-episodes`, `max-total-steps` or `diverged` |
 //! | `failure` | utf8, null | what went wrong, for diverged trials |

@@ -141,7 +141,7 @@ fn paint_svg(picture: &impl Picture, (w, h): (u32, u32)) -> Result<String, Strin
         canvas.root.present().map_err(|e| e.to_string())?;
         canvas.hatch_marks.unwrap_or_default()
     };
-    Ok(hatch_patterns(&super::svg::compact(&svg), &hatches))
+    Ok(super::svg::compact_with(&svg, |s| hatch_patterns(&s, &hatches)))
 }
 
 fn paint_png(picture: &impl Picture, (w, h): (u32, u32)) -> Result<Vec<u8>, String> {

@@ -13,7 +13,14 @@
 
 /// Rewrite plotters' SVG text as described in the module documentation.
 pub fn compact(svg: &str) -> String {
-    group(&super::svg_grid::grid_images(&merge(svg)))
+    compact_with(svg, |s| s)
+}
+
+/// [`compact`], with `between` applied after the per-element rewrites and before the grids
+/// become images (a figure's hatching placeholders become pattern fills there, so the grid step
+/// sees them as what is drawn over a cell).
+pub fn compact_with(svg: &str, between: impl FnOnce(String) -> String) -> String {
+    group(&super::svg_grid::grid_images(&between(merge(svg))))
 }
 
 /// The per-element rewrites: defaults dropped, outlines merged, polylines joined.

@@ -132,7 +132,14 @@ fn lattice(g: &[Cell]) -> Option<(Vec<i64>, Vec<i64>, Vec<usize>)> {
         }
         ys.push(ys[r] + row[0].h);
     }
-    Some((xs, ys, rows))
+    // One pixel per cell is scaled evenly over the box: every edge must be within half a pixel
+    // of its even place, where the 1-pixel border drawn over it hides the difference.
+    let even = |edges: &[i64]| {
+        let (first, n) = (edges[0] as f64, (edges.len() - 1) as f64);
+        let step = (edges[edges.len() - 1] - edges[0]) as f64 / n;
+        edges.iter().enumerate().all(|(k, &e)| (e as f64 - (first + step * k as f64)).abs() <= 0.5)
+    };
+    (even(&xs) && even(&ys)).then_some((xs, ys, rows))
 }
 
 fn emit(out: &mut String, g: &[Cell]) {
@@ -255,6 +262,16 @@ mod tests {
         assert_eq!((info.width, info.height), (3, 2));
         let reds: Vec<u8> = buf[..info.buffer_size()].chunks(3).map(|p| p[0]).collect();
         assert_eq!(reds, vec![0x11, 0x22, 0x33, 0x44, 0x55, 0x66]);
+    }
+
+    #[test]
+    fn a_grid_whose_edges_stray_from_even_spacing_stays_as_it_was() {
+        // Widths 10, 10, 13: the last edge is 2 px from its even place (11 px steps).
+        let g: Vec<String> = (0..6)
+            .map(|k| rect([0, 10, 20][k % 3], k as i64 / 3 * 10, [10, 10, 13][k % 3], 10, "123456"))
+            .collect();
+        let svg = format!("{}\n", g.join("\n"));
+        assert_eq!(grid_images(&svg), svg);
     }
 
     #[test]

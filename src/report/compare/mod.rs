@@ -44,7 +44,7 @@ pub fn write_comparison(
         Some(x) => explore::search_table(plan, x, variants),
         None => {
             let fits: Vec<(&VariantInfo, Fit)> = variants.iter().map(|v| (&v.info, v.fit)).collect();
-            comparison_table(&fits)
+            comparison_table(&fits, plan.has_fresh())
         }
     };
     if formats.has(Format::Md) {
