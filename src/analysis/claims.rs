@@ -225,38 +225,27 @@ pub fn evaluate(cells: &[ClaimCell]) -> Vec<ClaimResult> {
             n: c.counted.len(),
         })
         .collect();
-    // Each cell's resamples from its own stream: the same on any number of threads.
-    let draws: Vec<Vec<View>> = cells
-        .par_iter()
-        .map(|c| {
-            let mut rng = TrialRng::new(c.seed);
-            let n = c.counted.len();
-            (0..CLAIM_RESAMPLES)
-                .map(|_| {
-                    if n == 0 {
-                        return View { mean: None, successes: 0, n: 0 };
-                    }
-                    let (mut sum, mut ok) = (0.0, 0);
-                    for _ in 0..n {
-                        let i = rng.below(n);
-                        sum += c.counted[i];
-                        ok += usize::from(c.converged[i]);
-                    }
-                    View { mean: Some(sum / n as f64), successes: ok, n }
-                })
-                .collect()
-        })
-        .collect();
     let g = Groups::of(cells);
     let estimates = statistics(cells, &g, &point);
-    // All claims of one resample at once: its view, best cells and correlations are shared.
-    let reps: Vec<[Option<f64>; CLAIMS.len()]> = (0..CLAIM_RESAMPLES)
-        .into_par_iter()
-        .map(|r| {
-            let view: Vec<View> = draws.iter().map(|d| d[r]).collect();
-            statistics(cells, &g, &view)
-        })
-        .collect();
+    // Each cell's resamples come from its own stream, consumed in order, so drawing them a block
+    // at a time gives the same resamples on any number of threads, with one block in memory
+    // instead of every cell's thousand.
+    let mut streams: Vec<TrialRng> = cells.iter().map(|c| TrialRng::new(c.seed)).collect();
+    let mut reps: Vec<[Option<f64>; CLAIMS.len()]> = Vec::with_capacity(CLAIM_RESAMPLES);
+    for start in (0..CLAIM_RESAMPLES).step_by(RESAMPLE_BLOCK) {
+        let len = RESAMPLE_BLOCK.min(CLAIM_RESAMPLES - start);
+        let draws: Vec<Vec<View>> =
+            cells.par_iter().zip(streams.par_iter_mut()).map(|(c, rng)| resample(c, rng, len)).collect();
+        // All claims of one resample at once: its view, best cells and correlations are shared.
+        let block: Vec<[Option<f64>; CLAIMS.len()]> = (0..len)
+            .into_par_iter()
+            .map(|r| {
+                let view: Vec<View> = draws.iter().map(|d| d[r]).collect();
+                statistics(cells, &g, &view)
+            })
+            .collect();
+        reps.extend(block);
+    }
     CLAIMS
         .iter()
         .enumerate()
@@ -266,6 +255,28 @@ pub fn evaluate(cells: &[ClaimCell]) -> Vec<ClaimResult> {
             let interval =
                 (estimate.is_some() && values.len() * 2 > CLAIM_RESAMPLES).then(|| interval_95(&mut values));
             ClaimResult { claim, estimate, interval, verdict: verdict(claim, interval) }
+        })
+        .collect()
+}
+
+/// Resamples drawn at once per cell ([`evaluate`]).
+const RESAMPLE_BLOCK: usize = 100;
+
+/// A cell's next `len` resamples from its stream: each redraws its trials with replacement.
+fn resample(c: &ClaimCell, rng: &mut TrialRng, len: usize) -> Vec<View> {
+    let n = c.counted.len();
+    (0..len)
+        .map(|_| {
+            if n == 0 {
+                return View { mean: None, successes: 0, n: 0 };
+            }
+            let (mut sum, mut ok) = (0.0, 0);
+            for _ in 0..n {
+                let i = rng.below(n);
+                sum += c.counted[i];
+                ok += usize::from(c.converged[i]);
+            }
+            View { mean: Some(sum / n as f64), successes: ok, n }
         })
         .collect()
 }

@@ -116,6 +116,25 @@ mod tests {
     }
 
     #[test]
+    fn a_mean_at_either_edge_of_the_margin_is_not_equivalent() {
+        // ours / paper exactly 1.25 or 0.80: that one-sided t is 0, so p = 0.5 whatever the
+        // spreads (SciPy as above gives 0.5 at both edges), however many runs.
+        for (ours, paper) in [(62.5, 50.0), (40.0, 50.0)] {
+            for pn in PAPER_N {
+                let t = tost(m(ours, 10.0, 20), m(paper, 5.0, pn)).unwrap();
+                assert!((t.p - 0.5).abs() < 1e-12 && !t.equivalent, "{ours} {paper} {pn}: {t:?}");
+            }
+        }
+        // With the spreads small, a mean well inside the margin is equivalent; SciPy's two
+        // one-sided p-values for 50 ± 1 (n 20) against 50 ± 1 (n 10) are 4.9e-16 and 9.3e-18.
+        let inside = tost(m(50.0, 1.0, 20), m(50.0, 1.0, 10)).unwrap();
+        assert!(inside.equivalent && inside.p < 1e-15, "{inside:?}");
+        // Without spread, a value on the edge is outside: the margin's bounds are strict.
+        assert!(!tost(m(62.5, 0.0, 10), m(50.0, 0.0, 10)).unwrap().equivalent);
+        assert!(!tost(m(40.0, 0.0, 10), m(50.0, 0.0, 10)).unwrap().equivalent);
+    }
+
+    #[test]
     fn far_values_are_not_equivalent_and_one_trial_is_undecided() {
         assert!(!tost(m(4.5, 1.6, 10), m(90.5, 25.8, 10)).unwrap().equivalent);
         let single = Moments { mean: 90.0, std: None, n: 1 };

@@ -6,11 +6,13 @@ use crate::cache::Key;
 use crate::error::user_error;
 use crate::sim::config::{default_ranges, default_success, Success, TrialConfig};
 use crate::sim::env::{EnvParams, SystemKind};
+use crate::sim::Algorithm;
 use crate::spec::{
     format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings,
     SystemMarker, SystemSpec, Target,
 };
 use crate::spec::{BallBeamM, CartPoleM, MountainCarM};
+use rayon::prelude::*;
 
 /// Plans larger than this many trials need confirmation (`--yes`).
 pub const DEFAULT_MAX_TRIALS: usize = 200_000;
@@ -417,9 +419,13 @@ fn expand_experiment<M: Resolve>(
         crate::sim::repr::ReprKind::Fuzzy => &sys.fuzzy,
     };
     let grid = grid_points(&e.axes.iter().map(|a| a.values.len()).collect::<Vec<_>>());
-    let mut cells = Vec::with_capacity(grid.len() * e.algorithms.len());
-    for &algorithm in &e.algorithms {
-        for point in &grid {
+    let points: Vec<(Algorithm, &Vec<usize>)> =
+        e.algorithms.iter().flat_map(|&a| grid.iter().map(move |p| (a, p))).collect();
+    // Cells are resolved, and their trials keyed (one blake3 per trial), in parallel; the first
+    // error in grid order is the one reported, whatever the number of threads.
+    let resolved: Vec<anyhow::Result<Cell>> = points
+        .par_iter()
+        .map(|&(algorithm, point)| -> anyhow::Result<Cell> {
             let coords: Vec<f64> = e.axes.iter().zip(point).map(|(a, &i)| a.values[i]).collect();
             let at = || coords.iter().map(|&v| format_value(v)).collect::<Vec<_>>().join("×");
             let fail = |msg: String| {
@@ -477,9 +483,10 @@ fn expand_experiment<M: Resolve>(
                     key: Key::from_canonical(&canonical, seed, crate::cache::ENGINE_VERSION),
                 })
                 .collect();
-            cells.push(Cell { algorithm, coords, config: c, trials, contender: None, fresh: Vec::new() });
-        }
-    }
+            Ok(Cell { algorithm, coords, config: c, trials, contender: None, fresh: Vec::new() })
+        })
+        .collect();
+    let cells = resolved.into_iter().collect::<anyhow::Result<Vec<Cell>>>()?;
     Ok(Experiment {
         variant: None,
         system,

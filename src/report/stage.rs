@@ -236,9 +236,11 @@ pub fn write(
     }
     for ((info, sub), target) in subs.iter().zip(&targets) {
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
-        let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
-        // Intervals where a page or the combined cells.parquet shows them.
         let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
+        // Episode lengths only for what draws or stores them: a folder's curves, the trial rows.
+        let to_push = trials.is_some() && info.is_some() && !exploratory;
+        let outcomes = store.read_outcomes(scan, &wanted, lengths && (target.is_some() || to_push))?;
+        // Intervals where a page or the combined cells.parquet shows them.
         let in_cells = with_comparison && formats.has(Format::Cells) && !exploratory;
         let data = ReportData::build_as(sub, &outcomes, target.is_some() || in_cells);
         // The folder's files and this variant's rows of the combined trials.parquet at once.
@@ -246,7 +248,7 @@ pub fn write(
             || target.as_ref().map(|t| write_folder(&data, &t.dir, formats, info.is_none())).transpose(),
             || match &mut trials {
                 // An exploratory reading's rows are its declared twin's: written with its folder.
-                Some(sink) if info.as_ref().is_some_and(|v| !v.exploratory) => sink.push(&data),
+                Some(sink) if to_push => sink.push(&data),
                 _ => Ok(()),
             },
         );
@@ -295,7 +297,7 @@ pub fn write(
     Ok(out)
 }
 
-/// The combined `trials.parquet`, written one variant's rows at a time (one row group each) to a
+/// The combined `trials.parquet`, written one experiment of one variant at a time (one row group each) to a
 /// hidden temporary file beside it, renamed into place when complete (so memory holds one
 /// variant's rows, and a reader never sees a partial file).
 struct TrialsSink {
@@ -311,8 +313,8 @@ impl TrialsSink {
         Self { tmp, path, writer: None }
     }
 
-    /// Append one report's rows (built an experiment at a time, so only one experiment's rows are
-    /// ever in memory uncompressed) as one row group.
+    /// Append one report's rows, one row group per experiment: built and flushed an experiment at
+    /// a time, so only one experiment's rows are ever in memory, uncompressed or encoded.
     fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
         for k in 0..data.experiments.len() {
             let batch = datasets::trials_batch_of(&data.experiments[k..k + 1])?;
@@ -323,9 +325,8 @@ impl TrialsSink {
                 self.writer =
                     Some(::parquet::arrow::ArrowWriter::try_new(file, batch.schema(), Some(props))?);
             }
-            self.writer.as_mut().expect("created above").write(&batch)?;
-        }
-        if let Some(w) = &mut self.writer {
+            let w = self.writer.as_mut().expect("created above");
+            w.write(&batch)?;
             w.flush()?;
         }
         Ok(())

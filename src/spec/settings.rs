@@ -13,13 +13,13 @@ use std::fmt;
 use std::marker::PhantomData;
 
 /// Compile-time identity of a system, so its section can check variable names while parsing.
-pub trait SystemMarker: fmt::Debug + Clone + 'static {
+pub trait SystemMarker: fmt::Debug + Clone + Sync + 'static {
     /// The system.
     const SYSTEM: SystemKind;
     /// Its physical parameter struct.
-    type Params: DeserializeOwned + Serialize + Default + Clone + fmt::Debug;
+    type Params: DeserializeOwned + Serialize + Default + Clone + fmt::Debug + Sync;
     /// Its success-criterion section.
-    type Success: DeserializeOwned + Serialize + Clone + fmt::Debug;
+    type Success: DeserializeOwned + Serialize + Clone + fmt::Debug + Sync;
     /// The parameters as the simulation's tagged form.
     fn env(p: &Self::Params) -> EnvParams;
     /// The success section's rules across its fields (`Err`: what is wrong and the fix).
