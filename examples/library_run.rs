@@ -38,7 +38,7 @@ fn main() -> anyhow::Result<()> {
         formats: Formats::of(&[Format::Md, Format::Csv]),
         force: false,
     };
-    let report = qsweep::report::write(&plan, &store, &keys, &opts)?;
+    let report = qsweep::report::write(plan.clone(), &store, &keys, &opts)?;
     println!(
         "report: {} files in {} ({} of {} planned trials present)",
         report.summary.files.len(),

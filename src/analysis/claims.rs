@@ -8,7 +8,7 @@ use super::best::{best_cell, Candidate};
 use super::rank::{average_ranks, pearson, spearman};
 use super::summary::interval_95;
 use crate::sim::env::SystemKind;
-use crate::sim::rng::TrialRng;
+use crate::sim::rng::{below_from, TrialRng};
 use crate::sim::Algorithm;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -265,14 +265,17 @@ const RESAMPLE_BLOCK: usize = 100;
 /// A cell's next `len` resamples from its stream: each redraws its trials with replacement.
 fn resample(c: &ClaimCell, rng: &mut TrialRng, len: usize) -> Vec<View> {
     let n = c.counted.len();
-    (0..len)
-        .map(|_| {
-            if n == 0 {
-                return View { mean: None, successes: 0, n: 0 };
-            }
+    if n == 0 {
+        return vec![View { mean: None, successes: 0, n: 0 }; len];
+    }
+    let mut draws = vec![0u64; n * len];
+    rng.fill_u64(&mut draws);
+    draws
+        .chunks_exact(n)
+        .map(|r| {
             let (mut sum, mut ok) = (0.0, 0);
-            for _ in 0..n {
-                let i = rng.below(n);
+            for &x in r {
+                let i = below_from(x, n);
                 sum += c.counted[i];
                 ok += usize::from(c.converged[i]);
             }

@@ -2,7 +2,7 @@
 //! (ddof = 1), min, median, max, interquartile mean and a seeded percentile-bootstrap 95%
 //! confidence interval of the mean. Everything is a pure function of its inputs.
 
-use crate::sim::rng::TrialRng;
+use crate::sim::rng::{below_from, TrialRng};
 
 /// Bootstrap resamples per cell.
 pub const BOOTSTRAP_RESAMPLES: usize = 2000;
@@ -116,9 +116,26 @@ pub fn bootstrap_ci(values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
         return (values[0], values[0]);
     }
     let mut rng = TrialRng::new(seed);
-    let mut means: Vec<f64> =
-        (0..resamples).map(|_| (0..n).map(|_| values[rng.below(n)]).sum::<f64>() / n as f64).collect();
+    let mut means: Vec<f64> = Vec::with_capacity(resamples);
+    let mut raw = vec![0u64; n * RESAMPLE_CHUNK];
+    for start in (0..resamples).step_by(RESAMPLE_CHUNK) {
+        // The stream's draws in order, a chunk of resamples at a time: n per resample.
+        let draws = &mut raw[..n * RESAMPLE_CHUNK.min(resamples - start)];
+        rng.fill_u64(draws);
+        means.extend(draws.chunks_exact(n).map(|r| resample_mean(values, r)));
+    }
     interval_95(&mut means)
+}
+
+/// Resamples whose draws are read from the stream at once by the bootstraps.
+const RESAMPLE_CHUNK: usize = 64;
+
+/// The mean of `values` resampled by `draws` (one u64 of the stream per value, in order: what
+/// `TrialRng::below(values.len())` would pick).
+#[inline]
+pub fn resample_mean(values: &[f64], draws: &[u64]) -> f64 {
+    let n = values.len();
+    draws.iter().map(|&x| values[below_from(x, n)]).sum::<f64>() / n as f64
 }
 
 /// Percentile-bootstrap 95% interval of `mean(b) − mean(a)`: each resample draws `a` and `b`
@@ -130,13 +147,17 @@ pub fn bootstrap_diff_ci(a: &[f64], b: &[f64], resamples: usize, seed: u64) -> (
         return (d, d);
     }
     let mut rng = TrialRng::new(seed);
-    let mut draw = |v: &[f64]| (0..v.len()).map(|_| v[rng.below(v.len())]).sum::<f64>() / v.len() as f64;
-    let mut diffs: Vec<f64> = (0..resamples)
-        .map(|_| {
-            let ma = draw(a);
-            draw(b) - ma
-        })
-        .collect();
+    let per = a.len() + b.len();
+    let mut diffs: Vec<f64> = Vec::with_capacity(resamples);
+    let mut raw = vec![0u64; per * RESAMPLE_CHUNK];
+    for start in (0..resamples).step_by(RESAMPLE_CHUNK) {
+        let draws = &mut raw[..per * RESAMPLE_CHUNK.min(resamples - start)];
+        rng.fill_u64(draws);
+        diffs.extend(draws.chunks_exact(per).map(|r| {
+            let (ra, rb) = r.split_at(a.len());
+            resample_mean(b, rb) - resample_mean(a, ra)
+        }));
+    }
     interval_95(&mut diffs)
 }
 

@@ -31,7 +31,7 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
     let scan = crate::pipeline::scan(&store)?;
     warn_quarantined(&scan);
     let opts = a.report.options(&plan, a.force);
-    let outcome = crate::report::write(&plan, &store, &scan.stored, &opts)?;
+    let outcome = crate::report::write(plan, &store, &scan.stored, &opts)?;
     if !a.quiet {
         print_report(&outcome, &opts);
     }

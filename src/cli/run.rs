@@ -84,11 +84,12 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         return Ok(crate::error::exit::INTERRUPTED);
     }
     if !a.no_report {
-        // The trials just stored are in new segments: scan again.
+        // The trials just stored are in new segments: scan again (the old scan's keys freed first).
+        drop(scan);
         let scan = crate::pipeline::scan(&store)?;
         warn_quarantined(&scan);
         let ropts = a.report.options(&plan, false);
-        let outcome = crate::report::write(&plan, &store, &scan.stored, &ropts)?;
+        let outcome = crate::report::write(plan, &store, &scan.stored, &ropts)?;
         if !(a.quiet || a.json) {
             print_report(&outcome, &ropts);
         }

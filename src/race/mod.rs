@@ -121,7 +121,13 @@ struct Heat {
 /// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
 /// the trials `scan` lists (the plan itself, with no race).
 pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
-    replay(plan, &scan.keys, &mut |wanted| {
+    replay_cached_owned(plan.clone(), store, scan)
+}
+
+/// [`replay_cached`] of a plan the caller gives up, replayed in place (a report of the paper's
+/// readings holds no second copy of its 37,000 cells).
+pub fn replay_cached_owned(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
+    replay_owned(plan, &scan.keys, &mut |wanted| {
         Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
     })
 }
@@ -131,7 +137,11 @@ pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Resul
 /// and plan the next round's; then plan the fresh-seed trials of every decided best cell
 /// ([`crate::fresh::plan_fresh`]). Without a race or a `fresh:` block the plan comes back as it is.
 pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
-    let mut out = plan.clone();
+    replay_owned(plan.clone(), cached, read)
+}
+
+/// [`replay`] of a plan the caller gives up, replayed in place.
+pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
     let mut heats: Vec<Heat> = Vec::new();
     for (ei, e) in out.experiments.iter_mut().enumerate() {
         if e.race.is_none() {

@@ -161,7 +161,7 @@ impl Target {
 /// variants, each variant's folder `DIR/<id>/`, then (unless only some variants were selected) the
 /// comparison, every variant's `cells.parquet` rows and the combined `trials.parquet` in `DIR`.
 pub fn write(
-    plan: &Plan,
+    plan: Plan,
     store: &Store,
     scan: &KeySet,
     opts: &ReportOptions,
@@ -175,13 +175,9 @@ pub fn write(
     }
     // A raced plan is reported as far as its races have run: each cell with the seeds it got;
     // the best cells with the fresh seeds they got.
-    let raced;
-    let plan = if plan.is_staged() {
-        raced = crate::race::replay_cached(plan, store, scan)?;
-        &raced.plan
-    } else {
-        plan
-    };
+    let plan =
+        if plan.is_staged() { crate::race::replay_cached_owned(plan, store, scan)?.plan } else { plan };
+    let plan = &plan;
     let formats = opts.formats;
     let subs: Vec<(Option<VariantInfo>, Plan)> = if plan.variants.is_empty() {
         vec![(None, plan.clone())]
@@ -297,6 +293,9 @@ pub fn write(
     Ok(out)
 }
 
+/// Rows per row group of the combined `trials.parquet`.
+const TRIALS_ROW_GROUP: usize = 1024;
+
 /// The combined `trials.parquet`, written one experiment of one variant at a time (one row group each) to a
 /// hidden temporary file beside it, renamed into place when complete (so memory holds one
 /// variant's rows, and a reader never sees a partial file).
@@ -326,8 +325,12 @@ impl TrialsSink {
                     Some(::parquet::arrow::ArrowWriter::try_new(file, batch.schema(), Some(props))?);
             }
             let w = self.writer.as_mut().expect("created above");
-            w.write(&batch)?;
-            w.flush()?;
+            // A row group per TRIALS_ROW_GROUP rows: the writer buffers one group's encoded
+            // columns, episode_lengths lists included, until it is flushed.
+            for start in (0..batch.num_rows()).step_by(TRIALS_ROW_GROUP) {
+                w.write(&batch.slice(start, TRIALS_ROW_GROUP.min(batch.num_rows() - start)))?;
+                w.flush()?;
+            }
         }
         Ok(())
     }

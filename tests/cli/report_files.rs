@@ -81,7 +81,7 @@ fn cache_of(records: &HashMap<Key, TrialRecord>, dir: &Path) -> Store {
 fn write_report(plan: &Plan, store: &Store, dir: &Path, formats: Formats) -> ReportSummary {
     let scan = qsweep::pipeline::scan(store).unwrap();
     let opts = ReportOptions { dir: dir.to_path_buf(), formats, force: false };
-    report::write(plan, store, &scan.stored, &opts).unwrap().summary
+    report::write(plan.clone(), store, &scan.stored, &opts).unwrap().summary
 }
 
 fn files_under(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
