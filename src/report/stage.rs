@@ -296,9 +296,9 @@ pub fn write(
 /// Rows per row group of the combined `trials.parquet`.
 const TRIALS_ROW_GROUP: usize = 1024;
 
-/// The combined `trials.parquet`, written one experiment of one variant at a time (one row group each) to a
-/// hidden temporary file beside it, renamed into place when complete (so memory holds one
-/// variant's rows, and a reader never sees a partial file).
+/// The combined `trials.parquet`, written one experiment of one variant at a time, in row groups
+/// of [`TRIALS_ROW_GROUP`] trials, to a hidden temporary file beside it, renamed into place when
+/// complete (so memory holds one experiment's rows, and a reader never sees a partial file).
 struct TrialsSink {
     tmp: PathBuf,
     path: PathBuf,
@@ -312,8 +312,9 @@ impl TrialsSink {
         Self { tmp, path, writer: None }
     }
 
-    /// Append one report's rows, one row group per experiment: built and flushed an experiment at
-    /// a time, so only one experiment's rows are ever in memory, uncompressed or encoded.
+    /// Append one report's rows, built an experiment at a time and flushed every
+    /// [`TRIALS_ROW_GROUP`] trials, so at most one experiment's rows are in memory uncompressed and
+    /// one row group's encoded.
     fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
         for k in 0..data.experiments.len() {
             let batch = datasets::trials_batch_of(&data.experiments[k..k + 1])?;
