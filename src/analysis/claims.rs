@@ -6,7 +6,7 @@
 
 use super::best::{best_cell, Candidate};
 use super::rank::{average_ranks, pearson, spearman};
-use super::summary::interval_95;
+use super::summary::{interval_95, resample_mean};
 use crate::sim::env::SystemKind;
 use crate::sim::rng::{below_from, TrialRng};
 use crate::sim::Algorithm;
@@ -272,14 +272,10 @@ fn resample(c: &ClaimCell, rng: &mut TrialRng, len: usize) -> Vec<View> {
     rng.fill_u64(&mut draws);
     draws
         .chunks_exact(n)
-        .map(|r| {
-            let (mut sum, mut ok) = (0.0, 0);
-            for &x in r {
-                let i = below_from(x, n);
-                sum += c.counted[i];
-                ok += usize::from(c.converged[i]);
-            }
-            View { mean: Some(sum / n as f64), successes: ok, n }
+        .map(|r| View {
+            mean: Some(resample_mean(&c.counted, r)),
+            successes: r.iter().filter(|&&x| c.converged[below_from(x, n)]).count(),
+            n,
         })
         .collect()
 }

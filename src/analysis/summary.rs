@@ -115,20 +115,30 @@ pub fn bootstrap_ci(values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
     if n == 1 || resamples == 0 {
         return (values[0], values[0]);
     }
-    let mut rng = TrialRng::new(seed);
-    let mut means: Vec<f64> = Vec::with_capacity(resamples);
-    let mut raw = vec![0u64; n * RESAMPLE_CHUNK];
-    for start in (0..resamples).step_by(RESAMPLE_CHUNK) {
-        // The stream's draws in order, a chunk of resamples at a time: n per resample.
-        let draws = &mut raw[..n * RESAMPLE_CHUNK.min(resamples - start)];
-        rng.fill_u64(draws);
-        means.extend(draws.chunks_exact(n).map(|r| resample_mean(values, r)));
-    }
+    let mut means = over_resamples(&mut TrialRng::new(seed), n, resamples, |r| resample_mean(values, r));
     interval_95(&mut means)
 }
 
 /// Resamples whose draws are read from the stream at once by the bootstraps.
 const RESAMPLE_CHUNK: usize = 64;
+
+/// `stat` of each of `resamples` resamples, the k-th given the stream's k-th run of `per` u64s
+/// (read in order, a chunk of resamples at a time).
+fn over_resamples(
+    rng: &mut TrialRng,
+    per: usize,
+    resamples: usize,
+    stat: impl Fn(&[u64]) -> f64,
+) -> Vec<f64> {
+    let mut out = Vec::with_capacity(resamples);
+    let mut raw = vec![0u64; per * RESAMPLE_CHUNK];
+    for start in (0..resamples).step_by(RESAMPLE_CHUNK) {
+        let draws = &mut raw[..per * RESAMPLE_CHUNK.min(resamples - start)];
+        rng.fill_u64(draws);
+        out.extend(draws.chunks_exact(per).map(&stat));
+    }
+    out
+}
 
 /// The mean of `values` resampled by `draws` (one u64 of the stream per value, in order: what
 /// `TrialRng::below(values.len())` would pick).
@@ -146,18 +156,10 @@ pub fn bootstrap_diff_ci(a: &[f64], b: &[f64], resamples: usize, seed: u64) -> (
     if resamples == 0 {
         return (d, d);
     }
-    let mut rng = TrialRng::new(seed);
-    let per = a.len() + b.len();
-    let mut diffs: Vec<f64> = Vec::with_capacity(resamples);
-    let mut raw = vec![0u64; per * RESAMPLE_CHUNK];
-    for start in (0..resamples).step_by(RESAMPLE_CHUNK) {
-        let draws = &mut raw[..per * RESAMPLE_CHUNK.min(resamples - start)];
-        rng.fill_u64(draws);
-        diffs.extend(draws.chunks_exact(per).map(|r| {
-            let (ra, rb) = r.split_at(a.len());
-            resample_mean(b, rb) - resample_mean(a, ra)
-        }));
-    }
+    let mut diffs = over_resamples(&mut TrialRng::new(seed), a.len() + b.len(), resamples, |r| {
+        let (ra, rb) = r.split_at(a.len());
+        resample_mean(b, rb) - resample_mean(a, ra)
+    });
     interval_95(&mut diffs)
 }
 

@@ -88,9 +88,7 @@ impl Plan {
             .max()
             .unwrap_or(1)
     }
-}
 
-impl Plan {
     /// The most stages the plan can take, each planned from the outcomes of those before: a
     /// race's rounds ([`Plan::race_rounds_max`]), then one more for the fresh seeds.
     pub fn stages_max(&self) -> u32 {

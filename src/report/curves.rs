@@ -16,7 +16,7 @@ use super::figures::{self, nice_ticks, Canvas, Picture, Res, INK, SUBTLE};
 use super::model::{CellData, ExpData, ReportData};
 use crate::analysis::quantile_sorted;
 use crate::sim::config::Success;
-use crate::sim::env::SystemKind;
+use crate::sim::env::{SystemKind, TaskKind};
 use crate::sim::Algorithm;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -226,9 +226,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         .map(|(_, c, _)| {
             let s = &c.cell.config.limits.success;
             let (v, text) = goal(s);
-            let reaching = crate::sim::env::TaskKind::of(c.cell.config.system())
-                == crate::sim::env::TaskKind::GoalReaching;
-            (v, text, reaching)
+            (v, text, TaskKind::of(c.cell.config.system()) == TaskKind::GoalReaching)
         })
         .collect();
     goals.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -224,8 +224,9 @@ pub fn fit_order(fits: &[Fit]) -> Vec<usize> {
     idx
 }
 
-/// The comparison table: one row per variant, in [`FIT_ORDER`]. With `fresh` (the pipeline has a `fresh:` block), the fresh-seed columns too, whether or not
-/// the cache holds their trials yet, so the file's columns depend on the pipeline alone.
+/// The comparison table: one row per variant, in [`FIT_ORDER`]. With `fresh` (the pipeline has a
+/// `fresh:` block), the fresh-seed columns too, whether or not the cache holds their trials yet,
+/// so the file's columns depend on the pipeline alone.
 pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table {
     let mut columns = vec![
         Column::new("Rank", "rank", Align::Right),
