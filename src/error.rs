@@ -19,7 +19,7 @@ pub fn user_error(msg: impl Into<String>) -> anyhow::Error {
     UserError::new(msg).into()
 }
 
-/// Exit codes, as documented in the README.
+/// Exit codes, as documented in docs/commands.md.
 pub mod exit {
     /// Success.
     pub const OK: u8 = 0;

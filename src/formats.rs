@@ -4,7 +4,7 @@
 //! Like cargo-nextest's machine-readable formats, a format's version is bumped only on an
 //! incompatible change (a field removed, renamed or given another type or meaning); new fields may
 //! appear at any time without a bump, so readers should ignore fields they do not know. Every
-//! format is at version 1. The README documents each one.
+//! format is at version 1. docs/json.md documents each one.
 
 use crate::bench::BenchResult;
 use crate::sim::env::SystemKind;

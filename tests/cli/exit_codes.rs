@@ -1,14 +1,14 @@
-//! The README's exit-code table, checked against every subcommand: the table lists exactly the
+//! The guide's exit-code table (docs/commands.md), checked against every subcommand: the table lists exactly the
 //! `qsweep::error::exit` constants, and each subcommand exits with each code that applies to it.
 
 use crate::helpers::{repo, Test};
 use qsweep::error::exit;
 use std::collections::BTreeSet;
 
-/// The codes of the README's "Exit codes" table.
+/// The codes of the guide's "Exit codes" table (docs/commands.md).
 fn readme_codes() -> BTreeSet<i32> {
-    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
-    let section = readme.split("### Exit codes").nth(1).expect("README has an Exit codes section");
+    let guide = std::fs::read_to_string(repo().join("docs/commands.md")).unwrap();
+    let section = guide.split("## Exit codes").nth(1).expect("docs/commands.md has an Exit codes section");
     section
         .lines()
         .skip_while(|l| !l.starts_with('|'))
@@ -18,7 +18,7 @@ fn readme_codes() -> BTreeSet<i32> {
 }
 
 #[test]
-fn the_readme_table_lists_exactly_the_exit_constants() {
+fn the_guide_table_lists_exactly_the_exit_constants() {
     let constants: BTreeSet<i32> =
         [exit::OK, exit::FAILURE, exit::USAGE, exit::INTERRUPTED].into_iter().map(i32::from).collect();
     assert_eq!(readme_codes(), constants);

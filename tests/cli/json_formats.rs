@@ -1,4 +1,4 @@
-//! The `--json` formats of `run`, `status`, `trial` and `bench` (README, "JSON output"): each is one
+//! The `--json` formats of `run`, `status`, `trial` and `bench` (docs/json.md): each is one
 //! object with `format_version` 1 and exactly the documented fields, and parses as the library's
 //! struct for it.
 

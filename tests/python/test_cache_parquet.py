@@ -1,4 +1,4 @@
-"""The cache reads back as one table in pandas, polars and DuckDB (the README's promise)."""
+"""The cache reads back as one table in pandas, polars and DuckDB (docs/reading-results.md's promise)."""
 
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ def test_pandas_reads_the_cache_directory(cache: Path) -> None:
 
 
 def test_pyarrow_backed_pandas_keeps_the_stored_types(cache: Path) -> None:
-    """The README's idiom: `dtype_backend="pyarrow"` keeps uint64 and the nullable uint32 (the
+    """The guide's idiom (docs/reading-results.md): `dtype_backend="pyarrow"` keeps uint64 and the nullable uint32 (the
     same types as trials.parquet) instead of float64 with NaN."""
     df = pd.read_parquet(cache, dtype_backend="pyarrow")
     assert len(df) == N_TRIALS
@@ -93,7 +93,7 @@ def test_a_cache_mixing_segments_from_before_cpu_seconds_reads_with_the_readme_i
     qsweep_bin: Path, tmp_path: Path
 ) -> None:
     """Segments written before qsweep recorded `cpu_seconds` lack the column; a cache holding both
-    kinds reads with the README's idioms (polars `concat(..., how="diagonal_relaxed")`, DuckDB
+    kinds reads with the guide's idioms (polars `concat(..., how="diagonal_relaxed")`, DuckDB
     `union_by_name`), old rows null, and `qsweep gc` rewrites every segment in the current schema."""
     import shutil
 
