@@ -8,7 +8,7 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    let cli = <qsweep::cli::Cli as clap::Parser>::parse();
+    let cli = qsweep::cli::parse();
     match qsweep::cli::dispatch(cli) {
         Ok(code) => ExitCode::from(code),
         Err(err) => {

@@ -12,6 +12,7 @@ mod simulate;
 mod slurm;
 mod status;
 mod trial;
+mod trial_config;
 mod verify;
 
 use clap::{Parser, Subcommand};
@@ -48,6 +49,47 @@ pub enum Command {
     Gc(gc::GcArgs),
     /// Print a script that submits a pipeline to Slurm: a job array of shards, then a report job.
     Slurm(slurm::SlurmArgs),
+}
+
+/// The guide chapter of each subcommand: its long help (`--help`) ends with "Guide: CHAPTER",
+/// so a reader goes from the flags to the explanation. `tests/docs` checks every chapter exists.
+pub const GUIDE: &[(&str, &str)] = &[
+    ("bench", "docs/speed.md"),
+    ("feasible", "docs/replication.md#feasibility"),
+    ("simulate", "docs/commands.md"),
+    ("trial", "docs/commands.md"),
+    ("run", "docs/pipelines.md"),
+    ("status", "docs/commands.md"),
+    ("report", "docs/reports.md"),
+    ("verify", "docs/reproducibility.md"),
+    ("gc", "docs/commands.md"),
+    ("slurm", "docs/cluster.md"),
+];
+
+/// The guide's table of contents, named at the end of `qsweep --help`.
+pub const GUIDE_INDEX: &str = "docs/SUMMARY.md";
+
+/// The command-line definition, each long help ending with its guide chapter ([`GUIDE`]).
+pub fn command() -> clap::Command {
+    let mut cmd = <Cli as clap::CommandFactory>::command().after_long_help(format!("Guide: {GUIDE_INDEX}"));
+    for (name, chapter) in GUIDE {
+        cmd = cmd.mut_subcommand(name, |s| {
+            let pointer = format!("Guide: {chapter}");
+            // A subcommand's own examples (`after_help`) stay, with the pointer after them.
+            let text = match s.get_after_help() {
+                Some(h) => format!("{h}\n\n{pointer}"),
+                None => pointer,
+            };
+            s.after_long_help(text)
+        });
+    }
+    cmd
+}
+
+/// Parse the process's arguments against [`command`] (exits with clap's usage error on bad ones).
+pub fn parse() -> Cli {
+    let matches = command().get_matches();
+    <Cli as clap::FromArgMatches>::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
 /// Run a parsed command line; returns the process exit code.

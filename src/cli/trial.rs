@@ -1,14 +1,13 @@
 //! `qsweep trial`: one configuration and one seed, with Table II defaults, printed as text or JSON.
+//! The flags are here; how they become a configuration is `trial_config`.
 
 use super::args;
-use crate::error::user_error;
+use super::trial_config::config;
 use crate::formats::TrialReport;
-use crate::plan::{one_cell, CellRequest};
-use crate::sim::config::{TieBreak, TrialConfig};
-use crate::sim::env::{SystemKind, TaskKind};
+use crate::sim::config::TieBreak;
+use crate::sim::env::SystemKind;
 use crate::sim::repr::ReprKind;
 use crate::sim::{run_trial, Algorithm};
-use crate::spec::Override;
 use clap::Args;
 
 /// Arguments of `qsweep trial`.
@@ -86,86 +85,6 @@ pub struct TrialArgs {
     /// Print the outcome (with every episode length) and the resolved configuration as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Resolve the arguments into a validated trial configuration: the flags become the settings of
-/// a one-cell plan ([`one_cell`]), resolved exactly as a pipeline cell with the same settings, so
-/// `qsweep trial` and that cell have the same configuration and the same cache key.
-pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
-    let system = a.env;
-    let dim = system.dim();
-    let resolution = match a.resolution.0.as_slice() {
-        [one] => vec![*one; dim],
-        many if many.len() == dim => many.to_vec(),
-        many => {
-            return Err(user_error(format!(
-            "--resolution: {system} has {dim} state variables ({}); give {dim} values or one for all, got {}",
-            system.variables().join(","),
-            many.len()
-        )))
-        }
-    };
-    let mut overrides = Vec::new();
-    let mut setting = |name: &str, v: Option<serde_yaml::Value>| {
-        if let Some(v) = v {
-            overrides.push(Override::setting(&["defaults", name], v));
-        }
-    };
-    let num = |v: Option<f64>| v.map(serde_yaml::Value::from);
-    setting("epsilon", num(a.epsilon));
-    setting("gamma", num(a.gamma));
-    setting("alpha", num(a.alpha));
-    setting("lambda", num(a.lambda));
-    setting("q_init", num(a.q_init));
-    setting("tie_break", a.tie_break.map(|t| serde_yaml::to_value(t).unwrap_or_default()));
-    setting("traces", a.replacing_traces.then(|| "replacing".into()));
-    setting("watkins_cut", a.watkins_cut.then_some(true.into()));
-    setting("width", num(a.width));
-    setting("prune", num(a.prune));
-    setting("trace_cutoff", num(a.trace_cutoff));
-    setting("max_episodes", a.max_episodes.map(serde_yaml::Value::from));
-    setting("max_total_steps", a.max_total_steps.map(serde_yaml::Value::from));
-    if let Some(v) = a.balance_steps {
-        if TaskKind::of(system) != TaskKind::Survival {
-            return Err(user_error(format!(
-                "--balance-steps: {system} is a goal-reaching task, not a survival task; use --set success.within=N"
-            )));
-        }
-        overrides.push(Override::setting(&["systems", system.name(), "success", "steps"], v));
-    }
-    let mut env = crate::sim::env::EnvParams::default_for(system);
-    for (name, v) in &a.params {
-        env.set_param(name, *v).map_err(|e| user_error(format!("--param: {e}")))?;
-        overrides.push(Override::setting(&["systems", system.name(), "params", name], *v));
-    }
-    for s in &a.set {
-        overrides.push(trial_override(system, s)?);
-    }
-    one_cell(&CellRequest {
-        system,
-        repr: a.repr,
-        resolution,
-        actions: a.actions.unwrap_or(system.default_actions()),
-        algorithm: a.algorithm,
-        seed: a.seed,
-        overrides,
-    })
-}
-
-/// A `--set` of `qsweep trial`: a bare setting name (`start=gym`) means `defaults.NAME`, a path
-/// starting `success.`, `params.` or `ranges.` is the system's, anything else a full pipeline path.
-fn trial_override(system: SystemKind, arg: &str) -> anyhow::Result<Override> {
-    let o = Override::parse(arg).map_err(user_error)?;
-    let mut path = o.path.clone();
-    match path[0].as_str() {
-        "defaults" | "systems" | "seeds" => {}
-        "success" | "params" | "ranges" => {
-            path.splice(0..0, ["systems".to_string(), system.name().to_string()]);
-        }
-        _ if path.len() == 1 => path.insert(0, "defaults".to_string()),
-        _ => {}
-    }
-    Ok(Override { path, ..o })
 }
 
 /// Run `qsweep trial`.

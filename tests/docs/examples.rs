@@ -1,0 +1,198 @@
+//! Every console example is a test. A ```console block in README.md or the guide holds
+//! `$ qsweep …` lines, each followed by an optional `? CODE` line (the exit status; 0 when absent)
+//! and the output it prints: stdout, then stderr. The runner executes each command with the
+//! built binary in a scratch directory holding a copy of the repository's `pipelines/` (the
+//! commands of one block share it, so a `run` can be followed by a `status`), and compares the
+//! output line by line. Two elisions keep examples honest about what varies (times, paths,
+//! progress): a line `...` stands for any number of lines, and `[..]` within a line for any text.
+//! Commands that cannot run in a test (Slurm, a long run) are written as ```sh blocks instead.
+//!
+//! A mismatch fails naming the file and the line of the example, with the expected and the
+//! actual output.
+
+use crate::markdown::{fences, guide_docs, repo};
+use std::path::Path;
+use std::process::Command;
+
+/// One `$ qsweep …` line of an example, with what it should print.
+struct Example {
+    /// Where the `$` line is, as `FILE:LINE`.
+    at: String,
+    args: Vec<String>,
+    status: i32,
+    expected: Vec<String>,
+}
+
+/// The examples of one ```console block, in order.
+fn parse_block(file: &Path, first_line: usize, lines: &[String]) -> Vec<Example> {
+    let mut out: Vec<Example> = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        if let Some(cmd) = line.strip_prefix("$ ") {
+            let args = split_words(cmd);
+            assert_eq!(
+                args.first().map(String::as_str),
+                Some("qsweep"),
+                "{}:{}: a console example runs `qsweep`; write other commands as a ```sh block",
+                file.display(),
+                first_line + i
+            );
+            let at = format!("{}:{}", file.display(), first_line + i);
+            out.push(Example { at, args: args[1..].to_vec(), status: 0, expected: Vec::new() });
+        } else if let Some(ex) = out.last_mut() {
+            match line.strip_prefix("? ") {
+                Some(code) if ex.expected.is_empty() => {
+                    ex.status = code.trim().parse().unwrap_or_else(|_| panic!("{}: bad status line", ex.at))
+                }
+                _ => ex.expected.push(line.trim_end().to_string()),
+            }
+        } else {
+            panic!("{}:{}: a console block starts with `$ qsweep …`", file.display(), first_line + i);
+        }
+    }
+    out
+}
+
+/// Shell-like word splitting: whitespace separates, '…' and "…" quote.
+fn split_words(s: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut cur = String::new();
+    let mut quote: Option<char> = None;
+    let mut any = false;
+    for c in s.chars() {
+        match quote {
+            Some(q) if c == q => quote = None,
+            Some(_) => cur.push(c),
+            None if c == '\'' || c == '"' => {
+                quote = Some(c);
+                any = true;
+            }
+            None if c.is_whitespace() => {
+                if any || !cur.is_empty() {
+                    words.push(std::mem::take(&mut cur));
+                }
+                any = false;
+            }
+            None => cur.push(c),
+        }
+    }
+    if any || !cur.is_empty() {
+        words.push(cur);
+    }
+    words
+}
+
+/// Whether one expected line matches one actual line (`[..]` matches any text).
+fn line_matches(expected: &str, actual: &str) -> bool {
+    let parts: Vec<&str> = expected.split("[..]").collect();
+    if parts.len() == 1 {
+        return expected == actual;
+    }
+    let (first, last) = (parts[0], parts[parts.len() - 1]);
+    if !actual.starts_with(first) || actual.len() < first.len() + last.len() || !actual.ends_with(last) {
+        return false;
+    }
+    let mut rest = &actual[first.len()..actual.len() - last.len()];
+    for part in &parts[1..parts.len() - 1] {
+        match rest.find(part) {
+            Some(k) => rest = &rest[k + part.len()..],
+            None => return false,
+        }
+    }
+    true
+}
+
+/// Whether the expected lines match the actual ones (`...` lines match any number of lines).
+fn lines_match(expected: &[String], actual: &[String]) -> bool {
+    match expected.split_first() {
+        None => actual.is_empty(),
+        Some((e, rest)) if e == "..." => (0..=actual.len()).any(|k| lines_match(rest, &actual[k..])),
+        Some((e, rest)) => actual.split_first().is_some_and(|(a, more)| line_matches(e, a) && lines_match(rest, more)),
+    }
+}
+
+/// Copies `from` into `to` recursively (the scratch directory's `pipelines/`).
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), target).unwrap();
+        }
+    }
+}
+
+/// Runs one block's examples in a fresh scratch directory; returns a report per mismatch.
+fn run_block(examples: &[Example]) -> Vec<String> {
+    let scratch = tempfile::tempdir().unwrap();
+    copy_dir(&repo().join("pipelines"), &scratch.path().join("pipelines"));
+    let mut failures = Vec::new();
+    for ex in examples {
+        let out = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+            .args(&ex.args)
+            .current_dir(scratch.path())
+            .env_remove("QSWEEP_CACHE")
+            .env("NO_COLOR", "1")
+            .output()
+            .unwrap();
+        let mut actual: Vec<String> = String::from_utf8_lossy(&out.stdout).lines().map(|l| l.trim_end().to_string()).collect();
+        actual.extend(String::from_utf8_lossy(&out.stderr).lines().map(|l| l.trim_end().to_string()));
+        let status = out.status.code().unwrap_or(-1);
+        if status != ex.status || !lines_match(&ex.expected, &actual) {
+            failures.push(format!(
+                "{}: `qsweep {}`\n  exit status: expected {}, got {status}\n  expected output:\n{}\n  actual output:\n{}",
+                ex.at,
+                ex.args.join(" "),
+                ex.status,
+                indent(&ex.expected),
+                indent(&actual)
+            ));
+        }
+    }
+    failures
+}
+
+fn indent(lines: &[String]) -> String {
+    lines.iter().map(|l| format!("    | {l}")).collect::<Vec<_>>().join("\n")
+}
+
+/// Every console block of README.md and the guide, with its file.
+fn blocks() -> Vec<Vec<Example>> {
+    let mut out = Vec::new();
+    for doc in guide_docs() {
+        for f in fences(&doc.text) {
+            if f.info == "console" {
+                out.push(parse_block(&doc.path, f.first_line, &f.lines));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn every_console_example_prints_what_it_says() {
+    let blocks = blocks();
+    let n: usize = blocks.iter().map(Vec::len).sum();
+    assert!(n >= 5, "expected the guide's console examples, found {n}");
+    // The blocks are independent (each has its own scratch directory): run them two at a time.
+    let failures: Vec<String> = std::thread::scope(|s| {
+        let handles: Vec<_> = blocks.chunks(blocks.len().div_ceil(2)).map(|chunk| s.spawn(move || chunk.iter().flat_map(|b| run_block(b)).collect::<Vec<_>>())).collect();
+        handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
+    });
+    eprintln!("{n} console examples in {} blocks run", blocks.len());
+    assert!(failures.is_empty(), "{} of {n} console examples differ:\n\n{}", failures.len(), failures.join("\n\n"));
+}
+
+#[test]
+fn elisions_match_what_they_say() {
+    let l = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    assert!(lines_match(&l(&["a", "...", "d"]), &l(&["a", "b", "c", "d"])));
+    assert!(lines_match(&l(&["a", "...", "b"]), &l(&["a", "b"])));
+    assert!(!lines_match(&l(&["a", "c"]), &l(&["a", "b"])));
+    assert!(lines_match(&l(&["executed 2 in [..] s"]), &l(&["executed 2 in 0.4 s"])));
+    assert!(!lines_match(&l(&["executed 2 in [..] s"]), &l(&["executed 3 in 0.4 s"])));
+    assert!(line_matches("[..]", "anything"));
+    assert!(!line_matches("ab[..]ba", "aba"));
+    assert_eq!(split_words("report 'a b' --x=\"c\" ''"), vec!["report", "a b", "--x=c", ""]);
+}
