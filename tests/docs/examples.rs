@@ -106,7 +106,9 @@ fn lines_match(expected: &[String], actual: &[String]) -> bool {
     match expected.split_first() {
         None => actual.is_empty(),
         Some((e, rest)) if e == "..." => (0..=actual.len()).any(|k| lines_match(rest, &actual[k..])),
-        Some((e, rest)) => actual.split_first().is_some_and(|(a, more)| line_matches(e, a) && lines_match(rest, more)),
+        Some((e, rest)) => {
+            actual.split_first().is_some_and(|(a, more)| line_matches(e, a) && lines_match(rest, more))
+        }
     }
 }
 
@@ -136,7 +138,8 @@ fn run_block(examples: &[Example]) -> Vec<String> {
             .env("NO_COLOR", "1")
             .output()
             .unwrap();
-        let mut actual: Vec<String> = String::from_utf8_lossy(&out.stdout).lines().map(|l| l.trim_end().to_string()).collect();
+        let mut actual: Vec<String> =
+            String::from_utf8_lossy(&out.stdout).lines().map(|l| l.trim_end().to_string()).collect();
         actual.extend(String::from_utf8_lossy(&out.stderr).lines().map(|l| l.trim_end().to_string()));
         let status = out.status.code().unwrap_or(-1);
         if status != ex.status || !lines_match(&ex.expected, &actual) {
@@ -177,11 +180,19 @@ fn every_console_example_prints_what_it_says() {
     assert!(n >= 5, "expected the guide's console examples, found {n}");
     // The blocks are independent (each has its own scratch directory): run them two at a time.
     let failures: Vec<String> = std::thread::scope(|s| {
-        let handles: Vec<_> = blocks.chunks(blocks.len().div_ceil(2)).map(|chunk| s.spawn(move || chunk.iter().flat_map(|b| run_block(b)).collect::<Vec<_>>())).collect();
+        let handles: Vec<_> = blocks
+            .chunks(blocks.len().div_ceil(2))
+            .map(|chunk| s.spawn(move || chunk.iter().flat_map(|b| run_block(b)).collect::<Vec<_>>()))
+            .collect();
         handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
     });
     eprintln!("{n} console examples in {} blocks run", blocks.len());
-    assert!(failures.is_empty(), "{} of {n} console examples differ:\n\n{}", failures.len(), failures.join("\n\n"));
+    assert!(
+        failures.is_empty(),
+        "{} of {n} console examples differ:\n\n{}",
+        failures.len(),
+        failures.join("\n\n")
+    );
 }
 
 #[test]

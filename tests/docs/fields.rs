@@ -14,7 +14,8 @@ use std::process::Command;
 /// line of `text` containing `marker` (e.g. "`qsweep run --json`").
 fn table_after(text: &str, marker: &str) -> BTreeSet<String> {
     let lines = prose_lines(text);
-    let start = lines.iter().position(|l| l.contains(marker)).unwrap_or_else(|| panic!("no `{marker}` in the guide"));
+    let start =
+        lines.iter().position(|l| l.contains(marker)).unwrap_or_else(|| panic!("no `{marker}` in the guide"));
     lines[start..]
         .iter()
         .skip_while(|l| !l.starts_with('|'))
@@ -35,7 +36,12 @@ fn guide(chapter: &str) -> String {
 
 /// Runs the binary in `dir` and returns stdout, asserting exit 0.
 fn qsweep(dir: &Path, args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_qsweep")).args(args).current_dir(dir).env_remove("QSWEEP_CACHE").output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("QSWEEP_CACHE")
+        .output()
+        .unwrap();
     assert!(out.status.success(), "qsweep {}: {}", args.join(" "), String::from_utf8_lossy(&out.stderr));
     String::from_utf8(out.stdout).unwrap()
 }
@@ -55,28 +61,55 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
     }
     let d = dir.path();
     let text = guide("json.md");
-    let trial = ["trial", "--env", "cart-pole", "--repr", "crisp", "--resolution", "2,2,2,2", "--algorithm", "q0", "--set", "max_episodes=3", "--json"];
+    let trial = [
+        "trial",
+        "--env",
+        "cart-pole",
+        "--repr",
+        "crisp",
+        "--resolution",
+        "2,2,2,2",
+        "--algorithm",
+        "q0",
+        "--set",
+        "max_episodes=3",
+        "--json",
+    ];
     let cases: Vec<(&str, String)> = vec![
         ("`qsweep run --json`", qsweep(d, &["run", "tiny.yaml", "--json", "--no-report", "--quiet"])),
         // A raced pipeline, so the optional `race` list is printed too.
         ("`qsweep status --json`", qsweep(d, &["status", "race.yaml", "--json"])),
         ("`qsweep trial --json`", qsweep(d, &trial)),
-        ("`qsweep bench --json`", qsweep(d, &["bench", "--steps", "1000", "--filter", "cart-pole/crisp/q0/2^4", "--json"])),
-        ("`qsweep bench --pipeline P --json`", qsweep(d, &["bench", "--pipeline", "tiny.yaml", "--top", "1", "--json"])),
+        (
+            "`qsweep bench --json`",
+            qsweep(d, &["bench", "--steps", "1000", "--filter", "cart-pole/crisp/q0/2^4", "--json"]),
+        ),
+        (
+            "`qsweep bench --pipeline P --json`",
+            qsweep(d, &["bench", "--pipeline", "tiny.yaml", "--top", "1", "--json"]),
+        ),
         (
             "`qsweep feasible --json`",
-            qsweep(d, &["feasible", "--env", "cart-pole", "--resolution", "2", "--max-nodes", "100", "--json"]),
+            qsweep(
+                d,
+                &["feasible", "--env", "cart-pole", "--resolution", "2", "--max-nodes", "100", "--json"],
+            ),
         ),
     ];
     for (marker, stdout) in cases {
-        assert_eq!(table_after(&text, marker), json_keys(&stdout), "docs/json.md's table after {marker} against the binary's output");
+        assert_eq!(
+            table_after(&text, marker),
+            json_keys(&stdout),
+            "docs/json.md's table after {marker} against the binary's output"
+        );
     }
 }
 
 #[test]
 fn the_cache_column_table_lists_exactly_the_schema() {
     let documented = table_after(&guide("reading-results.md"), "One row per trial");
-    let schema: BTreeSet<String> = qsweep::cache::rows::schema().fields().iter().map(|f| f.name().clone()).collect();
+    let schema: BTreeSet<String> =
+        qsweep::cache::rows::schema().fields().iter().map(|f| f.name().clone()).collect();
     assert_eq!(documented, schema, "docs/reading-results.md's cache columns against cache::rows::schema()");
 }
 
@@ -88,7 +121,10 @@ fn the_uncertainty_table_lists_exactly_table3_csv_s_last_columns() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let from = header.iter().position(|c| *c == "ci_lo").expect("table3.csv has ci_lo");
     let written: BTreeSet<String> = header[from..].iter().map(|c| c.to_string()).collect();
-    assert_eq!(documented, written, "docs/reports.md's uncertainty columns against reports/paper/as-written/table3.csv");
+    assert_eq!(
+        documented, written,
+        "docs/reports.md's uncertainty columns against reports/paper/as-written/table3.csv"
+    );
 }
 
 #[test]
@@ -101,7 +137,13 @@ fn the_settings_list_names_exactly_the_settings_the_parser_accepts() {
         .cloned()
         .collect::<Vec<_>>()
         .join(" ");
-    let list = para.split("experiment `settings`):").nth(1).expect("the settings paragraph").split("; e.g.").next().unwrap();
+    let list = para
+        .split("experiment `settings`):")
+        .nth(1)
+        .expect("the settings paragraph")
+        .split("; e.g.")
+        .next()
+        .unwrap();
     // Backticked words that are names, not values in parentheses (`random`|`first`).
     let mut documented = BTreeSet::new();
     let mut depth = 0;
@@ -116,9 +158,14 @@ fn the_settings_list_names_exactly_the_settings_the_parser_accepts() {
     let dir = tempfile::tempdir().unwrap();
     let pipeline = "name: t\nseeds: 1\ndefaults: { no_such_setting: 1 }\nsystems:\n  ball-beam:\n    experiments:\n      - { id: 1, repr: crisp, vary: { x: [2] , x_dot: [2] } }\n";
     std::fs::write(dir.path().join("t.yaml"), pipeline).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_qsweep")).args(["status", "t.yaml"]).current_dir(dir.path()).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+        .args(["status", "t.yaml"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    let expected = stderr.split("expected one of").nth(1).unwrap_or_else(|| panic!("no field list in: {stderr}"));
+    let expected =
+        stderr.split("expected one of").nth(1).unwrap_or_else(|| panic!("no field list in: {stderr}"));
     let accepted: BTreeSet<String> = backticked(expected.split(';').next().unwrap()).into_iter().collect();
     assert_eq!(documented, accepted, "docs/pipelines.md's settings against the parser's ({stderr})");
 }

@@ -92,8 +92,11 @@ fn every_link_and_anchor_of_the_committed_reports_resolves() {
 fn every_long_help_ends_with_its_guide_chapter() {
     let mut cases: Vec<(Vec<&str>, &str)> = vec![(vec!["--help"], qsweep::cli::GUIDE_INDEX)];
     cases.extend(qsweep::cli::GUIDE.iter().map(|(sub, chapter)| (vec![*sub, "--help"], *chapter)));
-    let mut subcommands: Vec<String> =
-        qsweep::cli::command().get_subcommands().map(|s| s.get_name().to_string()).filter(|n| n != "help").collect();
+    let mut subcommands: Vec<String> = qsweep::cli::command()
+        .get_subcommands()
+        .map(|s| s.get_name().to_string())
+        .filter(|n| n != "help")
+        .collect();
     let mut guided: Vec<String> = qsweep::cli::GUIDE.iter().map(|(s, _)| s.to_string()).collect();
     subcommands.sort();
     guided.sort();
@@ -105,6 +108,9 @@ fn every_long_help_ends_with_its_guide_chapter() {
         assert_eq!(last.trim(), format!("Guide: {chapter}"), "qsweep {}", args.join(" "));
         let (file, anchor) = chapter.split_once('#').unwrap_or((chapter, ""));
         let text = std::fs::read_to_string(repo().join(file)).unwrap_or_else(|e| panic!("{chapter}: {e}"));
-        assert!(anchor.is_empty() || anchors(&text).iter().any(|a| a == anchor), "{chapter}: no such heading");
+        assert!(
+            anchor.is_empty() || anchors(&text).iter().any(|a| a == anchor),
+            "{chapter}: no such heading"
+        );
     }
 }

@@ -18,8 +18,8 @@ pub struct Doc {
 
 impl Doc {
     pub fn read(rel: &Path) -> Doc {
-        let text = std::fs::read_to_string(repo().join(rel))
-            .unwrap_or_else(|e| panic!("{}: {e}", rel.display()));
+        let text =
+            std::fs::read_to_string(repo().join(rel)).unwrap_or_else(|e| panic!("{}: {e}", rel.display()));
         Doc { path: rel.to_path_buf(), text }
     }
 }
