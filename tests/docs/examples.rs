@@ -21,6 +21,8 @@ struct Example {
     args: Vec<String>,
     status: i32,
     expected: Vec<String>,
+    /// The line of each expected line in the file, to name the one that differs.
+    expected_lines: Vec<usize>,
 }
 
 /// The examples of one ```console block, in order.
@@ -37,13 +39,22 @@ fn parse_block(file: &Path, first_line: usize, lines: &[String]) -> Vec<Example>
                 first_line + i
             );
             let at = format!("{}:{}", file.display(), first_line + i);
-            out.push(Example { at, args: args[1..].to_vec(), status: 0, expected: Vec::new() });
+            out.push(Example {
+                at,
+                args: args[1..].to_vec(),
+                status: 0,
+                expected: Vec::new(),
+                expected_lines: Vec::new(),
+            });
         } else if let Some(ex) = out.last_mut() {
             match line.strip_prefix("? ") {
                 Some(code) if ex.expected.is_empty() => {
                     ex.status = code.trim().parse().unwrap_or_else(|_| panic!("{}: bad status line", ex.at))
                 }
-                _ => ex.expected.push(line.trim_end().to_string()),
+                _ => {
+                    ex.expected.push(line.trim_end().to_string());
+                    ex.expected_lines.push(first_line + i);
+                }
             }
         } else {
             panic!("{}:{}: a console block starts with `$ qsweep …`", file.display(), first_line + i);
@@ -112,6 +123,29 @@ fn lines_match(expected: &[String], actual: &[String]) -> bool {
     }
 }
 
+/// The first expected line that a greedy reading cannot match (each `...` taking the fewest
+/// lines), to point at in a failure; None when every expected line matched but lines are left.
+fn first_mismatch(expected: &[String], actual: &[String]) -> Option<usize> {
+    let mut a = 0;
+    let mut i = 0;
+    while i < expected.len() {
+        if expected[i] == "..." {
+            let Some(next) = expected.get(i + 1) else { return None };
+            match actual[a..].iter().position(|l| line_matches(next, l)) {
+                Some(k) => a += k,
+                None => return Some(i + 1),
+            }
+        } else {
+            match actual.get(a) {
+                Some(l) if line_matches(&expected[i], l) => a += 1,
+                _ => return Some(i),
+            }
+        }
+        i += 1;
+    }
+    None
+}
+
 /// Copies `from` into `to` recursively (the scratch directory's `pipelines/`).
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
@@ -143,8 +177,14 @@ fn run_block(examples: &[Example]) -> Vec<String> {
         actual.extend(String::from_utf8_lossy(&out.stderr).lines().map(|l| l.trim_end().to_string()));
         let status = out.status.code().unwrap_or(-1);
         if status != ex.status || !lines_match(&ex.expected, &actual) {
+            let file = ex.at.split(':').next().unwrap_or("");
+            let at = match first_mismatch(&ex.expected, &actual) {
+                Some(k) => format!("{file}:{}: this expected line differs", ex.expected_lines[k]),
+                None if status != ex.status => format!("{}: the exit status differs", ex.at),
+                None => format!("{}: the command prints more lines than expected", ex.at),
+            };
             failures.push(format!(
-                "{}: `qsweep {}`\n  exit status: expected {}, got {status}\n  expected output:\n{}\n  actual output:\n{}",
+                "{at}\n{}: `qsweep {}`\n  exit status: expected {}, got {status}\n  expected output:\n{}\n  actual output:\n{}",
                 ex.at,
                 ex.args.join(" "),
                 ex.status,
@@ -205,5 +245,7 @@ fn elisions_match_what_they_say() {
     assert!(!lines_match(&l(&["executed 2 in [..] s"]), &l(&["executed 3 in 0.4 s"])));
     assert!(line_matches("[..]", "anything"));
     assert!(!line_matches("ab[..]ba", "aba"));
+    assert_eq!(first_mismatch(&l(&["a", "...", "x", "d"]), &l(&["a", "b", "c", "d"])), Some(2));
+    assert_eq!(first_mismatch(&l(&["a", "q"]), &l(&["a", "b"])), Some(1));
     assert_eq!(split_words("report 'a b' --x=\"c\" ''"), vec!["report", "a b", "--x=c", ""]);
 }
