@@ -155,17 +155,45 @@ fn the_settings_list_names_exactly_the_settings_the_parser_accepts() {
         }
     }
     // The parser's own list: an unknown setting's error names every accepted one.
+    let accepted = parser_fields("defaults: { bogus: 1 }\nsystems: {}\n");
+    assert_eq!(documented, accepted, "docs/pipelines.md's settings against the parser's");
+}
+
+/// The keys the pipeline parser accepts in the section where `body` (after `name` and `seeds`)
+/// puts the unknown key `bogus`: its error lists them ("expected one of `a`, `b`", "expected `a`
+/// or `b`", "expected `a`").
+fn parser_fields(body: &str) -> BTreeSet<String> {
     let dir = tempfile::tempdir().unwrap();
-    let pipeline = "name: t\nseeds: 1\ndefaults: { no_such_setting: 1 }\nsystems:\n  ball-beam:\n    experiments:\n      - { id: 1, repr: crisp, vary: { x: [2] , x_dot: [2] } }\n";
-    std::fs::write(dir.path().join("t.yaml"), pipeline).unwrap();
+    std::fs::write(dir.path().join("t.yaml"), format!("name: t\nseeds: 1\n{body}")).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_qsweep"))
         .args(["status", "t.yaml"])
         .current_dir(dir.path())
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    let expected =
-        stderr.split("expected one of").nth(1).unwrap_or_else(|| panic!("no field list in: {stderr}"));
-    let accepted: BTreeSet<String> = backticked(expected.split(';').next().unwrap()).into_iter().collect();
-    assert_eq!(documented, accepted, "docs/pipelines.md's settings against the parser's ({stderr})");
+    assert!(stderr.contains("unknown field `bogus`"), "not an unknown-field error for {body}: {stderr}");
+    let list = stderr.split("unknown field `bogus`, expected").nth(1).unwrap().split(';').next().unwrap();
+    backticked(list).into_iter().collect()
+}
+
+#[test]
+fn the_field_tables_list_exactly_the_keys_the_parser_accepts() {
+    let text = guide("pipelines.md");
+    let exp = "systems:\n  ball-beam:\n    experiments:\n      - { id: 1, bogus: 1, repr: crisp, vary: { x: [2], x_dot: [2] } }\n";
+    let cases = [
+        ("### Top level", "bogus: 1\nsystems: {}\n"),
+        ("### A system (`systems.NAME`)", "systems:\n  ball-beam:\n    bogus: 1\n"),
+        ("### An experiment (`systems.NAME.experiments.N`)", exp),
+        ("### A variant (`variants.N`)", "variants: [{ id: a, bogus: 1 }]\nsystems: {}\n"),
+        ("### `race`", "race: { bogus: 1 }\nsystems: {}\n"),
+        ("### `fresh`", "fresh: { bogus: 1 }\nsystems: {}\n"),
+        ("### `exploratory`", "exploratory: { bogus: 1 }\nsystems: {}\n"),
+    ];
+    for (heading, body) in cases {
+        assert_eq!(
+            table_after(&text, heading),
+            parser_fields(body),
+            "docs/pipelines.md's table under {heading} against the parser"
+        );
+    }
 }
