@@ -197,3 +197,42 @@ fn the_field_tables_list_exactly_the_keys_the_parser_accepts() {
         );
     }
 }
+
+/// The column names of a committed CSV's header.
+fn csv_header(rel: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(repo().join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    text.lines().next().unwrap_or("").split(',').map(str::to_string).collect()
+}
+
+/// The column names of a committed Parquet file.
+fn parquet_columns(rel: &str) -> BTreeSet<String> {
+    let file = std::fs::File::open(repo().join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let reader = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
+    reader.schema().fields().iter().map(|f| f.name().clone()).collect()
+}
+
+#[test]
+fn the_report_column_tables_list_exactly_the_columns_written() {
+    let text = guide("reports.md");
+    let table3 = csv_header("reports/paper/as-written/table3.csv");
+    let leading: BTreeSet<String> = table3.iter().take_while(|c| *c != "ci_lo").cloned().collect();
+    assert_eq!(
+        table_after(&text, "The first columns of `table3.csv`"),
+        leading,
+        "docs/reports.md against table3.csv"
+    );
+    // The paper's cells carry `variant` and the fresh columns, a raced pipeline's `contender`.
+    let mut cells = parquet_columns("reports/paper/as-written/cells.parquet");
+    cells.extend(parquet_columns("reports/paper-race/cells.parquet"));
+    assert_eq!(
+        table_after(&text, "`cells.parquet`, one row per heatmap cell"),
+        cells,
+        "docs/reports.md against cells.parquet"
+    );
+    let variants: BTreeSet<String> = csv_header("reports/paper/variants.csv").into_iter().collect();
+    assert_eq!(
+        table_after(&text, "`variants.csv` (the comparison folder)"),
+        variants,
+        "docs/reports.md against variants.csv"
+    );
+}
