@@ -153,7 +153,7 @@ def test_pandas_polars_duckdb_agree_on_rows_and_types(cells: pd.DataFrame, trial
 
 
 def test_pyarrow_backed_pandas_keeps_the_stored_types() -> None:
-    """The README's idiom: `dtype_backend="pyarrow"` keeps uint64 and the nullable uint32."""
+    """The guide's idiom (docs/reading-results.md): `dtype_backend="pyarrow"` keeps uint64 and the nullable uint32."""
     t = pd.read_parquet(REPORT_DIR / "trials.parquet", dtype_backend="pyarrow")
     assert t["total_steps"].dtype == pd.ArrowDtype(pa.uint64())
     assert t["seed"].dtype == pd.ArrowDtype(pa.uint64())
