@@ -1,7 +1,8 @@
 //! Every console example is a test. A ```console block in README.md or the guide holds
 //! `$ qsweep …` lines, each followed by an optional `? CODE` line (the exit status; 0 when absent)
-//! and the output it prints: stdout, then stderr. The runner executes each command with the
-//! built binary in a scratch directory holding a copy of the repository's `pipelines/` (the
+//! and the output it prints, stdout and stderr as a terminal interleaves them. The runner
+//! executes each command with the built binary in a scratch directory holding a copy of the
+//! repository's `pipelines/` (the
 //! commands of one block share it, so a `run` can be followed by a `status`), and compares the
 //! output line by line. Two elisions keep examples honest about what varies (times, paths,
 //! progress): a line `...` stands for any number of lines, and `[..]` within a line for any text.
@@ -165,16 +166,20 @@ fn run_block(examples: &[Example]) -> Vec<String> {
     copy_dir(&repo().join("pipelines"), &scratch.path().join("pipelines"));
     let mut failures = Vec::new();
     for ex in examples {
-        let out = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+        // stdout and stderr share one pipe (`2>&1`), so the lines come in the order a terminal
+        // shows them (progress lines on stderr, the summary on stdout).
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg("exec \"$0\" \"$@\" 2>&1")
+            .arg(env!("CARGO_BIN_EXE_qsweep"))
             .args(&ex.args)
             .current_dir(scratch.path())
             .env_remove("QSWEEP_CACHE")
             .env("NO_COLOR", "1")
             .output()
             .unwrap();
-        let mut actual: Vec<String> =
+        let actual: Vec<String> =
             String::from_utf8_lossy(&out.stdout).lines().map(|l| l.trim_end().to_string()).collect();
-        actual.extend(String::from_utf8_lossy(&out.stderr).lines().map(|l| l.trim_end().to_string()));
         let status = out.status.code().unwrap_or(-1);
         if status != ex.status || !lines_match(&ex.expected, &actual) {
             let file = ex.at.split(':').next().unwrap_or("");
