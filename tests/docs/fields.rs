@@ -236,3 +236,44 @@ fn the_report_column_tables_list_exactly_the_columns_written() {
         "docs/reports.md against variants.csv"
     );
 }
+
+/// `12.3` and `4.56` as the report's Markdown prints them (two decimals).
+fn two_decimals(s: &str) -> String {
+    s.parse::<f64>().map(|v| format!("{v:.2}")).unwrap_or_else(|_| s.to_string())
+}
+
+#[test]
+fn the_readme_table_iii_rows_equal_the_committed_report() {
+    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    let csv = std::fs::read_to_string(repo().join("reports/paper/gym-v0-terminal/table3.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let prose = prose_lines(&readme);
+    let start = prose
+        .iter()
+        .position(|l| l.starts_with("A few rows of Table III"))
+        .expect("the README's Table III rows");
+    let table: Vec<&String> = prose[start..]
+        .iter()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .skip(2)
+        .collect();
+    assert!(!table.is_empty());
+    for line in table {
+        let cells: Vec<&str> = line.split('|').map(str::trim).filter(|c| !c.is_empty()).collect();
+        let [system, exp, algorithm, ours, paper] = cells[..] else { panic!("README row {line}") };
+        let row = rows
+            .iter()
+            .find(|r| {
+                r[col("system")] == system && r[col("experiment")] == exp && r[col("algorithm")] == algorithm
+            })
+            .unwrap_or_else(|| panic!("no row {system} {exp} {algorithm} in table3.csv"));
+        let pm = |m: &str, s: &str| format!("{} ± {}", two_decimals(row[col(m)]), two_decimals(row[col(s)]));
+        assert_eq!(ours, pm("mean", "std"), "README.md: {line}");
+        assert_eq!(paper, pm("paper_mean", "paper_std"), "README.md: {line}");
+        assert_eq!(row[col("n")], "10", "README.md says the best cell's 10 seeds: {line}");
+    }
+}
