@@ -277,3 +277,42 @@ fn the_readme_table_iii_rows_equal_the_committed_report() {
         assert_eq!(row[col("n")], "10", "README.md says the best cell's 10 seeds: {line}");
     }
 }
+
+#[test]
+fn the_readme_replication_answer_counts_equal_variants_csv() {
+    let readme = std::fs::read_to_string(repo().join("README.md"))
+        .unwrap()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    let csv = std::fs::read_to_string(repo().join("reports/paper/variants.csv")).unwrap();
+    let header = csv_header("reports/paper/variants.csv");
+    let col = |name: &str| header.iter().position(|c| c == name).unwrap();
+    // `title` may be quoted with commas: read the fields before it and count the rest from the end.
+    let rows: Vec<Vec<String>> =
+        csv.lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect();
+    let field = |r: &Vec<String>, name: &str| {
+        let i = col(name);
+        if i < col("title") {
+            r[i].clone()
+        } else {
+            r[r.len() - (header.len() - i)].clone()
+        }
+    };
+    let variant =
+        |id: &str| rows.iter().find(|r| r[col("variant")] == id).unwrap_or_else(|| panic!("no {id}")).clone();
+    let (aw, best) = (variant("as-written"), variant("gym-v0-terminal"));
+    assert_eq!(field(&best, "rank"), "1", "the README calls gym-v0-terminal the best-fitting reading");
+    let expected = [
+        format!("as written, {} of its {} Table III rows", field(&aw, "replicating"), field(&aw, "rows")),
+        format!("({} more within 2×)", field(&aw, "within_2x")),
+        format!("{} are and {} more are within 2×", field(&best, "replicating"), field(&best, "within_2x")),
+    ];
+    for e in expected {
+        assert!(readme.contains(&e), "README.md should say `{e}` (reports/paper/variants.csv)");
+    }
+    assert!(
+        rows.iter().all(|r| field(r, "equivalent_n10") == "0"),
+        "README.md says no row of any reading is equivalent"
+    );
+}
