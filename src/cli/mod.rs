@@ -12,6 +12,7 @@ mod simulate;
 mod slurm;
 mod status;
 mod trial;
+mod trial_args;
 mod trial_config;
 mod verify;
 
@@ -36,7 +37,7 @@ pub enum Command {
     /// Roll a system forward under given action values and print the trajectory as CSV.
     Simulate(simulate::SimulateArgs),
     /// Run one trial (one configuration, one seed) and print its outcome.
-    Trial(trial::TrialArgs),
+    Trial(trial_args::TrialArgs),
     /// Run a pipeline's missing trials in parallel, store them in the cache, then write the report.
     Run(run::RunArgs),
     /// Show how many of a pipeline's trials are cached and missing, without running anything.

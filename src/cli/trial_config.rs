@@ -1,7 +1,7 @@
 //! `qsweep trial`'s flags resolved into a trial configuration: they become the settings of a
 //! one-cell plan, so a trial and the pipeline cell with the same settings share their key.
 
-use super::trial::TrialArgs;
+use super::trial_args::TrialArgs;
 use crate::error::user_error;
 use crate::plan::{one_cell, CellRequest};
 use crate::sim::config::TrialConfig;

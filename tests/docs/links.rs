@@ -114,3 +114,18 @@ fn every_long_help_ends_with_its_guide_chapter() {
         );
     }
 }
+
+#[test]
+fn summary_lists_every_chapter_of_the_guide() {
+    let summary = std::fs::read_to_string(repo().join("docs/SUMMARY.md")).unwrap();
+    let listed: Vec<String> = links(&summary).into_iter().map(|(_, t)| t).collect();
+    let mut missing = Vec::new();
+    for doc in guide_docs() {
+        let Ok(rel) = doc.path.strip_prefix("docs") else { continue };
+        let rel = rel.to_string_lossy().to_string();
+        if rel != "SUMMARY.md" && !listed.contains(&rel) {
+            missing.push(rel);
+        }
+    }
+    assert!(missing.is_empty(), "docs/SUMMARY.md (the guide's table of contents) does not list: {missing:?}");
+}
