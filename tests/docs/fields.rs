@@ -316,3 +316,19 @@ fn the_readme_replication_answer_counts_equal_variants_csv() {
         "README.md says no row of any reading is equivalent"
     );
 }
+
+#[test]
+fn the_trials_parquet_table_lists_exactly_the_columns_written() {
+    // trials.parquet is not committed: write one, of a pipeline with variants and fresh seeds so
+    // that the conditional `variant` and `fresh` columns are there (a fraction of a second).
+    let dir = tempfile::tempdir().unwrap();
+    let fixture = std::fs::read_to_string(repo().join("tests/fixtures/pipelines/fresh.yaml")).unwrap();
+    let pipeline = format!("{fixture}variants:\n  - id: a\n  - id: b\n    set: {{ defaults.q_init: 1 }}\n");
+    std::fs::write(dir.path().join("p.yaml"), pipeline).unwrap();
+    qsweep(dir.path(), &["run", "p.yaml", "--cache", "c", "--out", "r", "--formats", "trials", "--quiet"]);
+    let file = std::fs::File::open(dir.path().join("r/trials.parquet")).unwrap();
+    let reader = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(file).unwrap();
+    let written: BTreeSet<String> = reader.schema().fields().iter().map(|f| f.name().clone()).collect();
+    let documented = table_after(&guide("reports.md"), "`trials.parquet`, one row per trial of each cell");
+    assert_eq!(documented, written, "docs/reports.md's trials.parquet columns against a report's");
+}
