@@ -131,7 +131,7 @@ fn first_mismatch(expected: &[String], actual: &[String]) -> Option<usize> {
     let mut i = 0;
     while i < expected.len() {
         if expected[i] == "..." {
-            let Some(next) = expected.get(i + 1) else { return None };
+            let next = expected.get(i + 1)?;
             match actual[a..].iter().position(|l| line_matches(next, l)) {
                 Some(k) => a += k,
                 None => return Some(i + 1),
