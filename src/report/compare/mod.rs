@@ -4,12 +4,15 @@
 //!
 //! - `variants.md`, `variants.csv`: one row per variant, scoring how well its Table III reproduces
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
+//! - `consistency.md`, `consistency.csv` (pipelines with reference values): every pair of Table III
+//!   rows whose grids overlap, with the Welch test of their published means ([`consistency`]);
 //! - `figures/diff-<variant>-<system>.svg` (and `.png` with `--formats png`), for every variant
 //!   but the first: per cell, the change of mean episodes against the first variant ([`diff`]);
 //! - `index.html` and `README.md` (for repository web pages): links to each variant's own report,
 //!   the table and the difference figures.
 
 pub mod conclusions;
+pub mod consistency;
 pub mod diff;
 mod digest;
 pub mod explore;
@@ -63,6 +66,15 @@ pub fn write_comparison(
             put("conclusions.csv", render(&t, &Csv).as_bytes())?;
         }
     }
+    let consistency = consistency::consistency_table(plan).map(|c| c.1);
+    if let Some(t) = &consistency {
+        if formats.has(Format::Md) {
+            put("consistency.md", render(t, &Markdown).as_bytes())?;
+        }
+        if formats.has(Format::Csv) {
+            put("consistency.csv", render(t, &Csv).as_bytes())?;
+        }
+    }
     if let Some(t) = &held_out {
         if formats.has(Format::Md) {
             put("held_out.md", render(t, &Markdown).as_bytes())?;
@@ -96,11 +108,21 @@ pub fn write_comparison(
     }
     let notes = dir.join(NOTES).is_file();
     if formats.has(Format::Html) {
-        let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
+        let tables = Tables {
+            fit: &table,
+            held_out: held_out.as_ref(),
+            matrix: matrix.as_ref(),
+            consistency: consistency.as_ref(),
+        };
         put("index.html", page(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
+        let tables = Tables {
+            fit: &table,
+            held_out: held_out.as_ref(),
+            matrix: matrix.as_ref(),
+            consistency: consistency.as_ref(),
+        };
         put("README.md", readme(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
     }
     Ok(out.files)
@@ -133,6 +155,8 @@ struct Tables<'a> {
     held_out: Option<&'a Table>,
     /// The reading × claim matrix (pipelines with reference values).
     matrix: Option<&'a Table>,
+    /// The pairs of Table III rows whose grids overlap (pipelines with reference values).
+    consistency: Option<&'a Table>,
 }
 
 /// The hand-written notes a comparison folder may hold beside the report (the paper's
@@ -184,6 +208,9 @@ fn page(
             "<p>What these results mean for the replication: <a href=\"{NOTES}\">{NOTES}</a>.</p>\n"
         ));
     }
+    if let Some(t) = consistency::cause_tally(variants) {
+        h.push_str(&format!("<p id=\"causes\">{}</p>\n", esc(&t)));
+    }
     // Only the files this report writes (`--formats`).
     let links: Vec<&str> = [
         (Format::Csv, "<a href=\"variants.csv\">variants.csv</a>"),
@@ -192,6 +219,7 @@ fn page(
     ]
     .into_iter()
     .chain(tables.matrix.map(|_| (Format::Csv, "<a href=\"conclusions.csv\">conclusions.csv</a>")))
+    .chain(tables.consistency.map(|_| (Format::Csv, "<a href=\"consistency.csv\">consistency.csv</a>")))
     .filter(|(f, _)| formats.has(*f))
     .map(|(_, l)| l)
     .collect();
@@ -206,6 +234,10 @@ fn page(
     }
     if let Some(t) = tables.matrix {
         h.push_str("<h2 id=\"claims\">The paper's conclusions, per reading</h2>\n");
+        h.push_str(&captioned(t));
+    }
+    if let Some(t) = tables.consistency {
+        h.push_str("<h2 id=\"consistency\">The paper against itself</h2>\n");
         h.push_str(&captioned(t));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
@@ -262,6 +294,9 @@ fn readme(
     if notes {
         m.push_str(&format!("What these results mean for the replication: [{NOTES}]({NOTES}).\n\n"));
     }
+    if let Some(t) = consistency::cause_tally(variants) {
+        m.push_str(&format!("{t}\n\n"));
+    }
     m.push_str(
         "Each variant is the whole pipeline with some settings changed; each has its own full report:\n\n",
     );
@@ -290,6 +325,10 @@ fn readme(
     }
     if let Some(t) = tables.matrix {
         m.push_str("\n## The paper's conclusions, per reading\n\n");
+        m.push_str(&render(t, &Markdown));
+    }
+    if let Some(t) = tables.consistency {
+        m.push_str("\n## The paper against itself\n\n");
         m.push_str(&render(t, &Markdown));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
@@ -462,6 +501,8 @@ systems:
             [
                 "variants.md",
                 "variants.csv",
+                "consistency.md",
+                "consistency.csv",
                 "figures/diff-fast-ball-beam.svg",
                 "figures/diff-fast-ball-beam.png",
                 "index.html",
@@ -473,7 +514,7 @@ systems:
         let out = files(tmp.path());
         assert_eq!(
             out.keys().cloned().collect::<Vec<_>>().len(),
-            6,
+            8,
             "no temporary files left: {:?}",
             out.keys()
         );
