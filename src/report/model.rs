@@ -329,14 +329,18 @@ impl<'a> ReportData<'a> {
     /// Table III's rows that belong to a pair the paper's own numbers contradict
     /// ([`crate::analysis::consistency`]): (experiment index, algorithm).
     pub fn inconsistent_rows(&self) -> Vec<(usize, Algorithm)> {
-        let rows = published_rows(self.plan);
-        let published: Vec<Published> = rows.iter().map(|r| r.2.clone()).collect();
-        let pairs = crate::analysis::consistency::pairs(&published);
-        rows.iter()
-            .enumerate()
-            .filter(|(i, _)| crate::analysis::consistency::inconsistent(&pairs, *i))
-            .map(|(_, r)| (r.0, r.1))
-            .collect()
+        let mut out = Vec::new();
+        for rows in published_rows(self.plan) {
+            let published: Vec<Published> = rows.iter().map(|r| r.2.clone()).collect();
+            let pairs = crate::analysis::consistency::pairs(&published);
+            out.extend(
+                rows.iter()
+                    .enumerate()
+                    .filter(|(i, _)| crate::analysis::consistency::inconsistent(&pairs, *i))
+                    .map(|(_, r)| (r.0, r.1)),
+            );
+        }
+        out
     }
 
     /// Whether any experiment carries published reference values.
@@ -347,10 +351,16 @@ impl<'a> ReportData<'a> {
 
 /// The plan's Table III rows that have a published value, as the consistency check reads them
 /// ([`crate::analysis::consistency`]): each with its experiment's index and its grid (the
-/// experiment's cells of the algorithm), in plan order.
-pub fn published_rows(plan: &Plan) -> Vec<(usize, Algorithm, Published)> {
-    let mut out = Vec::new();
+/// experiment's cells of the algorithm), in plan order, one group per variant (a plan of several
+/// variants holds each variant's copy of the paper's values; pairs are sought within one).
+pub fn published_rows(plan: &Plan) -> Vec<Vec<(usize, Algorithm, Published)>> {
+    let mut groups: Vec<(Option<&str>, Vec<(usize, Algorithm, Published)>)> = Vec::new();
     for (ei, e) in plan.experiments.iter().enumerate() {
+        let variant = e.variant.as_deref();
+        if !groups.iter().any(|g| g.0 == variant) {
+            groups.push((variant, Vec::new()));
+        }
+        let group = &mut groups.iter_mut().find(|g| g.0 == variant).expect("just added").1;
         for &alg in &e.algorithms {
             let Some(r) = e.reference.get(&alg) else { continue };
             let grid = e
@@ -369,10 +379,10 @@ pub fn published_rows(plan: &Plan) -> Vec<(usize, Algorithm, Published)> {
                 config: r.resolution.clone().zip(r.actions),
                 grid,
             };
-            out.push((ei, alg, row));
+            group.push((ei, alg, row));
         }
     }
-    out
+    groups.into_iter().map(|g| g.1).filter(|g| !g.is_empty()).collect()
 }
 
 fn cell_data<'a>(

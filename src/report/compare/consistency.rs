@@ -20,13 +20,11 @@ fn config_text(c: &Option<Config>) -> Value {
     })
 }
 
-/// The comparable pairs of `plan`'s published rows, and the table listing them (`None` when the
-/// plan has no reference values).
+/// The comparable pairs of `plan`'s published rows (those of its first variant: every variant
+/// holds the same paper), and the table listing them (`None` when the plan has no reference
+/// values).
 pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
-    let rows: Vec<_> = published_rows(plan).into_iter().map(|r| r.2).collect();
-    if rows.is_empty() {
-        return None;
-    }
+    let rows: Vec<_> = published_rows(plan).into_iter().next()?.into_iter().map(|r| r.2).collect();
     let found = pairs(&rows);
     let columns = vec![
         Column::new("System", "system", Align::Left),
