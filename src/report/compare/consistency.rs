@@ -89,11 +89,17 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
 }
 
 /// The opening sentence on causes: the tally of the best declared reading (first by the fit
-/// measure), or `None` without reference rows.
-pub fn cause_tally(variants: &[VariantDigest]) -> Option<String> {
-    let fits: Vec<Fit> = variants.iter().map(|v| v.fit).collect();
-    let best = fit_order(&fits).into_iter().find(|&i| !variants[i].info.exploratory)?;
-    let v = &variants[best];
+/// measure; in an exploratory search, the chosen reading, ranked on the fit rows), or `None`
+/// without reference rows.
+pub fn cause_tally(plan: &Plan, variants: &[VariantDigest]) -> Option<String> {
+    let (v, which) = if plan.exploratory.is_some() {
+        let id = &super::explore::chosen(plan, variants)?.id;
+        (variants.iter().find(|v| &v.info.id == id)?, "the chosen reading of the search")
+    } else {
+        let fits: Vec<Fit> = variants.iter().map(|v| v.fit).collect();
+        let best = fit_order(&fits).into_iter().find(|&i| !variants[i].info.exploratory)?;
+        (&variants[best], "the best declared reading")
+    };
     if v.rows.is_empty() {
         return None;
     }
@@ -102,10 +108,9 @@ pub fn cause_tally(variants: &[VariantDigest]) -> Option<String> {
         .map(|c| format!("{} {}", v.rows.iter().filter(|r| r.cause == *c).count(), c.label()))
         .collect();
     Some(format!(
-        "Why each Table III row does or does not replicate, under the best declared reading `{}` \
-         ({} rows): {}. {CAUSE_RULE} Each reading's table3.csv gives the cause per row beside ours \
-         at the paper's configuration; consistency.csv lists the pairs of rows the paper's own \
-         numbers contradict.",
+        "Why each Table III row does or does not replicate, under {which} `{}` ({} rows): {}. \
+         {CAUSE_RULE} Each reading's table3.csv gives the cause per row beside ours at the paper's \
+         configuration; consistency.csv lists the pairs of rows the paper's own numbers contradict.",
         v.info.id,
         v.rows.len(),
         counts.join(", ")

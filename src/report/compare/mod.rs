@@ -208,7 +208,7 @@ fn page(
             "<p>What these results mean for the replication: <a href=\"{NOTES}\">{NOTES}</a>.</p>\n"
         ));
     }
-    if let Some(t) = consistency::cause_tally(variants) {
+    if let Some(t) = consistency::cause_tally(plan, variants) {
         h.push_str(&format!("<p id=\"causes\">{}</p>\n", esc(&t)));
     }
     // Only the files this report writes (`--formats`).
@@ -294,7 +294,7 @@ fn readme(
     if notes {
         m.push_str(&format!("What these results mean for the replication: [{NOTES}]({NOTES}).\n\n"));
     }
-    if let Some(t) = consistency::cause_tally(variants) {
+    if let Some(t) = consistency::cause_tally(plan, variants) {
         m.push_str(&format!("{t}\n\n"));
     }
     m.push_str(
