@@ -110,7 +110,7 @@ def paper_cell(cells: pd.DataFrame, t3: pd.DataFrame) -> pd.DataFrame:
             out.append({"mean": math.nan, "std": math.nan, "n": 0})
             continue
         c = c.iloc[0]
-        f = "fresh_" if c["fresh_n"] > 0 else ""
+        f = "fresh_" if c.get("fresh_n", 0) > 0 else ""
         out.append({"mean": c[f"{f}mean"], "std": c[f"{f}std"], "n": int(c[f"{f}n"])})
     return pd.DataFrame(out, index=t3.index)
 
@@ -184,14 +184,24 @@ def cause_table(d: Path, v: str) -> None:
     j = judged(t3)
     at = paper_cell(cells, t3)
     why = causes(t3, cells)
+    # The declared reading whose best cell (judged estimate) comes closest to the paper, per row.
+    listed = pd.read_csv(d / "variants.csv")
+    others = {
+        o: judged(pd.read_csv(d / o / "table3.csv", dtype={"experiment": str}))
+        for o, x in zip(listed["variant"], listed["exploratory"].astype(str))
+        if x == "no" and (d / o / "table3.csv").is_file()
+    }
     print(f"### Why each row does or does not replicate, under `{v}`\n")
-    print("| system | exp. | algorithm | paper | ours, best cell | verdict | ours at paper's config | verdict | cause |")
-    print("|---|---|---|---:|---:|---|---:|---|---|")
+    print("| system | exp. | algorithm | paper | ours, best cell | verdict | ours at paper's config | verdict | cause | closest reading (ours/paper) |")
+    print("|---|---|---|---:|---:|---|---:|---|---|---|")
     for (i, r), c in zip(j.iterrows(), why):
         pc = pd.Series({**r.to_dict(), "mean": at.loc[i, "mean"], "std": at.loc[i, "std"], "n": at.loc[i, "n"]})
+        near = min(others, key=lambda o: (abs(math.log(others[o].loc[i, "mean"] / r.paper_mean)), o))
+        ratio = others[near].loc[i, "mean"] / r.paper_mean
         print(
             f"| {r.system} | {r.experiment} | {r.algorithm} | {r.paper_mean:g} ± {r.paper_std:g} "
-            f"| {r['mean']:.1f} ± {r['std']:.1f} | {verdict(r)} | {pc['mean']:.1f} ± {pc['std']:.1f} | {verdict(pc)} | {c} |"
+            f"| {r['mean']:.1f} ± {r['std']:.1f} | {verdict(r)} | {pc['mean']:.1f} ± {pc['std']:.1f} | {verdict(pc)} | {c} "
+            f"| `{near}` ({ratio:.2f}) |"
         )
     tallied = {c: why.count(c) for c in ["replicates", "argmin", "paper-inconsistent", "learner", "unexplained"]}
     print("\nTally: " + ", ".join(f"{n} {c}" for c, n in tallied.items()) + ".\n")
@@ -237,7 +247,7 @@ def study(d: Path) -> str:
     best = next(v for v in ranked if not explo[v])
     print(f"\nBest fit under the pre-registered measure: `{best}`.\n")
     side_by_side(d, "as-written", best)
-    if (d / "cells.parquet").is_file():
+    if (d / "cells.parquet").is_file() and "paper_cell_mean" in pd.read_csv(d / best / "table3.csv", nrows=0).columns:
         cause_table(d, best)
     return best
 
