@@ -349,12 +349,15 @@ impl<'a> ReportData<'a> {
     }
 }
 
+/// A published Table III row with its experiment's index and its algorithm.
+pub type PublishedRow = (usize, Algorithm, Published);
+
 /// The plan's Table III rows that have a published value, as the consistency check reads them
 /// ([`crate::analysis::consistency`]): each with its experiment's index and its grid (the
 /// experiment's cells of the algorithm), in plan order, one group per variant (a plan of several
 /// variants holds each variant's copy of the paper's values; pairs are sought within one).
-pub fn published_rows(plan: &Plan) -> Vec<Vec<(usize, Algorithm, Published)>> {
-    let mut groups: Vec<(Option<&str>, Vec<(usize, Algorithm, Published)>)> = Vec::new();
+pub fn published_rows(plan: &Plan) -> Vec<Vec<PublishedRow>> {
+    let mut groups: Vec<(Option<&str>, Vec<PublishedRow>)> = Vec::new();
     for (ei, e) in plan.experiments.iter().enumerate() {
         let variant = e.variant.as_deref();
         if !groups.iter().any(|g| g.0 == variant) {
