@@ -18,22 +18,22 @@ seeds: 4
 defaults: { max_episodes: 25 }
 systems:
   ball-beam:
-crisp: { epsilon: 1.0e-6, gamma: 0.9, alpha: 0.1, lambda: 0.9 }
-success: { steps: 300 }
-experiments:
-  - id: 1
-    repr: crisp
-    vary: { x: [2, 3], x_dot: [2, 3] }
-    fixed: { actions: 3 }
-    reference:
-      q0: { mean: 6.0, std: 3.0, resolution: [3, 3], actions: 3 }
-      q-lambda: { mean: 2.0, std: 1.0, resolution: [2, 3], actions: 3 }
-  - id: 2
-    repr: crisp
-    vary: { x: [2, 3, 4] }
-    fixed: { x_dot: 3, actions: 3 }
-    reference:
-      q0: { mean: 8.0, std: 3.0 }
+    crisp: { epsilon: 1.0e-6, gamma: 0.9, alpha: 0.1, lambda: 0.9 }
+    success: { steps: 300 }
+    experiments:
+      - id: 1
+        repr: crisp
+        vary: { x: [2, 3], x_dot: [2, 3] }
+        fixed: { actions: 3 }
+        reference:
+          q0: { mean: 6.0, std: 3.0, resolution: [3, 3], actions: 3 }
+          q-lambda: { mean: 2.0, std: 1.0, resolution: [2, 3], actions: 3 }
+      - id: 2
+        repr: crisp
+        vary: { x: [2, 3, 4] }
+        fixed: { x_dot: 3, actions: 3 }
+        reference:
+          q0: { mean: 8.0, std: 3.0 }
 ";
 
 fn plan_with(sets: &[&str]) -> Plan {
