@@ -94,9 +94,134 @@ def fit_key(t: dict) -> tuple:
     return (-t["replicating"], -t["within_2x"], -t["config_match"], abs(math.log(t["geo_mean_ratio"])))
 
 
-def study(d: Path) -> str:
-    """Print the variant study; return the id of the best-fitting variant."""
+def paper_cell(cells: pd.DataFrame, t3: pd.DataFrame) -> pd.DataFrame:
+    """Per Table III row, our cell at the paper's stated configuration (one variant's cells, from
+    cells.parquet), on its fresh-seed estimate where it has one: columns mean, std, n (NaN where
+    the row has no such cell)."""
+    out = []
+    for _, r in t3.iterrows():
+        c = cells[
+            (cells.system_title == r.system) & (cells.experiment.astype(str) == str(r.experiment)) & (cells.label == r.algorithm)
+        ]
+        for col in RES_COLS + ["actions"]:
+            want = r[f"paper_{col}"]
+            c = c[c[col].isna()] if pd.isna(want) else c[c[col] == want]
+        if len(c) != 1 or pd.isna(r["paper_actions"]) or c.iloc[0]["n"] == 0:
+            out.append({"mean": math.nan, "std": math.nan, "n": 0})
+            continue
+        c = c.iloc[0]
+        f = "fresh_" if c.get("fresh_n", 0) > 0 else ""
+        out.append({"mean": c[f"{f}mean"], "std": c[f"{f}std"], "n": int(c[f"{f}n"])})
+    return pd.DataFrame(out, index=t3.index)
+
+
+def consistency(t3: pd.DataFrame, cells: pd.DataFrame) -> list[dict]:
+    """Every pair of Table III rows (same system, representation, algorithm; different experiments)
+    where one row's published configuration is a cell of the other's grid, with the two-sided Welch
+    test of the published means (10 runs each); contradictory when p < 0.05 and the difference goes
+    the way the grids forbid (the grid's minimum above the contained row's value)."""
+    from scipy import stats
+
+    def cfg(r: pd.Series) -> tuple | None:
+        if pd.isna(r["paper_actions"]):
+            return None
+        return tuple(int(r[f"paper_{c}"]) for c in RES_COLS if pd.notna(r[f"paper_{c}"])) + (int(r["paper_actions"]),)
+
+    def grid(r: pd.Series) -> set:
+        c = cells[(cells.system_title == r.system) & (cells.experiment.astype(str) == str(r.experiment)) & (cells.label == r.algorithm)]
+        return {tuple(int(x[k]) for k in RES_COLS if pd.notna(x[k])) + (int(x["actions"]),) for _, x in c.iterrows()}
+
+    rows = [r for _, r in t3.iterrows() if pd.notna(r["paper_mean"])]
+    grids = [grid(r) for r in rows]
+    out = []
+    for i, a in enumerate(rows):
+        for j in range(i + 1, len(rows)):
+            b = rows[j]
+            if (a.system, a.algorithm) != (b.system, b.algorithm) or a.experiment == b.experiment:
+                continue
+            a_in_b, b_in_a = cfg(a) in grids[j], cfg(b) in grids[i]
+            if not (a_in_b or b_in_a):
+                continue
+            t, p = stats.ttest_ind_from_stats(b.paper_mean, b.paper_std, 10, a.paper_mean, a.paper_std, 10, equal_var=False)
+            forbidden = (a_in_b and b.paper_mean > a.paper_mean) or (b_in_a and a.paper_mean > b.paper_mean)
+            out.append({"a": i, "b": j, "row_a": a, "row_b": b, "t": float(t), "p": float(p), "contradictory": bool(p < 0.05 and forbidden)})
+    return out
+
+
+def causes(t3: pd.DataFrame, cells: pd.DataFrame) -> list[str]:
+    """Each Table III row's cause by the rule pre-registered in docs/preregistration.md (issue #40),
+    recomputed from cells.parquet and the paper's values: replicates, paper-inconsistent, argmin,
+    learner, unexplained."""
+    j = judged(t3)
+    at = paper_cell(cells, t3)
+    rows = [i for i, r in t3.iterrows() if pd.notna(r["paper_mean"])]
+    bad = set()
+    for p in consistency(t3, cells):
+        if p["contradictory"]:
+            bad |= {rows[p["a"]], rows[p["b"]]}
+    out = []
+    for i, r in j.iterrows():
+        if pd.isna(r["paper_mean"]):
+            out.append("")
+            continue
+        if verdict(r) == "replicates":
+            out.append("replicates")
+        elif i in bad:
+            out.append("paper-inconsistent")
+        elif at.loc[i, "n"] == 0:
+            out.append("unexplained")
+        else:
+            pc = verdict(pd.Series({**r.to_dict(), "mean": at.loc[i, "mean"], "std": at.loc[i, "std"], "n": at.loc[i, "n"]}))
+            out.append("argmin" if pc == "replicates" else "learner")
+    return out
+
+
+def cause_table(d: Path, v: str) -> None:
+    """The per-row cause table of REPLICATION.md for reading `v`, and its tally."""
+    cells = pd.read_parquet(d / "cells.parquet")
+    cells = cells[cells.variant == v]
+    t3 = pd.read_csv(d / v / "table3.csv", dtype={"experiment": str})
+    j = judged(t3)
+    at = paper_cell(cells, t3)
+    why = causes(t3, cells)
+    # The declared reading whose best cell (judged estimate) comes closest to the paper, per row.
     listed = pd.read_csv(d / "variants.csv")
+    others = {
+        o: judged(pd.read_csv(d / o / "table3.csv", dtype={"experiment": str}))
+        for o, x in zip(listed["variant"], listed["exploratory"].astype(str))
+        if x == "no" and (d / o / "table3.csv").is_file()
+    }
+    print(f"### Why each row does or does not replicate, under `{v}`\n")
+    print("| system | exp. | algorithm | paper | ours, best cell | verdict | ours at paper's config | verdict | cause | closest reading (ours/paper) |")
+    print("|---|---|---|---:|---:|---|---:|---|---|---|")
+    for (i, r), c in zip(j.iterrows(), why):
+        pc = pd.Series({**r.to_dict(), "mean": at.loc[i, "mean"], "std": at.loc[i, "std"], "n": at.loc[i, "n"]})
+        near = min(others, key=lambda o: (abs(math.log(others[o].loc[i, "mean"] / r.paper_mean)), o))
+        ratio = others[near].loc[i, "mean"] / r.paper_mean
+        print(
+            f"| {r.system} | {r.experiment} | {r.algorithm} | {r.paper_mean:g} ± {r.paper_std:g} "
+            f"| {r['mean']:.1f} ± {r['std']:.1f} | {verdict(r)} | {pc['mean']:.1f} ± {pc['std']:.1f} | {verdict(pc)} | {c} "
+            f"| `{near}` ({ratio:.2f}) |"
+        )
+    tallied = {c: why.count(c) for c in ["replicates", "argmin", "paper-inconsistent", "learner", "unexplained"]}
+    print("\nTally: " + ", ".join(f"{n} {c}" for c, n in tallied.items()) + ".\n")
+    print("### The paper against itself (pairs of Table III rows whose grids overlap)\n")
+    print("| system | algorithm | exp. a | paper a | exp. b | paper b | Welch t (b − a) | p | contradictory |")
+    print("|---|---|---|---:|---|---:|---:|---:|---|")
+    for p in consistency(t3, cells):
+        a, b = p["row_a"], p["row_b"]
+        print(
+            f"| {a.system} | {a.algorithm} | {a.experiment} | {a.paper_mean:g} ± {a.paper_std:g} | {b.experiment} "
+            f"| {b.paper_mean:g} ± {b.paper_std:g} | {p['t']:.2f} | {p['p']:.2g} | {'yes' if p['contradictory'] else 'no'} |"
+        )
+    print()
+
+
+def study(d: Path) -> str:
+    """Print the variant study; return the id of the best-fitting declared variant. Exploratory
+    readings have no folder of their own (their rows are in variants.csv only) and are skipped."""
+    listed = pd.read_csv(d / "variants.csv")
+    listed = listed[[(d / v / "table3.csv").is_file() for v in listed["variant"]]]
     ids = listed["variant"].tolist()
     tallies = {v: tally(pd.read_csv(d / v / "table3.csv", dtype={"experiment": str})) for v in ids}
     for _, r in listed.iterrows():
@@ -105,7 +230,9 @@ def study(d: Path) -> str:
             got = r[k]
             ok = math.isclose(got, want, rel_tol=1e-9) if k == "geo_mean_ratio" else int(got) == want
             assert ok, f"variants.csv {r['variant']}.{k} = {got}, recomputed {want}"
-    ranked = sorted(ids, key=lambda v: (fit_key(tallies[v]), ids.index(v)))
+    # variants.csv lists the declared readings first, each part in fit order.
+    explo = dict(zip(listed["variant"], listed["exploratory"].astype(str) == "yes"))
+    ranked = sorted(ids, key=lambda v: (explo[v], fit_key(tallies[v]), ids.index(v)))
     assert ranked == ids, f"variants.csv order {ids} differs from the recomputed ranking {ranked}"
     print("### Every variant's fit (variants.csv, recomputed from each variant's table3.csv)\n")
     print("| rank | variant | replicate | within 2× | do not | configs match | Q(0)/Q(λ) order | geo. mean ours/paper |")
@@ -117,9 +244,11 @@ def study(d: Path) -> str:
             f"| {i} | `{v}` | {t['replicating']} | {t['within_2x']} | {rest} | {t['config_match']} "
             f"| {t['order_match']}/{t['order_experiments']} | {t['geo_mean_ratio']:.2f} |"
         )
-    best = ranked[0]
+    best = next(v for v in ranked if not explo[v])
     print(f"\nBest fit under the pre-registered measure: `{best}`.\n")
     side_by_side(d, "as-written", best)
+    if (d / "cells.parquet").is_file() and "paper_cell_mean" in pd.read_csv(d / best / "table3.csv", nrows=0).columns:
+        cause_table(d, best)
     return best
 
 

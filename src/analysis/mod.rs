@@ -6,10 +6,12 @@
 
 mod best;
 pub mod claims;
+pub mod consistency;
 pub mod equivalence;
 pub mod rank;
 mod summary;
 pub mod survival;
+pub mod verdict;
 pub mod welch;
 
 pub use best::{best_cell, episodes_counted, Best, Candidate, BEST_RULE, CENSORING, RACE_RULE};

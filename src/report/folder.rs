@@ -91,7 +91,7 @@ pub fn write_folder(
     // The CSV holds every column; the pages, Markdown and LaTeX show the uncertainty apart.
     let t3 = table::table3_parts(data);
     let both = |w: &dyn table::TableWriter, sep: &str| {
-        format!("{}{sep}{}", table::render(&t3[0], w), table::render(&t3[1], w))
+        t3.iter().map(|t| table::render(t, w)).collect::<Vec<_>>().join(sep)
     };
     if formats.has(Format::Md) {
         put("table3.md", both(&table::Markdown, "\n").as_bytes())?;

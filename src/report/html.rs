@@ -119,10 +119,12 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
     h.push_str("</nav>\n");
 
     h.push_str("<h2 id=\"table3\">Table III: best configurations</h2>\n<div class=\"scroll\">\n");
-    let [main, uncertainty] = table3_parts(data);
-    h.push_str(&render(&main, &Html));
-    h.push_str("</div>\n<div class=\"scroll\" id=\"uncertainty\">\n");
-    h.push_str(&render(&uncertainty, &Html));
+    let parts = table3_parts(data);
+    h.push_str(&render(&parts[0], &Html));
+    for (t, id) in parts[1..].iter().zip(["uncertainty", "paper-config"]) {
+        h.push_str(&format!("</div>\n<div class=\"scroll\" id=\"{id}\">\n"));
+        h.push_str(&render(t, &Html));
+    }
     h.push_str("</div>\n");
 
     for s in systems {

@@ -8,8 +8,9 @@ use super::model::ReportData;
 use super::table::{render, Markdown, Table};
 use crate::analysis::CENSORING;
 
-/// The Markdown page of one report; `t3` is its Table III in its two parts.
-pub fn page(data: &ReportData, t3: &[Table; 2], formats: Formats) -> String {
+/// The Markdown page of one report; `t3` is its Table III in its parts
+/// ([`super::table::table3_parts`]).
+pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
     let (name, notes) = identity(data);
     let mut m = format!("# qsweep report: {name}\n\n");
     if data.plan.report_variant().is_some() {
@@ -39,9 +40,8 @@ pub fn page(data: &ReportData, t3: &[Table; 2], formats: Formats) -> String {
         m.push('.');
     }
     m.push_str("\n\n");
-    m.push_str(&render(&t3[0], &Markdown));
-    m.push('\n');
-    m.push_str(&render(&t3[1], &Markdown));
+    let parts: Vec<String> = t3.iter().map(|t| render(t, &Markdown)).collect();
+    m.push_str(&parts.join("\n"));
     if let Some(ext) = formats.figure_ext() {
         for s in data.systems() {
             m.push_str(&format!("\n## {}\n\n", s.title()));

@@ -6,6 +6,7 @@
 //! [`crate::analysis`]'s, shared with the race.
 
 use crate::analysis::claims::ClaimCell;
+use crate::analysis::consistency::Published;
 use crate::analysis::{best_cell, episodes_counted, Best, Candidate, Summary};
 use crate::cache::rows::StoredOutcome;
 use crate::cache::{Key, TrialRecord};
@@ -325,10 +326,66 @@ impl<'a> ReportData<'a> {
         out
     }
 
+    /// Table III's rows that belong to a pair the paper's own numbers contradict
+    /// ([`crate::analysis::consistency`]): (experiment index, algorithm).
+    pub fn inconsistent_rows(&self) -> Vec<(usize, Algorithm)> {
+        let mut out = Vec::new();
+        for rows in published_rows(self.plan) {
+            let published: Vec<Published> = rows.iter().map(|r| r.2.clone()).collect();
+            let pairs = crate::analysis::consistency::pairs(&published);
+            out.extend(
+                rows.iter()
+                    .enumerate()
+                    .filter(|(i, _)| crate::analysis::consistency::inconsistent(&pairs, *i))
+                    .map(|(_, r)| (r.0, r.1)),
+            );
+        }
+        out
+    }
+
     /// Whether any experiment carries published reference values.
     pub fn has_reference(&self) -> bool {
         self.experiments.iter().any(|e| !e.exp.reference.is_empty())
     }
+}
+
+/// A published Table III row with its experiment's index and its algorithm.
+pub type PublishedRow = (usize, Algorithm, Published);
+
+/// The plan's Table III rows that have a published value, as the consistency check reads them
+/// ([`crate::analysis::consistency`]): each with its experiment's index and its grid (the
+/// experiment's cells of the algorithm), in plan order, one group per variant (a plan of several
+/// variants holds each variant's copy of the paper's values; pairs are sought within one).
+pub fn published_rows(plan: &Plan) -> Vec<Vec<PublishedRow>> {
+    let mut groups: Vec<(Option<&str>, Vec<PublishedRow>)> = Vec::new();
+    for (ei, e) in plan.experiments.iter().enumerate() {
+        let variant = e.variant.as_deref();
+        if !groups.iter().any(|g| g.0 == variant) {
+            groups.push((variant, Vec::new()));
+        }
+        let group = &mut groups.iter_mut().find(|g| g.0 == variant).expect("just added").1;
+        for &alg in &e.algorithms {
+            let Some(r) = e.reference.get(&alg) else { continue };
+            let grid = e
+                .cells
+                .iter()
+                .filter(|c| c.algorithm == alg)
+                .map(|c| (c.config.repr.resolution.clone(), c.config.actions))
+                .collect();
+            let row = Published {
+                system: e.system,
+                repr: e.repr,
+                experiment: e.id.clone(),
+                algorithm: alg,
+                mean: r.mean,
+                std: r.std,
+                config: r.resolution.clone().zip(r.actions),
+                grid,
+            };
+            group.push((ei, alg, row));
+        }
+    }
+    groups.into_iter().map(|g| g.1).filter(|g| !g.is_empty()).collect()
 }
 
 fn cell_data<'a>(

@@ -281,10 +281,12 @@ fn missing_trials_are_counted_and_reference_values_compared() {
     assert!(header.contains(
         ",paper_mean,paper_std,paper_x,paper_x_dot,paper_theta,paper_theta_dot,paper_actions,diff_mean,"
     ));
-    // The uncertainty columns come last, so the earlier fields keep their positions.
-    assert!(header.ends_with(
-        ",ci_lo,ci_hi,censored,km_median,ratio,ratio_lo,ratio_hi,tost_p_n10,equivalent_n10,tost_p_n100,equivalent_n100"
+    // The uncertainty columns follow, then ours at the paper's configuration and the cause (issue
+    // #40), so the earlier fields keep their positions.
+    assert!(header.contains(
+        ",ci_lo,ci_hi,censored,km_median,ratio,ratio_lo,ratio_hi,tost_p_n10,equivalent_n10,tost_p_n100,equivalent_n100,paper_cell_mean,"
     ), "{header}");
+    assert!(header.ends_with(",verdict,paper_cell_verdict,paper_inconsistent,cause"), "{header}");
     let row = csv.lines().nth(1).unwrap();
     assert!(row.starts_with("Ball-Beam,1,Q(0)-learning,"), "{row}");
     // The uncertainty columns agree with the row's own numbers.

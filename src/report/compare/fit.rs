@@ -1,23 +1,15 @@
 //! How well one variant's Table III reproduces the pipeline's `reference:` values: the verdict
-//! of each row ([`verdict`], the one definition of the rule that `scripts/replication_summary.py`
-//! recomputes independently), the per-variant tally ([`Fit`]) and the order of the comparison
+//! of each row ([`verdict`], defined once in [`crate::analysis::verdict`], the rule that
+//! `scripts/replication_summary.py` recomputes independently), the per-variant tally ([`Fit`]) and the order of the comparison
 //! table ([`FIT_ORDER`]).
 
 use super::super::model::{resolution_columns, ReportData};
 use super::super::table::{Align, Column, Row, Table, Value};
 use super::info::VariantInfo;
 use crate::analysis::equivalence::{against_paper, Tost, EQUIVALENCE_RULE};
+pub use crate::analysis::verdict::{cause, verdict, Cause, Verdict, REFERENCE_N, VERDICT_RULE};
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
-
-/// Seeds behind each reference value (the paper's ten runs), for the standard error.
-pub const REFERENCE_N: f64 = 10.0;
-
-/// The verdict rule, as stated in the caption.
-pub const VERDICT_RULE: &str = "A Table III row replicates its reference when |ours − reference| ≤ \
-2·√(s_ref²/10 + s_ours²/n) (two standard errors; the reference has 10 runs, a row with a single \
-trial has no std and does not replicate); it is within 2× when it does not replicate but 0.5 ≤ \
-ours/reference ≤ 2.";
 
 /// How the rows are ordered, as stated in the caption.
 pub const FIT_ORDER: &str = "Rows are ordered by fit (the measure pre-registered in \
@@ -48,32 +40,6 @@ pub struct Fit {
     /// Rows judged on a fresh-seed estimate, and over those the geometric mean of fresh ÷
     /// selection mean (above 1: the grid's choice flattered the row; `None` without such rows).
     pub fresh: (usize, Option<f64>),
-}
-
-/// Verdict of one Table III row against its reference.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Verdict {
-    /// Within two standard errors.
-    Replicates,
-    /// Not replicating, but ours/reference ∈ [0.5, 2].
-    Within2x,
-    /// Neither.
-    DoesNotReplicate,
-}
-
-/// The verdict for our mean and std over `n` trials against a reference mean and std.
-pub fn verdict(ours: f64, ours_std: Option<f64>, n: usize, ref_mean: f64, ref_std: f64) -> Verdict {
-    let replicates = ours_std.is_some_and(|s| {
-        let se = (ref_std * ref_std / REFERENCE_N + s * s / n as f64).sqrt();
-        (ours - ref_mean).abs() <= 2.0 * se
-    });
-    if replicates {
-        Verdict::Replicates
-    } else if ref_mean > 0.0 && (0.5..=2.0).contains(&(ours / ref_mean)) {
-        Verdict::Within2x
-    } else {
-        Verdict::DoesNotReplicate
-    }
 }
 
 /// One Table III row scored against its reference: what [`Fit`] tallies, kept per row so a fit can
@@ -110,12 +76,20 @@ pub struct RowFit {
     pub fresh: bool,
     /// The selection estimate: the best cell's mean over the grid's seeds that chose it.
     pub selection_mean: f64,
+    /// The verdict of our cell at the paper's configuration (its fresh-seed estimate where it has
+    /// one; `None`: no such cell with trials).
+    pub paper_cell: Option<Verdict>,
+    /// The row is in a pair of rows the paper's own numbers contradict.
+    pub inconsistent: bool,
+    /// The row's cause ([`cause`]).
+    pub cause: Cause,
 }
 
 /// Every Table III row of `data` that has a reference value and a best cell, in report order.
 pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
     let mut out = Vec::new();
-    for e in &data.experiments {
+    let inconsistent = data.inconsistent_rows();
+    for (ei, e) in data.experiments.iter().enumerate() {
         let system = e.exp.system;
         for &alg in &e.exp.algorithms {
             let Some(r) = e.exp.reference.get(&alg) else { continue };
@@ -139,6 +113,12 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
                 .flatten()
                 .chain(r.actions)
                 .collect();
+            let paper_cell = e.reference_cell(alg).and_then(|i| {
+                let est = e.cells[i].estimate();
+                Some(verdict(est.summary.mean?, est.summary.std, est.n(), r.mean, r.std))
+            });
+            let row_verdict = verdict(mean, std, n, r.mean, r.std);
+            let bad = inconsistent.contains(&(ei, alg));
             out.push(RowFit {
                 system,
                 experiment: e.exp.id.clone(),
@@ -148,12 +128,15 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
                 n,
                 ref_mean: r.mean,
                 ref_std: r.std,
-                verdict: verdict(mean, std, n, r.mean, r.std),
+                verdict: row_verdict,
                 config_match: ours == theirs,
                 exp_algorithms: e.exp.algorithms.len(),
                 tost: against_paper(mean, std, n, r.mean, r.std),
                 fresh: est.fresh,
                 selection_mean,
+                paper_cell,
+                inconsistent: bad,
+                cause: cause(row_verdict, bad, paper_cell),
             });
         }
     }

@@ -4,12 +4,15 @@
 //!
 //! - `variants.md`, `variants.csv`: one row per variant, scoring how well its Table III reproduces
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
+//! - `consistency.md`, `consistency.csv` (pipelines with reference values): every pair of Table III
+//!   rows whose grids overlap, with the Welch test of their published means ([`consistency`]);
 //! - `figures/diff-<variant>-<system>.svg` (and `.png` with `--formats png`), for every variant
 //!   but the first: per cell, the change of mean episodes against the first variant ([`diff`]);
 //! - `index.html` and `README.md` (for repository web pages): links to each variant's own report,
 //!   the table and the difference figures.
 
 pub mod conclusions;
+pub mod consistency;
 pub mod diff;
 mod digest;
 pub mod explore;
@@ -63,6 +66,15 @@ pub fn write_comparison(
             put("conclusions.csv", render(&t, &Csv).as_bytes())?;
         }
     }
+    let consistency = consistency::consistency_table(plan).map(|c| c.1);
+    if let Some(t) = &consistency {
+        if formats.has(Format::Md) {
+            put("consistency.md", render(t, &Markdown).as_bytes())?;
+        }
+        if formats.has(Format::Csv) {
+            put("consistency.csv", render(t, &Csv).as_bytes())?;
+        }
+    }
     if let Some(t) = &held_out {
         if formats.has(Format::Md) {
             put("held_out.md", render(t, &Markdown).as_bytes())?;
@@ -96,11 +108,21 @@ pub fn write_comparison(
     }
     let notes = dir.join(NOTES).is_file();
     if formats.has(Format::Html) {
-        let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
+        let tables = Tables {
+            fit: &table,
+            held_out: held_out.as_ref(),
+            matrix: matrix.as_ref(),
+            consistency: consistency.as_ref(),
+        };
         put("index.html", page(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
+        let tables = Tables {
+            fit: &table,
+            held_out: held_out.as_ref(),
+            matrix: matrix.as_ref(),
+            consistency: consistency.as_ref(),
+        };
         put("README.md", readme(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
     }
     Ok(out.files)
@@ -133,6 +155,8 @@ struct Tables<'a> {
     held_out: Option<&'a Table>,
     /// The reading × claim matrix (pipelines with reference values).
     matrix: Option<&'a Table>,
+    /// The pairs of Table III rows whose grids overlap (pipelines with reference values).
+    consistency: Option<&'a Table>,
 }
 
 /// The hand-written notes a comparison folder may hold beside the report (the paper's
@@ -184,6 +208,9 @@ fn page(
             "<p>What these results mean for the replication: <a href=\"{NOTES}\">{NOTES}</a>.</p>\n"
         ));
     }
+    if let Some(t) = consistency::cause_tally(plan, variants) {
+        h.push_str(&format!("<p id=\"causes\">{}</p>\n", esc(&t)));
+    }
     // Only the files this report writes (`--formats`).
     let links: Vec<&str> = [
         (Format::Csv, "<a href=\"variants.csv\">variants.csv</a>"),
@@ -192,6 +219,7 @@ fn page(
     ]
     .into_iter()
     .chain(tables.matrix.map(|_| (Format::Csv, "<a href=\"conclusions.csv\">conclusions.csv</a>")))
+    .chain(tables.consistency.map(|_| (Format::Csv, "<a href=\"consistency.csv\">consistency.csv</a>")))
     .filter(|(f, _)| formats.has(*f))
     .map(|(_, l)| l)
     .collect();
@@ -206,6 +234,10 @@ fn page(
     }
     if let Some(t) = tables.matrix {
         h.push_str("<h2 id=\"claims\">The paper's conclusions, per reading</h2>\n");
+        h.push_str(&captioned(t));
+    }
+    if let Some(t) = tables.consistency {
+        h.push_str("<h2 id=\"consistency\">The paper against itself</h2>\n");
         h.push_str(&captioned(t));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
@@ -262,6 +294,9 @@ fn readme(
     if notes {
         m.push_str(&format!("What these results mean for the replication: [{NOTES}]({NOTES}).\n\n"));
     }
+    if let Some(t) = consistency::cause_tally(plan, variants) {
+        m.push_str(&format!("{t}\n\n"));
+    }
     m.push_str(
         "Each variant is the whole pipeline with some settings changed; each has its own full report:\n\n",
     );
@@ -292,6 +327,10 @@ fn readme(
         m.push_str("\n## The paper's conclusions, per reading\n\n");
         m.push_str(&render(t, &Markdown));
     }
+    if let Some(t) = tables.consistency {
+        m.push_str("\n## The paper against itself\n\n");
+        m.push_str(&render(t, &Markdown));
+    }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
         for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
             m.push_str(&format!("\n## {} against {}\n\n", v.info.id, base.info.id));
@@ -310,273 +349,4 @@ fn readme(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::analysis::bootstrap_diff_ci;
-    use crate::cache::{Key, TrialRecord};
-    use crate::plan::plan;
-    use crate::report::model::ReportData;
-    use crate::sim::run_trial;
-    use crate::spec::{load_str, LoadedSpec, Override};
-    use plotters::style::RGBColor;
-    use std::collections::{BTreeMap, HashMap};
-
-    /// Two Ball-Beam experiments (a 2 × 2 grid and a 3-cell row), 4 seeds, short trials.
-    const PIPELINE: &str = "\
-name: vt
-seeds: 4
-defaults: { max_episodes: 25 }
-systems:
-  ball-beam:
-    crisp: { epsilon: 1.0e-6, gamma: 0.9, alpha: 0.1, lambda: 0.9 }
-    success: { steps: 300 }
-    experiments:
-      - id: 1
-        repr: crisp
-        vary: { x: [2, 3], x_dot: [2, 3] }
-        fixed: { actions: 3 }
-        reference:
-          q0: { mean: 6.0, std: 3.0, resolution: [3, 3], actions: 3 }
-          q-lambda: { mean: 2.0, std: 1.0, resolution: [2, 3], actions: 3 }
-      - id: 2
-        repr: crisp
-        vary: { x: [2, 3, 4] }
-        fixed: { x_dot: 3, actions: 3 }
-        reference:
-          q0: { mean: 8.0, std: 3.0 }
-";
-
-    fn plan_with(sets: &[&str]) -> Plan {
-        let overrides: Vec<Override> = sets.iter().map(|s| Override::parse(s).unwrap()).collect();
-        let spec = load_str(PIPELINE, "vt.yaml", &overrides).unwrap();
-        plan(&LoadedSpec { spec, path: "vt.yaml".into(), variants: Vec::new() }, None).unwrap()
-    }
-
-    fn run_all(plan: &Plan) -> HashMap<Key, TrialRecord> {
-        plan.unique_trials()
-            .into_iter()
-            .map(|(c, t)| (t.key, TrialRecord::new(c.clone(), t.seed, run_trial(c, t.seed), 0.0)))
-            .collect()
-    }
-
-    fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-        let mut out = BTreeMap::new();
-        for sub in ["", "figures"] {
-            for entry in std::fs::read_dir(dir.join(sub)).unwrap() {
-                let p = entry.unwrap().path();
-                if p.is_file() {
-                    let name = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-                    out.insert(name, std::fs::read(&p).unwrap());
-                }
-            }
-        }
-        out
-    }
-
-    /// The fit recomputed from the trials, independently of [`Fit::from_rows`]: (rows, replicating,
-    /// within 2×, config matches, order matches, experiments ordered, geometric mean).
-    fn by_hand(d: &ReportData) -> (usize, usize, usize, usize, usize, usize, f64) {
-        let (mut rows, mut rep, mut w2, mut cfg, mut ord, mut ord_n, mut logs) = (0, 0, 0, 0, 0, 0, vec![]);
-        for e in &d.experiments {
-            let mut means = vec![];
-            for &a in &e.exp.algorithms {
-                let Some(r) = e.exp.reference.get(&a) else { continue };
-                let c = &e.cells[e.best_of(a).unwrap().cell];
-                let v: Vec<f64> = c.trials.iter().map(|t| f64::from(t.counted)).collect();
-                let n = v.len() as f64;
-                let m = v.iter().sum::<f64>() / n;
-                let s = (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0)).sqrt();
-                rows += 1;
-                if (m - r.mean).abs() <= 2.0 * (r.std * r.std / 10.0 + s * s / n).sqrt() {
-                    rep += 1;
-                } else if m / r.mean >= 0.5 && m / r.mean <= 2.0 {
-                    w2 += 1;
-                }
-                let res = &c.cell.config.repr.resolution;
-                if r.resolution.as_ref() == Some(res) && r.actions == Some(c.cell.config.actions) {
-                    cfg += 1;
-                }
-                logs.push((m / r.mean).ln());
-                means.push((m, r.mean));
-            }
-            if means.len() == 2 {
-                ord_n += 1;
-                if (means[0].0 <= means[1].0) == (means[0].1 <= means[1].1) {
-                    ord += 1;
-                }
-            }
-        }
-        (rows, rep, w2, cfg, ord, ord_n, (logs.iter().sum::<f64>() / logs.len() as f64).exp())
-    }
-
-    #[test]
-    fn verdicts_follow_the_replication_rule() {
-        // se = √(3²/10 + 2²/4) = √1.9 ≈ 1.378; 2·se ≈ 2.757.
-        assert_eq!(verdict(8.7, Some(2.0), 4, 6.0, 3.0), Verdict::Replicates);
-        assert_eq!(verdict(8.8, Some(2.0), 4, 6.0, 3.0), Verdict::Within2x);
-        assert_eq!(verdict(12.0, Some(2.0), 4, 6.0, 3.0), Verdict::Within2x);
-        assert_eq!(verdict(12.1, Some(2.0), 4, 6.0, 3.0), Verdict::DoesNotReplicate);
-        assert_eq!(verdict(6.0, None, 1, 6.0, 3.0), Verdict::Within2x, "no std: cannot replicate");
-        let f = |replicating, within_2x, geo_mean| Fit { replicating, within_2x, geo_mean, ..Fit::default() };
-        let fits =
-            [f(1, 3, Some(1.1)), f(2, 0, None), f(1, 3, Some(0.95)), f(1, 3, None), f(1, 4, Some(3.0))];
-        assert_eq!(fit_order(&fits), vec![1, 4, 2, 0, 3]);
-        assert_eq!(diff_label(-12.345), "−12.3");
-        assert_eq!(diff_label(0.001), "0.00");
-        assert_eq!(diff_label(150.0), "+150");
-        assert_eq!(diverging(0.0), RGBColor(247, 247, 247));
-        assert_eq!(diverging(-1.0), RGBColor(33, 102, 172));
-        assert_eq!(diverging(9.0), RGBColor(178, 24, 43));
-    }
-
-    #[test]
-    fn comparison_of_two_variants_is_right_and_deterministic() {
-        let base = plan_with(&[]);
-        let other = plan_with(&["systems.ball-beam.crisp.alpha=0.5", "systems.ball-beam.crisp.lambda=0.3"]);
-        let rec_base = run_all(&base);
-        let mut rec_other = run_all(&other);
-        // The other variant lacks every trial of one cell: grey in its difference figure.
-        let gone = &other.experiments[1].cells[2];
-        for t in &gone.trials {
-            rec_other.remove(&t.key);
-        }
-        let data = [ReportData::build(&base, &rec_base), ReportData::build(&other, &rec_other)];
-        let variants = vec![
-            VariantDigest::of(
-                VariantInfo { id: "as-written".into(), title: Some("The text".into()), exploratory: false },
-                &base,
-                &data[0],
-            ),
-            VariantDigest::of(
-                VariantInfo { id: "fast".into(), title: None, exploratory: false },
-                &other,
-                &data[1],
-            ),
-        ];
-        let all = Formats::of(&Format::ALL);
-        let tmp = tempfile::tempdir().unwrap();
-        let written = write_comparison(tmp.path(), &base, &variants, all).unwrap();
-        let names: Vec<String> = written.iter().map(|p| p.to_string_lossy().into_owned()).collect();
-        assert_eq!(
-            names,
-            [
-                "variants.md",
-                "variants.csv",
-                "figures/diff-fast-ball-beam.svg",
-                "figures/diff-fast-ball-beam.png",
-                "index.html",
-                "README.md"
-            ]
-        );
-        // The claims speak of all three systems: a Ball-Beam-only pipeline has no conclusions.
-        assert!(variants.iter().all(|v| v.claims.is_empty()));
-        let out = files(tmp.path());
-        assert_eq!(
-            out.keys().cloned().collect::<Vec<_>>().len(),
-            6,
-            "no temporary files left: {:?}",
-            out.keys()
-        );
-
-        // The CSV's numbers, recomputed from the trials.
-        let csv = String::from_utf8(out["variants.csv"].clone()).unwrap();
-        let mut lines = csv.lines();
-        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        assert_eq!(
-            header,
-            [
-                "rank",
-                "variant",
-                "title",
-                "rows",
-                "replicating",
-                "within_2x",
-                "config_match",
-                "order_match",
-                "order_experiments",
-                "geo_mean_ratio",
-                "equivalent_n10",
-                "equivalent_n100",
-                "exploratory"
-            ]
-        );
-        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-        assert_eq!(rows.len(), 2);
-        let fits: Vec<_> = data.iter().map(by_hand).collect();
-        for (v, d) in variants.iter().map(|v| &v.info).zip(&data) {
-            let row = rows.iter().find(|r| r[1] == v.id).unwrap();
-            let (n, rep, w2, cfg, ord, ord_n, geo) = by_hand(d);
-            let ints: Vec<usize> = row[3..9].iter().map(|s| s.parse().unwrap()).collect();
-            assert_eq!(ints, [n, rep, w2, cfg, ord, ord_n], "{}", v.id);
-            assert_eq!(n, 3);
-            assert_eq!(ord_n, 1);
-            let g: f64 = row[9].parse().unwrap();
-            assert!((g - geo).abs() < 1e-12, "{g} vs {geo}");
-            assert_eq!(row[2], v.title.as_deref().unwrap_or(""));
-        }
-        // Rows are in fit order.
-        let first = if (fits[0].1, fits[0].2, -fits[0].6.ln().abs())
-            >= (fits[1].1, fits[1].2, -fits[1].6.ln().abs())
-        {
-            "as-written"
-        } else {
-            "fast"
-        };
-        assert_eq!((rows[0][0], rows[0][1]), ("1", first));
-        let md = String::from_utf8(out["variants.md"].clone()).unwrap();
-        assert!(md.starts_with("**Variants.** How well each variant"));
-        assert!(md.contains("most replicating rows first"));
-
-        // Markers exactly where the difference's interval excludes 0.
-        let (b, o) = (&variants[0], &variants[1]);
-        let mut marked = 0;
-        let mut unmarked = 0;
-        let mut missing = 0;
-        let diffs = all_diffs(b, o);
-        for (k, e) in o.exps.iter().enumerate() {
-            for (i, c) in e.cells.iter().enumerate() {
-                let Some(d) = matching(b, e, i).and_then(|bc| CellDiff::of(bc, c)) else {
-                    missing += 1;
-                    assert_eq!(diffs[k][i], None);
-                    continue;
-                };
-                assert_eq!(diffs[k][i], Some(d));
-                // Recomputed from the trials themselves, not the digest.
-                let bd = &data[0].experiments[k];
-                let od = &data[1].experiments[k];
-                let j = bd.find(c.cell.algorithm, &c.cell.coords).unwrap();
-                let va: Vec<f64> = bd.cells[j].trials.iter().map(|t| f64::from(t.counted)).collect();
-                let vb: Vec<f64> = od.cells[i].trials.iter().map(|t| f64::from(t.counted)).collect();
-                let bc = matching(b, e, i).unwrap();
-                let ci = bootstrap_diff_ci(&va, &vb, 2000, diff_seed(bc, c));
-                assert_eq!(d.ci, ci);
-                assert!((d.diff - (crate::analysis::mean(&vb) - crate::analysis::mean(&va))).abs() < 1e-12);
-                assert_eq!(d.significant, ci.0 > 0.0 || ci.1 < 0.0);
-                if d.significant {
-                    marked += 1;
-                } else {
-                    unmarked += 1;
-                }
-            }
-        }
-        assert_eq!(missing, 1, "only the removed cell");
-        assert!(marked >= 1 && unmarked >= 1, "{marked} marked, {unmarked} unmarked");
-        let svg = String::from_utf8(out["figures/diff-fast-ball-beam.svg"].clone()).unwrap();
-        assert_eq!(svg.matches("<circle").count(), marked + 1, "one dot per marked cell, one in the legend");
-        assert!(svg.contains("#C8C8C8"), "the missing cell is grey");
-
-        let html = String::from_utf8(out["index.html"].clone()).unwrap();
-        for link in
-            ["as-written/index.html", "fast/index.html", "variants.csv", "figures/diff-fast-ball-beam.svg"]
-        {
-            assert!(html.contains(&format!("\"{link}\"")), "index.html links {link}");
-        }
-
-        // Determinism: a second write gives identical bytes.
-        let again = tempfile::tempdir().unwrap();
-        write_comparison(again.path(), &base, &variants, all).unwrap();
-        assert_eq!(files(again.path()), out);
-        write_comparison(tmp.path(), &base, &variants, all).unwrap();
-        assert_eq!(files(tmp.path()), out);
-    }
-}
+mod tests;

@@ -1,12 +1,15 @@
 //! The report's tables built from [`ReportData`]: Table III (best cell per system, experiment and
-//! algorithm, with the paper's values when the pipeline has them) and one cell table per
-//! experiment.
+//! algorithm, with the paper's values, ours at the paper's configuration and each row's cause when
+//! the pipeline has reference values) and one cell table per experiment.
 
 use super::model::{Align, Column, Row, Table, Value};
+use crate::analysis::consistency::CONSISTENCY_RULE;
 use crate::analysis::equivalence::{against_paper, EQUIVALENCE_RULE};
 use crate::analysis::survival::SURVIVAL_RULE;
+use crate::analysis::verdict::{cause, verdict, Verdict, CAUSE_RULE, VERDICT_RULE};
 use crate::analysis::{BEST_RULE, CENSORING, RACE_RULE};
-use crate::report::model::{resolution_columns, ExpData, ReportData};
+use crate::report::model::{resolution_columns, CellData, ExpData, ReportData};
+use crate::spec::Reference;
 
 fn var_columns(prefix: &str) -> Vec<Column> {
     let vars = [
@@ -24,15 +27,120 @@ fn opt_int(v: Option<u32>) -> Value {
 
 /// Table III: one row per system, experiment and algorithm.
 pub fn table3(data: &ReportData) -> Table {
-    let (mut t, _, uncertainty) = table3_built(data);
-    t.caption.push(' ');
-    t.caption.push_str(&uncertainty);
+    let (mut t, parts) = table3_built(data);
+    for (_, caption) in parts {
+        t.caption.push(' ');
+        t.caption.push_str(&caption);
+    }
     t
 }
 
-/// Table III with the caption of its first part, the index of its first uncertainty column and
-/// the caption of the uncertainty part.
-fn table3_built(data: &ReportData) -> (Table, usize, String) {
+/// The columns of one cell's estimate, CSV names after `prefix`: its bootstrap interval, its
+/// fresh-seed estimate (with `fresh`), censoring, and (with `reference`) its ratio to the paper
+/// and the equivalence tests.
+fn estimate_columns(prefix: &str, fresh: bool, reference: bool) -> Vec<Column> {
+    let name = |s: &str| format!("{prefix}{s}");
+    let pair = |title: &str, lo: &str, hi: &str| {
+        Column::new(title, &name(lo), Align::Right).fields(&[name(lo).as_str(), name(hi).as_str()])
+    };
+    let mut columns = vec![pair("95% CI", "ci_lo", "ci_hi")];
+    if fresh {
+        columns.push(pair("Fresh", "fresh_mean", "fresh_std"));
+        columns.push(Column::new("Fresh n", &name("fresh_n"), Align::Right));
+        columns.push(pair("Fresh 95% CI", "fresh_ci_lo", "fresh_ci_hi"));
+    }
+    columns.push(Column::new("Censored", &name("censored"), Align::Right));
+    columns.push(Column::new("KM median", &name("km_median"), Align::Right));
+    if reference {
+        columns.push(Column::new("Ours/paper", &name("ratio"), Align::Right));
+        columns.push(pair("Ours/paper 95% CI", "ratio_lo", "ratio_hi"));
+        for n in crate::analysis::equivalence::PAPER_N {
+            columns.push(Column::new(
+                &format!("TOST p (n={n})"),
+                &name(&format!("tost_p_n{n}")),
+                Align::Right,
+            ));
+            columns.push(Column::new(
+                &format!("Equivalent (n={n})"),
+                &name(&format!("equivalent_n{n}")),
+                Align::Left,
+            ));
+        }
+    }
+    columns
+}
+
+fn num(v: Option<f64>, decimals: usize) -> Value {
+    v.map_or(Value::Missing, |value| Value::Num { value, decimals, signed: false })
+}
+
+/// The values of [`estimate_columns`] for `cell` (none: every value missing) against `r`, the
+/// row's published value (`None`: the row has none, or the pipeline has no reference values).
+fn estimate_values(
+    cell: Option<&CellData>,
+    fresh: bool,
+    reference: bool,
+    r: Option<&Reference>,
+) -> Vec<Value> {
+    let mut values = vec![match cell.map(|c| (c.summary.ci_lo, c.summary.ci_hi)) {
+        Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
+        _ => Value::Missing,
+    }];
+    if fresh {
+        let f = cell.and_then(|c| c.fresh_summary.as_ref().map(|s| (s, c.fresh.len())));
+        values.push(match f {
+            Some((s, _)) => Value::MeanStd {
+                mean: s.mean.expect("fresh trials are present"),
+                std: s.std,
+                decimals: 2,
+                marked: false,
+            },
+            None => Value::Missing,
+        });
+        values.push(Value::Int(f.map_or(0, |(_, n)| n as u64)));
+        values.push(match f.map(|(s, _)| (s.ci_lo, s.ci_hi)) {
+            Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
+            _ => Value::Missing,
+        });
+    }
+    // The row is judged on the fresh-seed estimate where it has one.
+    let est = cell.map(|c| c.estimate());
+    values.push(num(est.and_then(|e| e.censored_fraction()), 2));
+    values.push(num(est.and_then(|e| e.km_median()), 1));
+    if reference {
+        let r = r.filter(|r| r.mean > 0.0);
+        match (est, r) {
+            (Some(est), Some(r)) if est.summary.mean.is_some() => {
+                let s = est.summary;
+                values.push(num(s.mean.map(|m| m / r.mean), 3));
+                values.push(match (s.ci_lo, s.ci_hi) {
+                    (Some(lo), Some(hi)) => Value::Range { lo: lo / r.mean, hi: hi / r.mean, decimals: 3 },
+                    _ => Value::Missing,
+                });
+                let mean = s.mean.expect("checked above");
+                for t in against_paper(mean, s.std, est.n(), r.mean, r.std) {
+                    values.push(num(t.map(|t| t.p), 4));
+                    values.push(t.map_or(Value::Missing, |t| {
+                        Value::Text(if t.equivalent { "yes" } else { "no" }.into())
+                    }));
+                }
+            }
+            _ => values.extend(std::iter::repeat_n(Value::Missing, 6)),
+        }
+    }
+    values
+}
+
+/// The replication verdict of `cell`'s estimate (fresh where present) against `r`.
+fn cell_verdict(cell: Option<&CellData>, r: &Reference) -> Option<Verdict> {
+    let est = cell?.estimate();
+    Some(verdict(est.summary.mean?, est.summary.std, est.n(), r.mean, r.std))
+}
+
+/// Table III with the caption of its first part, and the index of the first column and the caption
+/// of each further part: the uncertainty of the best cell, and (with reference values) the cell at
+/// the paper's configuration and each row's cause.
+fn table3_built(data: &ReportData) -> (Table, Vec<(usize, String)>) {
     let reference = data.has_reference();
     let mut columns = vec![
         Column::new("System", "system", Align::Left),
@@ -60,38 +168,28 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
             columns.push(Column::new("Paper config tied", "reference_config_tied", Align::Left));
         }
     }
-    // Uncertainty last, so the earlier CSV fields keep their positions.
+    // Uncertainty last, so the earlier CSV fields keep their positions; the paper's cell after it,
+    // so every field before keeps its position too.
     let split = columns.len();
-    columns.push(Column::new("95% CI", "ci_lo", Align::Right).fields(&["ci_lo", "ci_hi"]));
     let fresh = data.plan.has_fresh();
-    if fresh {
-        columns.push(Column::new("Fresh", "fresh_mean", Align::Right).fields(&["fresh_mean", "fresh_std"]));
-        columns.push(Column::new("Fresh n", "fresh_n", Align::Right));
-        columns.push(
-            Column::new("Fresh 95% CI", "fresh_ci_lo", Align::Right).fields(&["fresh_ci_lo", "fresh_ci_hi"]),
-        );
-    }
-    columns.push(Column::new("Censored", "censored", Align::Right));
-    columns.push(Column::new("KM median", "km_median", Align::Right));
+    columns.extend(estimate_columns("", fresh, reference));
+    let paper_split = columns.len();
     if reference {
-        columns.push(Column::new("Ours/paper", "ratio", Align::Right));
         columns.push(
-            Column::new("Ours/paper 95% CI", "ratio_lo", Align::Right).fields(&["ratio_lo", "ratio_hi"]),
+            Column::new("At paper config", "paper_cell_mean", Align::Right)
+                .fields(&["paper_cell_mean", "paper_cell_std"]),
         );
-        for n in crate::analysis::equivalence::PAPER_N {
-            columns.push(Column::new(&format!("TOST p (n={n})"), &format!("tost_p_n{n}"), Align::Right));
-            columns.push(Column::new(
-                &format!("Equivalent (n={n})"),
-                &format!("equivalent_n{n}"),
-                Align::Left,
-            ));
-        }
+        columns.push(Column::new("n", "paper_cell_n", Align::Right).latex("$n$"));
+        columns.push(Column::new("Successes", "paper_cell_successes", Align::Right));
+        columns.extend(estimate_columns("paper_cell_", fresh, true));
+        columns.push(Column::new("Verdict (best)", "verdict", Align::Left));
+        columns.push(Column::new("Verdict (paper config)", "paper_cell_verdict", Align::Left));
+        columns.push(Column::new("Paper inconsistent", "paper_inconsistent", Align::Left));
+        columns.push(Column::new("Cause", "cause", Align::Left));
     }
-    let num = |v: Option<f64>, decimals: usize| {
-        v.map_or(Value::Missing, |value| Value::Num { value, decimals, signed: false })
-    };
+    let inconsistent = if reference { data.inconsistent_rows() } else { Vec::new() };
     let mut rows = Vec::new();
-    for e in &data.experiments {
+    for (ei, e) in data.experiments.iter().enumerate() {
         let exp = e.exp;
         for &alg in &exp.algorithms {
             let best = e.best_of(alg).map(|b| (b, &e.cells[b.cell]));
@@ -121,8 +219,9 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
                     values.extend([Value::Int(0), Value::Int(0)]);
                 }
             }
+            let r = exp.reference.get(&alg);
             if reference {
-                match exp.reference.get(&alg) {
+                match r {
                     Some(r) => {
                         values.push(Value::MeanStd {
                             mean: r.mean,
@@ -154,52 +253,27 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
                 }
             }
             let cell = best.map(|(_, c)| c);
-            values.push(match cell.map(|c| (c.summary.ci_lo, c.summary.ci_hi)) {
-                Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
-                _ => Value::Missing,
-            });
-            if fresh {
-                let f = cell.and_then(|c| c.fresh_summary.as_ref().map(|s| (s, c.fresh.len())));
-                values.push(match f {
-                    Some((s, _)) => Value::MeanStd {
-                        mean: s.mean.expect("fresh trials are present"),
-                        std: s.std,
-                        decimals: 2,
-                        marked: false,
-                    },
+            values.extend(estimate_values(cell, fresh, reference, r));
+            if reference {
+                let at = e.reference_cell(alg).map(|i| &e.cells[i]);
+                values.push(match at.and_then(|c| c.summary.mean.map(|m| (m, c.summary.std))) {
+                    Some((mean, std)) => Value::MeanStd { mean, std, decimals: 2, marked: false },
                     None => Value::Missing,
                 });
-                values.push(Value::Int(f.map_or(0, |(_, n)| n as u64)));
-                values.push(match f.map(|(s, _)| (s.ci_lo, s.ci_hi)) {
-                    Some((Some(lo), Some(hi))) => Value::Range { lo, hi, decimals: 2 },
-                    _ => Value::Missing,
-                });
-            }
-            // The row is judged on the fresh-seed estimate where it has one.
-            let est = cell.map(|c| c.estimate());
-            values.push(num(est.and_then(|e| e.censored_fraction()), 2));
-            values.push(num(est.and_then(|e| e.km_median()), 1));
-            if reference {
-                let r = exp.reference.get(&alg).filter(|r| r.mean > 0.0);
-                match (est, r) {
-                    (Some(est), Some(r)) => {
-                        let s = est.summary;
-                        values.push(num(s.mean.map(|m| m / r.mean), 3));
-                        values.push(match (s.ci_lo, s.ci_hi) {
-                            (Some(lo), Some(hi)) => {
-                                Value::Range { lo: lo / r.mean, hi: hi / r.mean, decimals: 3 }
-                            }
-                            _ => Value::Missing,
-                        });
-                        let mean = s.mean.expect("a best cell has trials");
-                        for t in against_paper(mean, s.std, est.n(), r.mean, r.std) {
-                            values.push(num(t.map(|t| t.p), 4));
-                            values.push(t.map_or(Value::Missing, |t| {
-                                Value::Text(if t.equivalent { "yes" } else { "no" }.into())
-                            }));
-                        }
+                values.push(Value::Int(at.map_or(0, |c| c.trials.len() as u64)));
+                values.push(Value::Int(at.map_or(0, |c| c.successes as u64)));
+                values.extend(estimate_values(at, fresh, true, r));
+                let text = |s: &str| Value::Text(s.into());
+                match r {
+                    Some(r) => {
+                        let (best_v, at_v) = (cell_verdict(cell, r), cell_verdict(at, r));
+                        let bad = inconsistent.contains(&(ei, alg));
+                        values.push(best_v.map_or(Value::Missing, |v| text(v.label())));
+                        values.push(at_v.map_or(Value::Missing, |v| text(v.label())));
+                        values.push(text(if bad { "yes" } else { "no" }));
+                        values.push(best_v.map_or(Value::Missing, |v| text(cause(v, bad, at_v).label())));
                     }
-                    _ => values.extend(std::iter::repeat_n(Value::Missing, 6)),
+                    None => values.extend(std::iter::repeat_n(Value::Missing, 4)),
                 }
             }
             rows.push(Row { values, highlight: false });
@@ -241,19 +315,29 @@ fn table3_built(data: &ReportData) -> (Table, usize, String) {
             data.trials_cached, data.trials_planned
         ));
     }
-    (
-        Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows },
-        split,
-        uncertainty,
-    )
+    let mut parts = vec![(split, uncertainty)];
+    if reference {
+        parts.push((
+            paper_split,
+            format!(
+                "At paper config: the cell of the same heatmap at the paper's stated configuration \
+                 (mean ± std over the grid's seeds, n, successes), with the same interval, fresh-seed, \
+                 censoring and equivalence columns as the best cell (fresh seeds only where it is also \
+                 the best cell). Verdicts of the best cell and of the paper's cell, on their fresh-seed \
+                 estimate where present: {VERDICT_RULE} Paper inconsistent: {CONSISTENCY_RULE} {CAUSE_RULE}"
+            ),
+        ));
+    }
+    (Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows }, parts)
 }
 
-/// Table III as the pages show it, in two tables of the same rows: the best configurations (the
+/// Table III as the pages show it, in tables of the same rows: the best configurations (the
 /// paper's columns, and a race's), then their uncertainty (the rows' keys and the interval,
-/// censoring and equivalence columns), which side by side would be too wide to read. The CSV is
-/// the whole [`table3`].
-pub fn table3_parts(data: &ReportData) -> [Table; 2] {
-    let (full, split, unc_caption) = table3_built(data);
+/// censoring and equivalence columns), then, with reference values, ours at the paper's
+/// configuration and each row's cause; side by side they would be too wide to read. The CSV is the
+/// whole [`table3`].
+pub fn table3_parts(data: &ReportData) -> Vec<Table> {
+    let (full, parts) = table3_built(data);
     let keep = |cols: &[usize], title: String, caption: String| Table {
         title,
         caption,
@@ -267,12 +351,16 @@ pub fn table3_parts(data: &ReportData) -> [Table; 2] {
             })
             .collect(),
     };
-    let main: Vec<usize> = (0..split).collect();
-    let unc: Vec<usize> = (0..3).chain(split..full.columns.len()).collect();
-    [
-        keep(&main, full.title.clone(), full.caption.clone()),
-        keep(&unc, format!("{}: uncertainty", full.title), unc_caption),
-    ]
+    let mut bounds: Vec<usize> = parts.iter().map(|p| p.0).collect();
+    bounds.push(full.columns.len());
+    let main: Vec<usize> = (0..bounds[0]).collect();
+    let mut out = vec![keep(&main, full.title.clone(), full.caption.clone())];
+    let names = ["uncertainty", "at the paper's configuration"];
+    for (k, (start, caption)) in parts.iter().enumerate() {
+        let cols: Vec<usize> = (0..3).chain(*start..bounds[k + 1]).collect();
+        out.push(keep(&cols, format!("{}: {}", full.title, names[k]), caption.clone()));
+    }
+    out
 }
 
 /// `v` as an integer value when it is a whole number a `u64` holds exactly.
