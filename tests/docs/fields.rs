@@ -315,6 +315,23 @@ fn the_readme_replication_answer_counts_equal_variants_csv() {
         rows.iter().all(|r| field(r, "equivalent_n10") == "0"),
         "README.md says no row of any reading is equivalent"
     );
+    // The causes, counted in the best reading's table3.csv (its last column; no field is quoted
+    // there).
+    let t3 = std::fs::read_to_string(repo().join("reports/paper/gym-v0-terminal/table3.csv")).unwrap();
+    let cause = |name: &str| t3.lines().skip(1).filter(|l| l.rsplit(',').next() == Some(name)).count();
+    assert_eq!(csv_header("reports/paper/gym-v0-terminal/table3.csv").last().unwrap(), "cause");
+    let expected = [
+        format!("{} replicate, {} miss only because our grid", cause("replicates"), cause("argmin")),
+        format!(
+            "{} differ at the paper's configuration, and {} (crisp",
+            cause("learner"),
+            cause("paper-inconsistent")
+        ),
+    ];
+    for e in expected {
+        assert!(readme.contains(&e), "README.md should say `{e}` (reports/paper/gym-v0-terminal/table3.csv)");
+    }
+    assert_eq!(cause("unexplained"), 0, "README.md names no unexplained row");
 }
 
 #[test]
