@@ -4,16 +4,21 @@
 //!
 //! - `variants.md`, `variants.csv`: one row per variant, scoring how well its Table III reproduces
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
+//! - `figures/forest.svg` (and `.png`), where the pipeline has reference values: every Table III
+//!   row's ours ÷ reference with its interval, as written and under the best declared reading
+//!   ([`forest`]);
 //! - `figures/diff-<variant>-<system>.svg` (and `.png` with `--formats png`), for every variant
 //!   but the first: per cell, the change of mean episodes against the first variant ([`diff`]);
-//! - `index.html` and `README.md` (for repository web pages): links to each variant's own report,
-//!   the table and the difference figures.
+//! - `index.html` and `README.md` (for repository web pages): the answer in a few sentences and the
+//!   forest plot first, then links to each variant's own report, the table and the difference
+//!   figures.
 
 pub mod conclusions;
 pub mod diff;
 mod digest;
 pub mod explore;
 pub mod fit;
+pub mod forest;
 mod info;
 
 pub use digest::{CellDigest, ExpDigest, VariantDigest, VariantInfo};
@@ -72,6 +77,8 @@ pub fn write_comparison(
         }
     }
     let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
+    let series = forest::series(plan, variants);
+    let forest_size = forest::write(&plan.name, &series, (svg, png), &mut put)?;
     let mut figs = Vec::new();
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     if let Some(base) = variants.first() {
@@ -97,11 +104,13 @@ pub fn write_comparison(
     let notes = dir.join(NOTES).is_file();
     if formats.has(Format::Html) {
         let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
-        put("index.html", page(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
+        let answer = forest::Answer { series: &series, figure: forest_size };
+        put("index.html", page(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
         let tables = Tables { fit: &table, held_out: held_out.as_ref(), matrix: matrix.as_ref() };
-        put("README.md", readme(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
+        let answer = forest::Answer { series: &series, figure: forest_size };
+        put("README.md", readme(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
     Ok(out.files)
 }
@@ -144,6 +153,7 @@ fn page(
     plan: &Plan,
     variants: &[VariantDigest],
     tables: &Tables,
+    answer: &forest::Answer,
     figs: &[FigRef],
     formats: Formats,
     notes: bool,
@@ -157,6 +167,7 @@ fn page(
     if let Some(d) = plan.description.as_deref() {
         h.push_str(&format!("<p>{}</p>\n", esc(d)));
     }
+    h.push_str(&answer.html(formats));
     h.push_str("<p>Each variant is the whole pipeline with some settings changed; each has its own full report:</p>\n<ul>\n");
     for v in variants {
         let title = v.info.title.as_deref().map(|t| format!(": {}", esc(t))).unwrap_or_default();
@@ -250,6 +261,7 @@ fn readme(
     plan: &Plan,
     variants: &[VariantDigest],
     tables: &Tables,
+    answer: &forest::Answer,
     figs: &[FigRef],
     formats: Formats,
     notes: bool,
@@ -259,6 +271,7 @@ fn readme(
     if let Some(d) = plan.description.as_deref() {
         m.push_str(&format!("{}\n\n", d.trim()));
     }
+    m.push_str(&answer.markdown(formats));
     if notes {
         m.push_str(&format!("What these results mean for the replication: [{NOTES}]({NOTES}).\n\n"));
     }
@@ -462,6 +475,8 @@ systems:
             [
                 "variants.md",
                 "variants.csv",
+                "figures/forest.svg",
+                "figures/forest.png",
                 "figures/diff-fast-ball-beam.svg",
                 "figures/diff-fast-ball-beam.png",
                 "index.html",
@@ -473,7 +488,7 @@ systems:
         let out = files(tmp.path());
         assert_eq!(
             out.keys().cloned().collect::<Vec<_>>().len(),
-            6,
+            8,
             "no temporary files left: {:?}",
             out.keys()
         );
@@ -566,11 +581,25 @@ systems:
         assert!(svg.contains("#C8C8C8"), "the missing cell is grey");
 
         let html = String::from_utf8(out["index.html"].clone()).unwrap();
-        for link in
-            ["as-written/index.html", "fast/index.html", "variants.csv", "figures/diff-fast-ball-beam.svg"]
-        {
+        for link in [
+            "as-written/index.html",
+            "fast/index.html",
+            "variants.csv",
+            "figures/forest.svg",
+            "figures/diff-fast-ball-beam.svg",
+        ] {
             assert!(html.contains(&format!("\"{link}\"")), "index.html links {link}");
         }
+        // The page and the README open with the answer and the forest plot, before the readings.
+        let answer = html.find("<div id=\"answer\">").expect("the opening");
+        assert!(answer < html.find("figures/forest.svg").unwrap());
+        assert!(html.find("figures/forest.svg").unwrap() < html.find("as-written/index.html").unwrap());
+        let readme = String::from_utf8(out["README.md"].clone()).unwrap();
+        let first = readme.lines().nth(2).unwrap();
+        assert!(first.contains(" of 3 Table III rows are within 2× of the paper"), "{readme}");
+        assert!(
+            readme.find("(figures/forest.svg)").unwrap() < readme.find("(as-written/README.md)").unwrap()
+        );
 
         // Determinism: a second write gives identical bytes.
         let again = tempfile::tempdir().unwrap();
