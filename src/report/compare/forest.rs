@@ -30,11 +30,11 @@ pub const TWO_X: (f64, f64) = (0.5, 2.0);
 /// Width of the figure, in pixels.
 pub const WIDTH: u32 = 900;
 /// Height of one Table III row.
-const ROW_H: u32 = 18;
+const ROW_H: u32 = 16;
 /// Title band.
 const TOP: u32 = 44;
 /// Axis, axis title and legend below the rows.
-const BOTTOM: u32 = 96;
+const BOTTOM: u32 = 80;
 /// Where the plot area starts (the labels are right-aligned before it) and ends.
 const PLOT_X: (i32, i32) = (250, WIDTH as i32 - 30);
 
@@ -95,7 +95,8 @@ pub fn rows_of(data: &ReportData) -> Vec<ForestRow> {
 pub struct Series<'a> {
     /// The reading.
     pub info: &'a VariantInfo,
-    /// Its role: "as written", "best declared", or both.
+    /// Its role: "as written", "best declared" ("chosen by the search" in an exploratory
+    /// search), or both.
     pub role: &'static str,
     /// Its rows.
     pub rows: &'a [ForestRow],
@@ -113,11 +114,12 @@ pub fn series<'a>(plan: &Plan, variants: &'a [VariantDigest]) -> Vec<Series<'a>>
     let best =
         super::explore::chosen(plan, variants).and_then(|c| variants.iter().find(|v| v.info.id == c.id));
     let of = |v: &'a VariantDigest, role| Series { info: &v.info, role, rows: &v.forest, fit: v.fit };
+    let best_role = if plan.exploratory.is_some() { "chosen by the search" } else { "best declared" };
     let out = match (written, best) {
         (Some(w), Some(b)) if w.info.id == b.info.id => vec![of(w, "as written and best declared")],
-        (Some(w), Some(b)) => vec![of(w, "as written"), of(b, "best declared")],
+        (Some(w), Some(b)) => vec![of(w, "as written"), of(b, best_role)],
         (Some(w), None) => vec![of(w, "as written")],
-        (None, Some(b)) => vec![of(b, "best declared")],
+        (None, Some(b)) => vec![of(b, best_role)],
         (None, None) => Vec::new(),
     };
     if out.iter().all(|s| s.rows.is_empty()) {
@@ -160,65 +162,73 @@ impl Tally {
     }
 }
 
-fn count(n: usize) -> String {
-    if n == 0 {
-        "none".into()
-    } else {
-        n.to_string()
+/// "none is", "1 is", "3 are".
+fn are(n: usize) -> String {
+    match n {
+        0 => "none is".into(),
+        1 => "1 is".into(),
+        n => format!("{n} are"),
     }
 }
 
-/// The opening: a few sentences stating the answer with its uncertainty, in plain text (the
-/// pages escape or format it).
-pub fn opening(series: &[Series]) -> Vec<String> {
+/// The opening: a few sentences stating the answer with its uncertainty (the best declared
+/// reading first, then the text as written for contrast), in plain text (the pages escape or
+/// format it).
+pub fn opening(series: &[Series]) -> String {
     let mut out = Vec::new();
-    // The best declared reading first: the answer; then the text as written, for contrast.
     for (k, s) in series.iter().rev().enumerate() {
         let t = Tally::of(s);
-        let who = match s.role {
-            "as written" => format!("As written ({})", s.info.id),
-            "best declared" => format!("Under the best-ranked declared reading, {}", s.info.id),
-            _ => format!("Under the reading as written ({}), also the best-ranked declared one", s.info.id),
-        };
         let geo =
             s.fit.geo_mean.map(|g| format!("; geometric mean of ours ÷ paper {g:.2}")).unwrap_or_default();
         if k == 0 {
+            let who = match s.role {
+                "as written" => format!("As written ({})", s.info.id),
+                "best declared" => format!("Under the best-ranked declared reading, {}", s.info.id),
+                "chosen by the search" => {
+                    format!("Under the reading the search chose (ranked on its fit rows), {}", s.info.id)
+                }
+                _ => format!("As written ({}), also the best-ranked declared reading", s.info.id),
+            };
             out.push(format!(
-                "{who}, {} of {} Table III rows are within 2× of the paper (ours ÷ paper between 0.5 and 2; \
-                 {} with the whole 95 % interval inside), {} replicate (within two standard errors of the \
-                 paper's mean) and {} shown equivalent (ours ÷ paper within [{:.2}, {:.2}] by TOST) if the \
-                 paper averaged 10 runs ({} if 100){geo}.",
+                "{who}, {} of {} Table III rows are within 2× of the paper ({} with their whole 95 % \
+                 interval), {} replicate (within two standard errors) and {} equivalent by TOST (margin \
+                 {:.2}–{:.2}, the paper's runs taken as 10; {} at 100){geo}.",
                 t.within_2x,
                 t.rows,
                 t.whole_interval,
-                count(t.replicating),
-                count(t.equivalent[0]),
+                t.replicating,
+                are(t.equivalent[0]),
                 MARGIN.0,
                 MARGIN.1,
                 t.equivalent[1],
             ));
         } else {
             out.push(format!(
-                "{who}: {} of {} within 2× ({} whole-interval), {} replicate, {} equivalent at n = 10 ({} at \
-                 n = 100){geo}.",
+                "As written ({}): {} of {} within 2× ({} whole-interval), {} replicate, {} equivalent \
+                 ({} at 100){geo}.",
+                s.info.id,
                 t.within_2x,
                 t.rows,
                 t.whole_interval,
-                count(t.replicating),
-                count(t.equivalent[0]),
+                t.replicating,
+                t.equivalent[0],
                 t.equivalent[1],
             ));
         }
     }
+    out.join(" ")
+}
+
+/// The figure's caption.
+pub fn caption(series: &[Series]) -> String {
     let fresh = series.iter().any(|s| s.rows.iter().any(|r| r.fresh));
-    out.push(format!(
-        "The figure shows every row's ratio with its 95 % interval{}: the green band is the equivalence \
-         margin ({:.2}–{:.2}), the grey band 2× either way.",
-        if fresh { " (fresh seeds, where the best cell was re-run)" } else { "" },
+    format!(
+        "Every Table III row: ours ÷ paper (dot) with its 95 % interval (bar){}; green: the equivalence \
+         margin {:.2}–{:.2}; grey: within 2×.",
+        if fresh { ", on fresh seeds where the best cell was re-run" } else { "" },
         MARGIN.0,
         MARGIN.1
-    ));
-    out
+    )
 }
 
 /// The opening of the comparison pages: the plotted readings and the forest plot's pixel size
@@ -239,13 +249,12 @@ impl Answer<'_> {
         if self.series.is_empty() {
             return String::new();
         }
-        let mut h = String::from("<div id=\"answer\">\n");
-        for s in opening(self.series) {
-            h.push_str(&format!("<p>{}</p>\n", escape_html(&s)));
-        }
+        let mut h = format!("<div id=\"answer\">\n<p>{}</p>\n", escape_html(&opening(self.series)));
         if let (Some((w, ht)), Some(ext)) = (self.figure, formats.figure_ext()) {
             h.push_str(&format!(
-                "<figure><img src=\"{STEM}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{ALT}\"></figure>\n"
+                "<figure><img src=\"{STEM}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{ALT}\">\n\
+                 <figcaption class=\"caption\">{}</figcaption></figure>\n",
+                escape_html(&caption(self.series))
             ));
         }
         h.push_str("</div>\n");
@@ -258,11 +267,9 @@ impl Answer<'_> {
         if self.series.is_empty() {
             return m;
         }
-        for s in opening(self.series) {
-            m.push_str(&format!("{s}\n\n"));
-        }
+        m.push_str(&format!("{}\n\n", opening(self.series)));
         if let (Some(_), Some(ext)) = (self.figure, formats.figure_ext()) {
-            m.push_str(&format!("![{ALT}]({STEM}.{ext})\n\n"));
+            m.push_str(&format!("![{ALT}]({STEM}.{ext})\n\n{}\n\n", caption(self.series)));
         }
         m
     }
@@ -448,21 +455,26 @@ impl Picture for Forest<'_> {
         let mid = (PLOT_X.0 + PLOT_X.1) / 2;
         cv.text("ours ÷ paper (log scale)", (mid, bottom + 30), 12.0, INK, HPos::Center, VPos::Center);
         // The legend: the series, then the bands.
-        let y = bottom + 54;
+        let y = bottom + 50;
         let mut x = 20;
         for (k, s) in self.series.iter().enumerate() {
             let color = COLORS[k.min(1)];
             cv.line((x, y), (x + 24, y), color.stroke_width(2))?;
             cv.root.draw(&Circle::new((x + 12, y), 4, color.filled())).map_err(|e| e.to_string())?;
-            let text = format!("{} ({})", s.info.id, s.role);
+            // A long reading id (a grid's) is cut to the figure's width.
+            let room = ((WIDTH as i32 - x - 40) / 7).max(8) as usize;
+            let mut text = format!("{} ({})", s.info.id, s.role);
+            if text.chars().count() > room {
+                text = format!("{}…", text.chars().take(room - 1).collect::<String>());
+            }
             cv.text(&text, (x + 30, y), 12.0, INK, HPos::Left, VPos::Center);
-            x += 60 + (text.chars().count() as i32) * 7;
+            x += 50 + (text.chars().count() as i32) * 7;
         }
-        let y = y + 22;
-        cv.rect((20, y - 7), (44, y + 7), MARGIN_SHADE.filled())?;
+        let y = y + 19;
+        cv.rect((20, y - 6), (44, y + 6), MARGIN_SHADE.filled())?;
         let m = format!("equivalence margin {:.2}–{:.2}", MARGIN.0, MARGIN.1);
         cv.text(&m, (50, y), 12.0, INK, HPos::Left, VPos::Center);
-        cv.rect((260, y - 7), (284, y + 7), BAND.filled())?;
+        cv.rect((260, y - 6), (284, y + 6), BAND.filled())?;
         cv.text("within 2× (0.5–2)", (290, y), 12.0, INK, HPos::Left, VPos::Center);
         cv.text("dot: mean ratio; bar: its 95 % interval", (440, y), 12.0, SUBTLE, HPos::Left, VPos::Center);
         Ok(())
@@ -639,7 +651,7 @@ systems:
         assert_eq!((again.svg.unwrap(), again.png.unwrap()), (svg, png));
 
         // The opening states the counts of both series.
-        let text = opening(&series).join(" ");
+        let text = opening(&series);
         let t = Tally::of(&series[1]);
         assert!(
             text.starts_with(&format!(
@@ -648,6 +660,7 @@ systems:
             )),
             "{text}"
         );
-        assert!(text.contains("As written (as-written): "), "{text}");
+        let t = Tally::of(&series[0]);
+        assert!(text.contains(&format!("As written (as-written): {} of 3 within 2×", t.within_2x)), "{text}");
     }
 }
