@@ -8,8 +8,11 @@ use std::collections::BTreeMap;
 /// The as-written and best-declared series' colours (`forest::COLORS`).
 const COLORS: [&str; 2] = ["#0072B2", "#D55E00"];
 
+/// Points (x, y) or ticks (x, value).
+type Points = Vec<(f64, f64)>;
+
 /// Per series colour, the dots' (x, y) in drawing order; and the axis's (x, value) ticks.
-fn read_svg(svg: &str) -> (BTreeMap<&'static str, Vec<(f64, f64)>>, Vec<(f64, f64)>) {
+fn read_svg(svg: &str) -> (BTreeMap<&'static str, Points>, Points) {
     let doc = roxmltree::Document::parse(svg).unwrap();
     let mut dots = BTreeMap::new();
     for c in COLORS {
@@ -41,10 +44,11 @@ fn forest_plot_dots_are_table3_ratios_and_the_page_opens_with_the_answer() {
     assert!(svg.len() < 60_000, "small: {} bytes", svg.len());
     let (dots, ticks) = read_svg(&svg);
     assert!(ticks.len() >= 3, "{ticks:?}");
-    // The axis from its outermost ticks: log10(value) linear in x.
+    // The axis from its outermost ticks: ln(value) linear in x.
+    let ln = qsweep::sim::math::ln;
     let ((x0, v0), (x1, v1)) = (ticks[0], ticks[ticks.len() - 1]);
-    let value = |x: f64| 10f64.powf(v0.log10() + (x - x0) / (x1 - x0) * (v1.log10() - v0.log10()));
-    let px = (v1.log10() - v0.log10()) / (x1 - x0); // decades per pixel
+    let ln_value = |x: f64| ln(v0) + (x - x0) / (x1 - x0) * (ln(v1) - ln(v0));
+    let px = (ln(v1) - ln(v0)) / (x1 - x0); // ln units per pixel
 
     // The plotted readings: as written, and the top-ranked declared one.
     let variants = csv_rows(&std::fs::read_to_string(out.join("variants.csv")).unwrap());
@@ -61,7 +65,7 @@ fn forest_plot_dots_are_table3_ratios_and_the_page_opens_with_the_answer() {
         assert_eq!(got.len(), ratios.len(), "{id}: one dot per row");
         for (dot, want) in got.iter().zip(&ratios) {
             // Within the pixel rounding of the dot's position.
-            assert!((value(dot.0).log10() - want.log10()).abs() <= px, "{id}: dot at {dot:?} ≠ ratio {want}");
+            assert!((ln_value(dot.0) - ln(*want)).abs() <= px, "{id}: dot at {dot:?} ≠ ratio {want}");
         }
         let within = ratios.iter().filter(|r| (0.5..=2.0).contains(*r)).count();
         let said = if plotted.len() == 1 || k == 1 {

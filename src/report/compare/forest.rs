@@ -16,6 +16,7 @@ use crate::report::formats::Formats;
 use crate::report::model::ReportData;
 use crate::report::table::html::escape_html;
 use crate::sim::env::SystemKind;
+use crate::sim::math::{exp, ln};
 use crate::sim::repr::ReprKind;
 use crate::sim::Algorithm;
 use plotters::prelude::*;
@@ -321,15 +322,16 @@ impl Axis {
 
     /// The x pixel of `v` (clamped to the domain).
     pub fn x(&self, v: f64) -> i32 {
-        let (a, b) = (self.domain.0.log10(), self.domain.1.log10());
-        let t = if v > 0.0 { ((v.log10() - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
+        // The engine's own logarithm, so the pixels are the same on every machine.
+        let (a, b) = (ln(self.domain.0), ln(self.domain.1));
+        let t = if v > 0.0 { ((ln(v) - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
         PLOT_X.0 + (t * f64::from(PLOT_X.1 - PLOT_X.0)).round() as i32
     }
 
     /// The value at x pixel `x` (the inverse of [`Axis::x`], up to rounding).
     pub fn value(&self, x: f64) -> f64 {
-        let (a, b) = (self.domain.0.log10(), self.domain.1.log10());
-        10f64.powf(a + (x - f64::from(PLOT_X.0)) / f64::from(PLOT_X.1 - PLOT_X.0) * (b - a))
+        let (a, b) = (ln(self.domain.0), ln(self.domain.1));
+        exp(a + (x - f64::from(PLOT_X.0)) / f64::from(PLOT_X.1 - PLOT_X.0) * (b - a))
     }
 
     /// The ticks: the 1-2-5 values in the domain.
@@ -341,9 +343,9 @@ impl Axis {
 /// 1, 2, 5 × 10^k within `[lo, hi]`.
 fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
     let mut out = Vec::new();
-    for k in -3..=3 {
+    for decade in [1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3] {
         for m in [1.0, 2.0, 5.0] {
-            let v = m * 10f64.powi(k);
+            let v = m * decade;
             if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
                 out.push(v);
             }
