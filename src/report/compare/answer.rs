@@ -2,10 +2,37 @@
 //! counted over the rows the forest plot ([`super::forest`]) draws, for the best declared reading
 //! and the text as written, then the figure with its caption.
 
+use super::digest::VariantDigest;
 use super::forest::{Series, STEM, TWO_X};
 use crate::analysis::equivalence::MARGIN;
+use crate::plan::Plan;
 use crate::report::formats::Formats;
 use crate::report::table::html::escape_html;
+
+/// The plotted readings: the as-written one (the listed variant without a `set`, else the first)
+/// and the best-ranked declared one ([`super::explore::chosen`]), one series when they are the
+/// same; empty when no reading has a row with a reference.
+pub fn series<'a>(plan: &Plan, variants: &'a [VariantDigest]) -> Vec<Series<'a>> {
+    let written = super::explore::as_written(plan)
+        .and_then(|id| variants.iter().find(|v| v.info.id == id))
+        .or(variants.first());
+    let best =
+        super::explore::chosen(plan, variants).and_then(|c| variants.iter().find(|v| v.info.id == c.id));
+    let of = |v: &'a VariantDigest, role| Series { info: &v.info, role, rows: &v.forest, fit: v.fit };
+    let best_role = if plan.exploratory.is_some() { "chosen by the search" } else { "best declared" };
+    let out = match (written, best) {
+        (Some(w), Some(b)) if w.info.id == b.info.id => vec![of(w, "as written and best declared")],
+        (Some(w), Some(b)) => vec![of(w, "as written"), of(b, best_role)],
+        (Some(w), None) => vec![of(w, "as written")],
+        (None, Some(b)) => vec![of(b, best_role)],
+        (None, None) => Vec::new(),
+    };
+    if out.iter().all(|s| s.rows.is_empty()) {
+        Vec::new()
+    } else {
+        out
+    }
+}
 
 /// What the opening sentences count for one series.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -112,7 +139,7 @@ pub fn caption(series: &[Series]) -> String {
 /// The opening of the comparison pages: the plotted readings and the forest plot's pixel size
 /// (`None` when not drawn).
 pub struct Answer<'a> {
-    /// The plotted readings ([`super::forest::series`]); empty: no opening.
+    /// The plotted readings ([`series`]); empty: no opening.
     pub series: &'a [Series<'a>],
     /// The figure's pixel size, when drawn.
     pub figure: Option<(u32, u32)>,

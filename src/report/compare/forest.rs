@@ -7,10 +7,9 @@
 //! them as the table does: from the fresh-seed estimate where the best cell was re-run), so the
 //! figure and the table cannot disagree.
 
-use super::digest::{VariantDigest, VariantInfo};
 use super::fit::Fit;
+use super::info::VariantInfo;
 use crate::analysis::equivalence::MARGIN;
-use crate::plan::Plan;
 use crate::report::figures::{self, Canvas, Drawn, Picture, Res, INK, SUBTLE};
 use crate::report::model::ReportData;
 use crate::sim::env::SystemKind;
@@ -101,31 +100,6 @@ pub struct Series<'a> {
     pub rows: &'a [ForestRow],
     /// Its fit (replicating and equivalent rows).
     pub fit: Fit,
-}
-
-/// The plotted readings: the as-written one (the listed variant without a `set`, else the first)
-/// and the best-ranked declared one ([`super::explore::chosen`]), one series when they are the
-/// same; empty when no reading has a row with a reference.
-pub fn series<'a>(plan: &Plan, variants: &'a [VariantDigest]) -> Vec<Series<'a>> {
-    let written = super::explore::as_written(plan)
-        .and_then(|id| variants.iter().find(|v| v.info.id == id))
-        .or(variants.first());
-    let best =
-        super::explore::chosen(plan, variants).and_then(|c| variants.iter().find(|v| v.info.id == c.id));
-    let of = |v: &'a VariantDigest, role| Series { info: &v.info, role, rows: &v.forest, fit: v.fit };
-    let best_role = if plan.exploratory.is_some() { "chosen by the search" } else { "best declared" };
-    let out = match (written, best) {
-        (Some(w), Some(b)) if w.info.id == b.info.id => vec![of(w, "as written and best declared")],
-        (Some(w), Some(b)) => vec![of(w, "as written"), of(b, best_role)],
-        (Some(w), None) => vec![of(w, "as written")],
-        (None, Some(b)) => vec![of(b, best_role)],
-        (None, None) => Vec::new(),
-    };
-    if out.iter().all(|s| s.rows.is_empty()) {
-        Vec::new()
-    } else {
-        out
-    }
 }
 
 /// Pixel size of the forest plot of `rows` rows.
@@ -340,7 +314,7 @@ mod tests {
     use super::super::answer::{opening, Tally};
     use super::*;
     use crate::cache::{Key, TrialRecord};
-    use crate::plan::plan;
+    use crate::plan::{plan, Plan};
     use crate::report::table::{render, table3, Csv};
     use crate::sim::run_trial;
     use crate::spec::{load_str, LoadedSpec, Override};

@@ -78,7 +78,7 @@ pub fn write_comparison(
         }
     }
     let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
-    let series = forest::series(plan, variants);
+    let series = answer::series(plan, variants);
     let forest_size = forest::write(&plan.name, &series, (svg, png), &mut put)?;
     let mut figs = Vec::new();
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
