@@ -8,6 +8,7 @@ mod error_locations;
 mod exit_codes;
 mod explore;
 mod feasible;
+mod forest;
 mod fresh;
 mod helpers;
 mod json_formats;

@@ -5,7 +5,9 @@ Checks: no console errors or failed loads, every figure (an <img> of figures/*.s
 shown at a nonzero size within the page, Table III and one cell table per experiment present and
 filled, nothing wider than the window. A pipeline with variants: the comparison page and a
 variant's page at 1300 px, where the fit table and its caption must fit, and the variant's page
-names the pipeline and the variant and links back. Full-page screenshots are written to
+names the pipeline and the variant and links back. The comparison pages (the fixture's and the
+committed reports/paper/index.html) open with the answer and the forest plot, both on the first
+screen at 1300 × 900. Full-page screenshots are written to
 target/report-screenshot.png (and -comparison, -variant) for a human to look at.
 
 Chromium is driven over the DevTools protocol through `--remote-debugging-pipe` (JSON messages
@@ -174,8 +176,12 @@ PROBE = """JSON.stringify({
   images: [...document.images].map(i => {
     const r = i.getBoundingClientRect();
     return {src: i.getAttribute('src'), complete: i.complete, naturalWidth: i.naturalWidth,
-            width: r.width, height: r.height, right: r.right};
+            width: r.width, height: r.height, right: r.right, bottom: r.bottom};
   }),
+  answer: (() => {
+    const a = document.getElementById('answer');
+    return a && {top: a.getBoundingClientRect().top, text: a.querySelector('p').textContent};
+  })(),
   tables: [...document.querySelectorAll('table')].map(t => ({
     rows: t.tBodies.length ? [...t.tBodies].reduce((n, b) => n + b.rows.length, 0) : t.rows.length - 1,
     width: t.getBoundingClientRect().width, right: t.getBoundingClientRect().right})),
@@ -283,6 +289,27 @@ def test_report_page_renders_in_chromium(quick_report: Path) -> None:
     assert all(t["rows"] > 0 and t["width"] > 0 for t in page["tables"]), page["tables"]
 
 
+def check_opening(page: dict, screenshot: Path) -> None:
+    """The comparison page opens with the answer and the forest plot, both on the first screen
+    (900 px high)."""
+    answer = page["answer"]
+    assert answer and "Table III rows are within 2× of the paper" in answer["text"], answer
+    forest = [i for i in page["images"] if i["src"] == "figures/forest.svg"]
+    assert len(forest) == 1, page["images"]
+    assert answer["top"] < 900 and forest[0]["bottom"] <= 900, \
+        f"the answer and the forest plot are not on the first screen: {forest} (screenshot: {screenshot})"
+
+
+def test_paper_comparison_opens_with_the_answer_on_the_first_screen() -> None:
+    """The committed reports/paper/index.html at 1300 × 900: the answer and its figure first."""
+    exe = chromium_or_skip()
+    page, events, screenshot = render(exe, REPO_ROOT / "reports/paper/index.html", 1300,
+                                      "report-screenshot-paper.png")
+    assert errors_in(events) == [], f"console errors (screenshot: {screenshot})"
+    check_opening(page, screenshot)
+    assert page["answer"]["text"].startswith("Under the best-ranked declared reading, "), page["answer"]
+
+
 @pytest.fixture(scope="module")
 def variants_report(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     tmp = tmp_path_factory.mktemp("browser-variants")
@@ -315,6 +342,7 @@ def test_comparison_and_variant_pages_fit_a_1300_px_window(variants_report: Path
     check_fits(page, 1300, screenshot)
     for v in ["as-written", "fast-crisp", "short-episodes"]:
         assert f"{v}/index.html" in page["links"], v
+    check_opening(page, screenshot)
 
     page, events, screenshot = render(exe, variants_report / "fast-crisp" / "index.html", 1300,
                                       "report-screenshot-variant.png")

@@ -2,6 +2,7 @@
 //! experiment and cell the few numbers the comparison and the fit need.
 
 use super::fit::{rows_of, Fit, RowFit};
+use super::forest::ForestRow;
 pub use super::info::VariantInfo;
 use crate::analysis::claims::ClaimResult;
 use crate::cache::Key;
@@ -55,6 +56,8 @@ pub struct VariantDigest<'p> {
     pub fit: Fit,
     /// Its Table III rows scored one by one (what `fit` tallies).
     pub rows: Vec<RowFit>,
+    /// Its Table III rows as the forest plot draws them (`table3.csv`'s ratios).
+    pub forest: Vec<ForestRow>,
     /// Planned (cell, seed) trials.
     pub trials_planned: usize,
     /// Of those, present.
@@ -100,6 +103,7 @@ impl<'p> VariantDigest<'p> {
             info,
             fit: Fit::from_rows(&rows),
             rows,
+            forest: super::forest::rows_of(data),
             trials_planned: data.trials_planned,
             trials_cached: data.trials_cached,
             exps,

@@ -6,17 +6,23 @@
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
 //! - `consistency.md`, `consistency.csv` (pipelines with reference values): every pair of Table III
 //!   rows whose grids overlap, with the Welch test of their published means ([`consistency`]);
+//! - `figures/forest.svg` (and `.png`), where the pipeline has reference values: every Table III
+//!   row's ours ÷ reference with its interval, as written and under the best declared reading
+//!   ([`forest`]);
 //! - `figures/diff-<variant>-<system>.svg` (and `.png` with `--formats png`), for every variant
 //!   but the first: per cell, the change of mean episodes against the first variant ([`diff`]);
-//! - `index.html` and `README.md` (for repository web pages): links to each variant's own report,
-//!   the table and the difference figures.
+//! - `index.html` and `README.md` (for repository web pages): the answer in a few sentences
+//!   ([`answer`]) and the forest plot first, then links to each variant's own report, the table and the difference
+//!   figures.
 
+pub mod answer;
 pub mod conclusions;
 pub mod consistency;
 pub mod diff;
 mod digest;
 pub mod explore;
 pub mod fit;
+pub mod forest;
 mod info;
 
 pub use digest::{CellDigest, ExpDigest, VariantDigest, VariantInfo};
@@ -84,6 +90,8 @@ pub fn write_comparison(
         }
     }
     let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
+    let series = answer::series(plan, variants);
+    let forest_size = forest::write(&plan.name, &series, (svg, png), &mut put)?;
     let mut figs = Vec::new();
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     if let Some(base) = variants.first() {
@@ -114,7 +122,8 @@ pub fn write_comparison(
             matrix: matrix.as_ref(),
             consistency: consistency.as_ref(),
         };
-        put("index.html", page(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
+        let answer = answer::Answer { series: &series, figure: forest_size };
+        put("index.html", page(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
         let tables = Tables {
@@ -123,7 +132,8 @@ pub fn write_comparison(
             matrix: matrix.as_ref(),
             consistency: consistency.as_ref(),
         };
-        put("README.md", readme(plan, variants, &tables, &figs, formats, notes).as_bytes())?;
+        let answer = answer::Answer { series: &series, figure: forest_size };
+        put("README.md", readme(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
     Ok(out.files)
 }
@@ -168,6 +178,7 @@ fn page(
     plan: &Plan,
     variants: &[VariantDigest],
     tables: &Tables,
+    answer: &answer::Answer,
     figs: &[FigRef],
     formats: Formats,
     notes: bool,
@@ -180,6 +191,10 @@ fn page(
     h.push_str(&format!("<h1>{}</h1>\n", esc(&heading(plan))));
     if let Some(d) = plan.description.as_deref() {
         h.push_str(&format!("<p>{}</p>\n", esc(d)));
+    }
+    h.push_str(&answer.html(formats));
+    if let Some(t) = consistency::cause_tally(plan, variants) {
+        h.push_str(&format!("<p id=\"causes\">{}</p>\n", esc(&t)));
     }
     h.push_str("<p>Each variant is the whole pipeline with some settings changed; each has its own full report:</p>\n<ul>\n");
     for v in variants {
@@ -207,9 +222,6 @@ fn page(
         h.push_str(&format!(
             "<p>What these results mean for the replication: <a href=\"{NOTES}\">{NOTES}</a>.</p>\n"
         ));
-    }
-    if let Some(t) = consistency::cause_tally(plan, variants) {
-        h.push_str(&format!("<p id=\"causes\">{}</p>\n", esc(&t)));
     }
     // Only the files this report writes (`--formats`).
     let links: Vec<&str> = [
@@ -282,6 +294,7 @@ fn readme(
     plan: &Plan,
     variants: &[VariantDigest],
     tables: &Tables,
+    answer: &answer::Answer,
     figs: &[FigRef],
     formats: Formats,
     notes: bool,
@@ -291,6 +304,7 @@ fn readme(
     if let Some(d) = plan.description.as_deref() {
         m.push_str(&format!("{}\n\n", d.trim()));
     }
+    m.push_str(&answer.markdown(formats));
     if notes {
         m.push_str(&format!("What these results mean for the replication: [{NOTES}]({NOTES}).\n\n"));
     }

@@ -153,6 +153,8 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
             "variants.csv",
             "consistency.md",
             "consistency.csv",
+            "figures/forest.svg",
+            "figures/forest.png",
             "figures/diff-fast-ball-beam.svg",
             "figures/diff-fast-ball-beam.png",
             "index.html",
@@ -162,7 +164,12 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
     // The claims speak of all three systems: a Ball-Beam-only pipeline has no conclusions.
     assert!(variants.iter().all(|v| v.claims.is_empty()));
     let out = files(tmp.path());
-    assert_eq!(out.keys().cloned().collect::<Vec<_>>().len(), 8, "no temporary files left: {:?}", out.keys());
+    assert_eq!(
+        out.keys().cloned().collect::<Vec<_>>().len(),
+        10,
+        "no temporary files left: {:?}",
+        out.keys()
+    );
 
     // The CSV's numbers, recomputed from the trials.
     let csv = String::from_utf8(out["variants.csv"].clone()).unwrap();
@@ -251,9 +258,13 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
     assert!(svg.contains("#C8C8C8"), "the missing cell is grey");
 
     let html = String::from_utf8(out["index.html"].clone()).unwrap();
-    for link in
-        ["as-written/index.html", "fast/index.html", "variants.csv", "figures/diff-fast-ball-beam.svg"]
-    {
+    for link in [
+        "as-written/index.html",
+        "fast/index.html",
+        "variants.csv",
+        "figures/forest.svg",
+        "figures/diff-fast-ball-beam.svg",
+    ] {
         assert!(html.contains(&format!("\"{link}\"")), "index.html links {link}");
     }
 
