@@ -121,7 +121,7 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
     h.push_str("<h2 id=\"table3\">Table III: best configurations</h2>\n<div class=\"scroll\">\n");
     let parts = table3_parts(data);
     h.push_str(&render(&parts[0], &Html));
-    for (t, id) in parts[1..].iter().zip(["uncertainty", "paper-config"]) {
+    for (t, (id, _)) in parts[1..].iter().zip(super::table::TABLE3_PARTS) {
         h.push_str(&format!("</div>\n<div class=\"scroll\" id=\"{id}\">\n"));
         h.push_str(&render(t, &Html));
     }

@@ -140,7 +140,7 @@ fn cell_verdict(cell: Option<&CellData>, r: &Reference) -> Option<Verdict> {
 /// Table III with the caption of its first part, and the index of the first column and the caption
 /// of each further part: the uncertainty of the best cell, and (with reference values) the cell at
 /// the paper's configuration and each row's cause.
-fn table3_built(data: &ReportData) -> (Table, Vec<(usize, String)>) {
+fn table3_built(data: &ReportData) -> (Table, Vec<(Vec<usize>, String)>) {
     let reference = data.has_reference();
     let mut columns = vec![
         Column::new("System", "system", Align::Left),
@@ -182,6 +182,9 @@ fn table3_built(data: &ReportData) -> (Table, Vec<(usize, String)>) {
         columns.push(Column::new("n", "paper_cell_n", Align::Right).latex("$n$"));
         columns.push(Column::new("Successes", "paper_cell_successes", Align::Right));
         columns.extend(estimate_columns("paper_cell_", fresh, true));
+    }
+    let cause_split = columns.len();
+    if reference {
         columns.push(Column::new("Verdict (best)", "verdict", Align::Left));
         columns.push(Column::new("Verdict (paper config)", "paper_cell_verdict", Align::Left));
         columns.push(Column::new("Paper inconsistent", "paper_inconsistent", Align::Left));
@@ -315,21 +318,42 @@ fn table3_built(data: &ReportData) -> (Table, Vec<(usize, String)>) {
             data.trials_cached, data.trials_planned
         ));
     }
-    let mut parts = vec![(split, uncertainty)];
+    let mut parts = vec![((split..paper_split).collect::<Vec<_>>(), uncertainty)];
     if reference {
+        // The paper's cell has fresh-seed trials only where it is also the best cell, whose columns
+        // show them: the page leaves its fresh-seed and survival columns and its TOST p-values (its
+        // equivalence verdicts stay) to the CSV, so that the table fits a page's width.
+        let shown = (paper_split..cause_split).filter(|&i| {
+            let key = &columns[i].csv[0];
+            !key.starts_with("paper_cell_fresh")
+                && !key.starts_with("paper_cell_tost_p")
+                && key != "paper_cell_km_median"
+        });
         parts.push((
-            paper_split,
+            shown.collect(),
+            "At paper config: the cell of the same heatmap at the paper's stated configuration \
+             (mean ± std over the grid's seeds, n, successes), with the same interval, censoring and \
+             equivalence verdicts as the best cell; table3.csv adds its fresh-seed estimate (only \
+             where it is also the best cell), Kaplan–Meier median and TOST p-values."
+                .to_string(),
+        ));
+        parts.push((
+            (cause_split..columns.len()).collect(),
             format!(
-                "At paper config: the cell of the same heatmap at the paper's stated configuration \
-                 (mean ± std over the grid's seeds, n, successes), with the same interval, fresh-seed, \
-                 censoring and equivalence columns as the best cell (fresh seeds only where it is also \
-                 the best cell). Verdicts of the best cell and of the paper's cell, on their fresh-seed \
-                 estimate where present: {VERDICT_RULE} Paper inconsistent: {CONSISTENCY_RULE} {CAUSE_RULE}"
+                "Verdicts of the best cell and of the paper's cell, on their fresh-seed estimate where \
+                 present: {VERDICT_RULE} Paper inconsistent: {CONSISTENCY_RULE} {CAUSE_RULE}"
             ),
         ));
     }
     (Table { title: format!("Table III ({})", data.plan.report_name()), caption, columns, rows }, parts)
 }
+
+/// The further parts of Table III on the pages after the best configurations: (HTML id, title).
+pub const TABLE3_PARTS: [(&str, &str); 3] = [
+    ("uncertainty", "uncertainty"),
+    ("paper-config", "at the paper's configuration"),
+    ("cause", "verdicts and cause"),
+];
 
 /// Table III as the pages show it, in tables of the same rows: the best configurations (the
 /// paper's columns, and a race's), then their uncertainty (the rows' keys and the interval,
@@ -351,14 +375,11 @@ pub fn table3_parts(data: &ReportData) -> Vec<Table> {
             })
             .collect(),
     };
-    let mut bounds: Vec<usize> = parts.iter().map(|p| p.0).collect();
-    bounds.push(full.columns.len());
-    let main: Vec<usize> = (0..bounds[0]).collect();
+    let main: Vec<usize> = (0..parts[0].0[0]).collect();
     let mut out = vec![keep(&main, full.title.clone(), full.caption.clone())];
-    let names = ["uncertainty", "at the paper's configuration"];
-    for (k, (start, caption)) in parts.iter().enumerate() {
-        let cols: Vec<usize> = (0..3).chain(*start..bounds[k + 1]).collect();
-        out.push(keep(&cols, format!("{}: {}", full.title, names[k]), caption.clone()));
+    for ((shown, caption), name) in parts.iter().zip(TABLE3_PARTS) {
+        let cols: Vec<usize> = (0..3).chain(shown.iter().copied()).collect();
+        out.push(keep(&cols, format!("{}: {}", full.title, name.1), caption.clone()));
     }
     out
 }

@@ -10,7 +10,7 @@ mod latex;
 mod markdown;
 mod model;
 
-pub use build::{cell_table, table3, table3_parts};
+pub use build::{cell_table, table3, table3_parts, TABLE3_PARTS};
 pub use csv::Csv;
 pub use html::Html;
 pub use latex::Latex;
