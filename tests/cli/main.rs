@@ -3,6 +3,7 @@
 mod bad_pipelines;
 mod bench;
 mod cache;
+mod claims;
 mod error_locations;
 mod exit_codes;
 mod explore;
