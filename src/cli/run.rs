@@ -74,12 +74,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         };
         println!("{}", serde_json::to_string(&v)?);
     } else if !a.quiet {
+        // Appended, so scripts that read the line's start (scripts/slurm/test.sh) still can.
         let elsewhere = match report.elsewhere {
             0 => String::new(),
-            n => format!(", {n} run elsewhere (another run on this cache)"),
+            n => format!("; {n} computed meanwhile by another run on this cache"),
         };
         println!(
-            "executed {}, cached {}{elsewhere}, failed {} in {:.1} s",
+            "executed {}, cached {}, failed {} in {:.1} s{elsewhere}",
             report.executed, done.cached, report.failed, seconds
         );
     }

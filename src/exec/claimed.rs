@@ -1,7 +1,8 @@
 //! Which trial a worker runs next when the run shares its cache ([`crate::cache::claims`]): the
 //! next one in order that it can claim; a trial another run has claimed is set aside, and once
 //! the order is used up the workers look at the set-aside trials every [`POLL`] until each is
-//! stored (by its holder) or claimable (its holder stopped or died).
+//! stored (by its holder) or claimable (its holder stopped or died); before that, every
+//! [`BUSY_POLL`], so a dead holder's trials go to the next free worker.
 
 use super::Job;
 use crate::cache::claims::{Claims, Take};
@@ -12,6 +13,20 @@ use std::time::{Duration, Instant};
 /// How often the trials running elsewhere are looked at: a dead holder on this machine is
 /// noticed within this, a stored trial too.
 pub const POLL: Duration = Duration::from_millis(100);
+
+/// How often they are looked at while the run still has other trials to start: rarely enough
+/// that a long list of them costs nothing next to the trials.
+pub const BUSY_POLL: Duration = Duration::from_secs(1);
+
+/// What a look at the set-aside trials found.
+enum Polled {
+    /// This one is free now: run it.
+    Run(usize),
+    /// Some are still held elsewhere (or another worker is looking).
+    Wait,
+    /// None is left.
+    Empty,
+}
 
 /// What a worker does next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,8 +72,20 @@ impl<'a> Scheduler<'a> {
         }
     }
 
+    /// Whether every job was handed out or set aside: the run is in its tail.
+    pub fn exhausted(&self) -> bool {
+        self.next.load(Ordering::Relaxed) >= self.order.len()
+    }
+
     /// The next job to run, or whether to wait or stop.
     pub fn pick(&self) -> Pick {
+        // While there is other work, the set-aside trials are looked at now and then too, so a
+        // dead holder's trials are taken over by the next free worker, not only in the tail.
+        if self.claims.is_some() && !self.exhausted() {
+            if let Polled::Run(j) = self.poll_waiting(BUSY_POLL) {
+                return Pick::Run(j);
+            }
+        }
         while let Some(&j) = self.order.get(self.next.fetch_add(1, Ordering::Relaxed)) {
             let Some(claims) = self.claims else { return Pick::Run(j) };
             match claims.try_take(self.jobs[j].key) {
@@ -73,14 +100,27 @@ impl<'a> Scheduler<'a> {
                 Ok(Take::Taken) | Err(_) => return Pick::Run(j),
             }
         }
-        let Some(claims) = self.claims else { return Pick::Done };
-        // One worker looks at a time; the others wait for its answer.
-        let Ok(mut w) = self.waiting.try_lock() else { return Pick::Wait };
-        if w.jobs.is_empty() {
+        if self.claims.is_none() {
             return Pick::Done;
         }
-        if w.last_poll.is_some_and(|t| t.elapsed() < POLL) {
-            return Pick::Wait;
+        match self.poll_waiting(POLL) {
+            Polled::Run(j) => Pick::Run(j),
+            Polled::Wait => Pick::Wait,
+            Polled::Empty => Pick::Done,
+        }
+    }
+
+    /// Look at the set-aside trials if the last look is `every` ago: take the first that is free,
+    /// drop those stored meanwhile.
+    fn poll_waiting(&self, every: Duration) -> Polled {
+        let Some(claims) = self.claims else { return Polled::Empty };
+        // One worker looks at a time; the others wait for its answer.
+        let Ok(mut w) = self.waiting.try_lock() else { return Polled::Wait };
+        if w.jobs.is_empty() {
+            return Polled::Empty;
+        }
+        if w.last_poll.is_some_and(|t| t.elapsed() < every) {
+            return Polled::Wait;
         }
         w.last_poll = Some(Instant::now());
         let mut i = 0;
@@ -96,14 +136,14 @@ impl<'a> Scheduler<'a> {
                 Ok(Take::Taken) | Err(_) => {
                     w.jobs.remove(i);
                     self.running_elsewhere.fetch_sub(1, Ordering::Relaxed);
-                    return Pick::Run(j);
+                    return Polled::Run(j);
                 }
             }
         }
         if w.jobs.is_empty() {
-            Pick::Done
+            Polled::Empty
         } else {
-            Pick::Wait
+            Polled::Wait
         }
     }
 }

@@ -113,8 +113,8 @@ pub fn estimated_cost(c: &TrialConfig) -> f64 {
 
 /// Run `jobs` and hand finished records to `sink` in batches; stops early (after flushing) when
 /// [`INTERRUPTED`] is set. With claims, a job another run holds is left to it and waited for, and
-/// each claim is released once its trial is handed to the sink. A sink error stops the run and is returned; records already handed
-/// to the sink are kept. Every step is reported to `reporter`.
+/// each claim is released once its trial is handed to the sink. A sink error stops the run and is
+/// returned; records already handed to the sink are kept. Every step is reported to `reporter`.
 pub fn execute(
     jobs: &[Job<'_>],
     opts: &ExecOptions,
@@ -218,9 +218,12 @@ pub fn execute(
             }
             // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
             // SIGKILL soon after) store what is finished at once rather than at the next batch.
+            // So in the tail of a run that shares the cache: other runs may be waiting for
+            // exactly these trials, which their claims keep from them until they are stored.
             if batch.len() >= opts.batch_trials
                 || last_flush.elapsed() >= opts.batch_interval
                 || INTERRUPTED.load(Ordering::Relaxed)
+                || (!batch.is_empty() && sched.exhausted() && claims.is_some_and(|c| c.others_present()))
             {
                 if let Err(e) = flush(&mut batch, &mut report, &mut *reporter) {
                     break Err(e);

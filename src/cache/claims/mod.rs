@@ -215,6 +215,17 @@ impl Claims {
         }
     }
 
+    /// Whether another run holds claims in this cache now (live or not): someone may be waiting
+    /// for this run's trials.
+    pub fn others_present(&self) -> bool {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else { return false };
+        let theirs = entries
+            .flatten()
+            .filter(|e| !e.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX))
+            .count();
+        theirs > self.held()
+    }
+
     /// How many claims this run holds.
     pub fn held(&self) -> usize {
         lock_ok(&self.held).len()
