@@ -24,6 +24,10 @@ pub struct RunSummary {
     pub executed: usize,
     /// Distinct trials of the plan (or shard) found in the cache and not run.
     pub cached: usize,
+    /// Distinct trials another run on the same cache computed while this one ran (claimed by it,
+    /// waited for, not run here); an addition, not a new version.
+    #[serde(default)]
+    pub elsewhere: usize,
     /// Executed trials that diverged (stored with their reason; the run exits 1).
     pub failed: usize,
     /// The run was stopped by Ctrl-C or SIGTERM (it exits 130).
@@ -51,6 +55,10 @@ pub struct StatusReport {
     pub cached: usize,
     /// Of those, not in the cache.
     pub missing: usize,
+    /// Of the missing, being computed now by another run on the cache (a live claim); an
+    /// addition, not a new version.
+    #[serde(default)]
+    pub running_elsewhere: usize,
     /// One entry per experiment, in report order.
     pub experiments: Vec<StatusExperiment>,
     /// Cache segments that could not be read (their trials count as missing).
@@ -140,6 +148,7 @@ impl StatusReport {
             trials: s.total.trials,
             cached: s.total.cached,
             missing: s.total.missing(),
+            running_elsewhere: s.running_elsewhere,
             experiments,
             damaged_segments: s.damaged.len(),
             race,

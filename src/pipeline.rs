@@ -107,6 +107,9 @@ pub fn run_trials(
     };
     if !plan.is_staged() {
         let (unique, jobs) = select(plan, scan, sel);
+        if let Some(c) = &opts.claims {
+            c.reset_view(scan, sel.force);
+        }
         let exec = execute(&jobs, opts, flush, reporter)?;
         return Ok(RunOutcome { exec, cached: unique.len() - jobs.len() });
     }
@@ -127,8 +130,12 @@ pub fn run_trials(
         if jobs.is_empty() {
             return Ok(RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total });
         }
+        if let Some(c) = &opts.claims {
+            c.reset_view(scan, sel.force);
+        }
         let exec = execute(&jobs, opts, flush, reporter)?;
         total.executed += exec.executed;
+        total.elsewhere += exec.elsewhere;
         total.failed += exec.failed;
         total.interrupted |= exec.interrupted;
         if exec.interrupted || sel.shard.is_some() {

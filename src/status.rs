@@ -44,6 +44,8 @@ pub struct Status {
     pub heats: Option<Vec<HeatRace>>,
     /// Cache segments that could not be read (their trials count as missing).
     pub damaged: Vec<Damaged>,
+    /// Of the missing trials, how many another run is computing now (a live claim in the cache).
+    pub running_elsewhere: usize,
     /// Why missing cells are missing: only when asked for and some trial is missing.
     pub explanation: Option<Vec<MissingCell>>,
 }
@@ -122,7 +124,14 @@ pub fn status(plan: &Plan, store: Option<&Store>, explain: bool) -> anyhow::Resu
         Some(store) => Some(missing_cells(&plan, &store.read_all()?, cached)),
         None => Some(missing_cells(&plan, &[], cached)),
     };
-    Ok(Status { plan, total, experiments, heats, damaged: scan.damaged, explanation })
+    let running_elsewhere = match store {
+        Some(store) if total.missing() > 0 => crate::cache::claims::running_elsewhere(
+            store,
+            plan.trials().map(|(_, _, t)| &t.key).filter(|k| !cached.contains(k)),
+        ),
+        _ => 0,
+    };
+    Ok(Status { plan, total, experiments, heats, damaged: scan.damaged, running_elsewhere, explanation })
 }
 
 /// A trial's grid position: system, representation, algorithm, resolution, actions and seed.

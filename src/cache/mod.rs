@@ -1,5 +1,6 @@
 //! The content-addressed trial cache: keys, records and the append-only Parquet store.
 
+pub mod claims;
 pub mod gc;
 pub mod key;
 pub mod record;

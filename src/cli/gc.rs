@@ -45,7 +45,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         )
     };
     println!(
-        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files; {sizes}",
+        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files, {} dead runs' claims; {sizes}",
         if a.dry_run { "dry run: " } else { "" },
         r.segments_before,
         r.segments_after,
@@ -53,6 +53,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         r.rows_removed,
         r.duplicates,
         r.stale_temps,
+        r.stale_claims,
     );
     Ok(exit::OK)
 }

@@ -64,7 +64,23 @@ impl CacheArgs {
     /// Open the cache store, creating its directory if needed (`run`).
     pub fn store(&self) -> anyhow::Result<Store> {
         let dir = self.dir();
-        Store::open(&dir).map_err(|e| anyhow::anyhow!("cache {}: {e}", dir.display()))
+        if dir.exists() && !dir.is_dir() {
+            return Err(user_error(format!(
+                "cache {} is a file, not a directory; give a directory with --cache DIR (or QSWEEP_CACHE), or move the file away",
+                dir.display()
+            )));
+        }
+        Store::open(&dir).map_err(|e| unwritable(&dir, &e))
+    }
+
+    /// The cache, created if needed, checked to be writable (`run`): a cache that cannot be
+    /// written is a usage error found before any trial runs, not an I/O error at the first flush.
+    pub fn writable_store(&self) -> anyhow::Result<Store> {
+        let store = self.store()?;
+        let probe = store.dir().join(format!("{}probe.{}", crate::atomic::TEMP_PREFIX, std::process::id()));
+        std::fs::File::create(&probe).map_err(|e| unwritable(store.dir(), &e))?;
+        let _ = std::fs::remove_file(&probe);
+        Ok(store)
     }
 
     /// The cache if its directory exists, else `None` (treated as empty): the rule of the
@@ -79,6 +95,21 @@ impl CacheArgs {
         require_cache(&self.dir())?;
         self.store()
     }
+}
+
+/// The usage error (exit 2) for a cache directory that cannot be made or written, and what to do.
+pub fn unwritable(dir: &Path, e: &std::io::Error) -> anyhow::Error {
+    let what = match e.kind() {
+        std::io::ErrorKind::PermissionDenied | std::io::ErrorKind::ReadOnlyFilesystem => "cannot be written",
+        std::io::ErrorKind::NotADirectory | std::io::ErrorKind::AlreadyExists => {
+            "cannot be made (a file is in the way)"
+        }
+        _ => return anyhow::anyhow!("cache {}: {e}", dir.display()),
+    };
+    user_error(format!(
+        "cache {} {what} ({e}); give a directory you can write with --cache DIR (or QSWEEP_CACHE), or fix its permissions",
+        dir.display()
+    ))
 }
 
 /// Fail with a usage error (exit 2) unless `dir` is an existing directory: the read-only

@@ -31,6 +31,11 @@ impl Reporter for ProgressReporter {
                     p.finish()
                 }
             }
+            Event::Elsewhere { running, stored } => {
+                if let Some(p) = &mut self.current {
+                    p.elsewhere(*running, *stored)
+                }
+            }
             Event::Flushed { .. } | Event::Interrupted => {}
         }
     }
@@ -42,6 +47,9 @@ struct Progress {
     total: usize,
     done: usize,
     failed: usize,
+    /// Trials another run on the cache has claimed and not stored yet, and those it stored.
+    running_elsewhere: usize,
+    stored_elsewhere: usize,
     start: Instant,
     last_line: Instant,
 }
@@ -62,7 +70,17 @@ impl Progress {
             b
         });
         let now = Instant::now();
-        Self { bar, plain: show && !terminal, total, done: 0, failed: 0, start: now, last_line: now }
+        Self {
+            bar,
+            plain: show && !terminal,
+            total,
+            done: 0,
+            failed: 0,
+            running_elsewhere: 0,
+            stored_elsewhere: 0,
+            start: now,
+            last_line: now,
+        }
     }
 
     fn inc(&mut self, failed: bool) {
@@ -70,11 +88,37 @@ impl Progress {
         self.failed += usize::from(failed);
         if let Some(b) = &self.bar {
             b.inc(1);
-            if self.failed > 0 {
-                b.set_message(format!("{} failed", self.failed));
-            }
         }
+        self.redraw_message();
         self.tick();
+    }
+
+    /// Another run's share: its stored trials count as done here, its running ones are shown.
+    fn elsewhere(&mut self, running: usize, stored: usize) {
+        self.done += stored - self.stored_elsewhere.min(stored);
+        if let Some(b) = &self.bar {
+            b.inc((stored - self.stored_elsewhere.min(stored)) as u64);
+        }
+        (self.running_elsewhere, self.stored_elsewhere) = (running, stored);
+        self.redraw_message();
+    }
+
+    /// What the bar says after its counts: failures, and trials running elsewhere.
+    fn suffix(&self) -> String {
+        let mut parts = Vec::new();
+        if self.failed > 0 {
+            parts.push(format!("{} failed", self.failed));
+        }
+        if self.running_elsewhere > 0 {
+            parts.push(format!("{} running elsewhere", self.running_elsewhere));
+        }
+        parts.join(", ")
+    }
+
+    fn redraw_message(&self) {
+        if let Some(b) = &self.bar {
+            b.set_message(self.suffix());
+        }
     }
 
     fn tick(&mut self) {
@@ -90,7 +134,10 @@ impl Progress {
                 100.0 * self.done as f64 / self.total as f64,
                 rate,
                 eta,
-                if self.failed > 0 { format!(", {} failed", self.failed) } else { String::new() }
+                match self.suffix() {
+                    s if s.is_empty() => s,
+                    s => format!(", {s}"),
+                }
             );
         }
     }

@@ -45,7 +45,7 @@ pub struct RunArgs {
 pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let start = Instant::now();
     let plan = a.pipeline.plan()?;
-    let store = a.pipeline.cache.store()?;
+    let store = a.pipeline.cache.writable_store()?;
     install_ctrlc();
     let scan = crate::pipeline::scan(&store)?;
     warn_quarantined(&scan);
@@ -53,6 +53,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
         batch_trials: a.batch_trials.max(1),
         batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
+        claims: Some(claims(&store)?),
     };
     let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();
@@ -66,14 +67,20 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
             pipeline: plan.name.clone(),
             executed: report.executed,
             cached: done.cached,
+            elsewhere: report.elsewhere,
             failed: report.failed,
             interrupted: report.interrupted,
             seconds,
         };
         println!("{}", serde_json::to_string(&v)?);
     } else if !a.quiet {
+        // Appended, so scripts that read the line's start (scripts/slurm/test.sh) still can.
+        let elsewhere = match report.elsewhere {
+            0 => String::new(),
+            n => format!("; {n} computed meanwhile by another run on this cache"),
+        };
         println!(
-            "executed {}, cached {}, failed {} in {:.1} s",
+            "executed {}, cached {}, failed {} in {:.1} s{elsewhere}",
             report.executed, done.cached, report.failed, seconds
         );
     }
@@ -101,9 +108,20 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     Ok(crate::error::exit::OK)
 }
 
+/// This run's claims on the cache, released at once by Ctrl-C / SIGTERM.
+fn claims(store: &crate::cache::Store) -> anyhow::Result<std::sync::Arc<crate::cache::claims::Claims>> {
+    let dir = store.dir().join(crate::cache::claims::CLAIMS_DIR);
+    let claims =
+        crate::cache::claims::Claims::open(store).map_err(|e| super::pipeline_args::unwritable(&dir, &e))?;
+    crate::cache::claims::register(&claims);
+    Ok(claims)
+}
+
 fn install_ctrlc() {
     // A second Ctrl-C exits at once; finished trials are already in renamed segments.
     let _ = ctrlc::set_handler(|| {
+        // Other runs on the cache may take this run's unfinished trials now.
+        crate::cache::claims::release_registered();
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(i32::from(crate::error::exit::INTERRUPTED));
         }

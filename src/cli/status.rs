@@ -52,10 +52,14 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             );
         }
         println!(
-            "total: {} trials, {} cached, {} missing (cache: {}{})",
+            "total: {} trials, {} cached, {} missing{} (cache: {}{})",
             v.trials,
             v.cached,
             v.missing,
+            match v.running_elsewhere {
+                0 => String::new(),
+                n => format!(", {n} of them running elsewhere (another run on this cache)"),
+            },
             a.pipeline.cache.dir().display(),
             if store.is_none() { ", does not exist yet" } else { "" }
         );

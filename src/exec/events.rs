@@ -28,6 +28,13 @@ pub enum Event {
         /// Trials in the batch.
         trials: usize,
     },
+    /// Trials another run sharing the cache has claimed: set aside, then waited for.
+    Elsewhere {
+        /// Set aside and not stored yet.
+        running: usize,
+        /// Stored by the other runs meanwhile (not run here).
+        stored: usize,
+    },
     /// An interrupt (Ctrl-C, SIGTERM) stopped the execution; finished trials were stored.
     Interrupted,
     /// The execution ended (also after an error or an interrupt).

@@ -3,20 +3,27 @@
 //! bounded by count and by time (so an interrupted run keeps them), and reports [`Event`]s to the
 //! caller's [`Reporter`].
 //!
+//! With claims ([`ExecOptions::claims`]) a run that shares its cache with others claims each trial
+//! before running it, sets aside those another run is computing, and waits for them at the end
+//! ([`claimed`]).
+//!
 //! Results never depend on the number of threads: each trial is a pure function of its config and
 //! seed, and batches are written in completion order, which only affects segment layout.
 
+pub mod claimed;
 mod events;
 pub mod shard;
 
 pub use events::{Event, Reporter};
 
+use crate::cache::claims::{lease::HEARTBEAT, Claims};
 use crate::cache::{Key, TrialRecord};
 use crate::plan::Plan;
 use crate::sim::repr::ReprKind;
 use crate::sim::{run_trial, TrialConfig};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use claimed::{Pick, Scheduler, POLL};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 /// Set by the Ctrl-C / SIGTERM handler: workers start no new trials, the run flushes and stops.
@@ -31,6 +38,9 @@ pub struct ExecOptions {
     pub batch_trials: usize,
     /// ...or after this long since the last flush, whichever comes first.
     pub batch_interval: Duration,
+    /// Claim each trial in the cache before running it, so that concurrent runs on the cache
+    /// never compute one twice (`None`: run every job, as a library user without a shared cache).
+    pub claims: Option<Arc<Claims>>,
 }
 
 impl Default for ExecOptions {
@@ -39,6 +49,7 @@ impl Default for ExecOptions {
             jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
             batch_trials: 500,
             batch_interval: Duration::from_secs(10),
+            claims: None,
         }
     }
 }
@@ -50,6 +61,8 @@ pub struct ExecReport {
     pub executed: usize,
     /// Of those, trials whose simulation diverged (stored with a failure reason).
     pub failed: usize,
+    /// Trials another run (sharing the cache) stored while this one ran: not run here.
+    pub elsewhere: usize,
     /// Whether Ctrl-C stopped the run early.
     pub interrupted: bool,
 }
@@ -99,8 +112,9 @@ pub fn estimated_cost(c: &TrialConfig) -> f64 {
 }
 
 /// Run `jobs` and hand finished records to `sink` in batches; stops early (after flushing) when
-/// [`INTERRUPTED`] is set. A sink error stops the run and is returned; records already handed
-/// to the sink are kept. Every step is reported to `reporter`.
+/// [`INTERRUPTED`] is set. With claims, a job another run holds is left to it and waited for, and
+/// each claim is released once its trial is handed to the sink. A sink error stops the run and is
+/// returned; records already handed to the sink are kept. Every step is reported to `reporter`.
 pub fn execute(
     jobs: &[Job<'_>],
     opts: &ExecOptions,
@@ -112,14 +126,15 @@ pub fn execute(
     order.sort_by(|&a, &b| estimated_cost(jobs[b].config).total_cmp(&estimated_cost(jobs[a].config)));
     let threads = opts.jobs.max(1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let next = AtomicUsize::new(0);
+    let claims = opts.claims.as_deref();
+    let sched = Scheduler::new(jobs, order, claims);
     let stop = AtomicBool::new(false);
     let (tx, rx) = mpsc::channel::<TrialRecord>();
     let mut report = ExecReport::default();
     reporter.event(&Event::Started { trials: jobs.len() });
 
     let collected = std::thread::scope(|scope| -> anyhow::Result<()> {
-        let (order, next, stop) = (&order, &next, &stop);
+        let (sched, stop) = (&sched, &stop);
         scope.spawn(move || {
             pool.scope(|s| {
                 for _ in 0..threads {
@@ -128,9 +143,14 @@ pub fn execute(
                         if stop.load(Ordering::Relaxed) || INTERRUPTED.load(Ordering::Relaxed) {
                             break;
                         }
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(&j) = order.get(i) else { break };
-                        let job = jobs[j];
+                        let job = match sched.pick() {
+                            Pick::Run(j) => jobs[j],
+                            Pick::Wait => {
+                                std::thread::sleep(POLL);
+                                continue;
+                            }
+                            Pick::Done => break,
+                        };
                         let start = Instant::now();
                         let cpu = thread_cpu_seconds();
                         let outcome = run_trial(job.config, job.seed);
@@ -153,12 +173,17 @@ pub fn execute(
 
         let mut batch: Vec<TrialRecord> = Vec::new();
         let mut last_flush = Instant::now();
+        let mut last_beat = Instant::now();
+        let mut elsewhere = (0, 0);
         let mut flush = |batch: &mut Vec<TrialRecord>,
                          report: &mut ExecReport,
                          reporter: &mut dyn Reporter|
          -> anyhow::Result<()> {
             if !batch.is_empty() {
                 sink(batch)?;
+                if let Some(c) = claims {
+                    c.release(&batch.iter().map(|r| r.key).collect::<Vec<_>>());
+                }
                 reporter.event(&Event::Flushed { trials: batch.len() });
                 report.executed += batch.len();
                 report.failed += batch.iter().filter(|r| r.outcome.failure.is_some()).count();
@@ -177,11 +202,28 @@ pub fn execute(
                     break flush(&mut batch, &mut report, &mut *reporter)
                 }
             }
+            if let Some(c) = claims {
+                if last_beat.elapsed() >= HEARTBEAT {
+                    c.heartbeat();
+                    last_beat = Instant::now();
+                }
+                let now = (
+                    sched.running_elsewhere.load(Ordering::Relaxed),
+                    sched.stored_elsewhere.load(Ordering::Relaxed),
+                );
+                if now != elsewhere {
+                    elsewhere = now;
+                    reporter.event(&Event::Elsewhere { running: now.0, stored: now.1 });
+                }
+            }
             // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
             // SIGKILL soon after) store what is finished at once rather than at the next batch.
+            // So in the tail of a run that shares the cache: other runs may be waiting for
+            // exactly these trials, which their claims keep from them until they are stored.
             if batch.len() >= opts.batch_trials
                 || last_flush.elapsed() >= opts.batch_interval
                 || INTERRUPTED.load(Ordering::Relaxed)
+                || (!batch.is_empty() && sched.exhausted() && claims.is_some_and(|c| c.others_present()))
             {
                 if let Err(e) = flush(&mut batch, &mut report, &mut *reporter) {
                     break Err(e);
@@ -196,7 +238,13 @@ pub fn execute(
         }
         result
     });
-    report.interrupted = INTERRUPTED.load(Ordering::Relaxed) && report.executed < jobs.len();
+    // Nothing is held between executions: claims of trials a failing sink did not store go now.
+    if let Some(c) = claims {
+        c.release_all();
+    }
+    report.elsewhere = sched.stored_elsewhere.load(Ordering::Relaxed);
+    report.interrupted =
+        INTERRUPTED.load(Ordering::Relaxed) && report.executed + report.elsewhere < jobs.len();
     if report.interrupted {
         reporter.event(&Event::Interrupted);
     }

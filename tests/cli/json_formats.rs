@@ -21,7 +21,7 @@ fn run_json_is_format_1() {
     assert_eq!(v["format_version"], 1);
     assert_eq!(
         keys(&v),
-        ["cached", "executed", "failed", "format_version", "interrupted", "pipeline", "seconds"]
+        ["cached", "elsewhere", "executed", "failed", "format_version", "interrupted", "pipeline", "seconds"]
     );
     let s: RunSummary = serde_json::from_value(v).unwrap();
     assert_eq!(s.format_version, RunSummary::FORMAT_VERSION);
@@ -40,7 +40,16 @@ fn status_json_is_format_1() {
     assert_eq!(v["format_version"], 1);
     assert_eq!(
         keys(&v),
-        ["cached", "damaged_segments", "experiments", "format_version", "missing", "pipeline", "trials"]
+        [
+            "cached",
+            "damaged_segments",
+            "experiments",
+            "format_version",
+            "missing",
+            "pipeline",
+            "running_elsewhere",
+            "trials"
+        ]
     );
     assert_eq!(
         keys(&v["experiments"][0]),

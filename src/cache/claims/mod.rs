@@ -1,0 +1,344 @@
+//! Claims: how several runs sharing one cache avoid computing a trial twice, and how a run that
+//! dies strands nothing.
+//!
+//! Before a run computes a trial it claims the trial's key: a small file `_claims/<key>` in the
+//! cache directory, made atomically (written and locked under a temporary name, then hard-linked
+//! into place, which fails if the key is claimed already) and holding the holder's host and pid.
+//! Another run that meets the claim skips the trial, does its other work, and at the end waits
+//! for the key to be stored (see [`crate::exec`]). The holder removes its claims once their trials
+//! are stored, and at once on Ctrl-C / SIGTERM ([`release_registered`]).
+//!
+//! A claim is live while its holder keeps an advisory lock on it ([`lock`]: dropped by the
+//! kernel when the process dies, so on one machine a dead holder is seen at once) and refreshes it
+//! within its lease ([`lease`]: for machines that do not share locks). A dead holder's claim is
+//! removed and taken by whoever meets it next. Older builds ignore the folder, and the segments
+//! stay the only truth: a trial stored twice (only possible where neither layer can see a live
+//! holder) is identical and dropped on read. `docs/sharing-a-cache.md` is the user's account.
+
+pub mod lease;
+pub mod lock;
+mod seen;
+
+use self::lease::{is_stale, process_alive, Holder, LEASE};
+use self::lock::{is_at, try_lock, Lock};
+use super::store::{KeySet, Store};
+use super::Key;
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{ErrorKind, Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, Weak};
+use std::time::SystemTime;
+
+pub use seen::Seen;
+
+/// The folder inside the cache that holds the claims. Its leading `_` (like `_quarantine`'s)
+/// makes readers that take the cache folder as a Parquet dataset (pyarrow, pandas, polars) skip
+/// it, and older builds only ever list `seg-*.parquet`.
+pub const CLAIMS_DIR: &str = "_claims";
+
+/// What claiming a key found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Take {
+    /// This run now holds the claim: compute the trial.
+    Taken,
+    /// A live holder is computing it.
+    Busy,
+    /// It is stored already (by another run since this one scanned the cache).
+    Stored,
+}
+
+/// What a claim file found in the cache says about its holder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Liveness {
+    /// Its holder is alive (or may be: its lease has not run out).
+    Live,
+    /// Its holder is gone: the claim is debris, free to remove or take over.
+    Dead,
+}
+
+/// Judge a claim from what its file shows: the lock, its holder, and whether its lease ran out.
+/// A lock someone holds means a live holder unless the lease ran out (a lost machine whose lock
+/// the file server has not yet dropped). A lock this process could take means the holder is dead
+/// if it was on this machine (the kernel dropped its lock); on another machine, whose lock may
+/// not reach us, the lease decides; so it does for a file without a holder (one that died while
+/// making it) and where locks do not work at all.
+pub fn judge(lock: Lock, holder: Option<&Holder>, me: &Holder, stale: bool) -> Liveness {
+    let live = match (lock, holder) {
+        (Lock::Busy, _) => !stale,
+        (Lock::Taken, Some(h)) if h.host == me.host => false,
+        (Lock::Unsupported, Some(h)) if h.host == me.host => !stale && process_alive(h.pid),
+        _ => !stale,
+    };
+    if live {
+        Liveness::Live
+    } else {
+        Liveness::Dead
+    }
+}
+
+/// One claim file as found: its handle (kept open while judged, so its lock means something) and
+/// how live it is.
+fn inspect(path: &Path, me: &Holder) -> std::io::Result<(File, Liveness)> {
+    let mut file = File::open(path)?;
+    let lock = try_lock(&file)?;
+    let mut text = String::new();
+    // A garbled file is no holder; an unreadable one too (the lease then decides).
+    let _ = file.read_to_string(&mut text);
+    let modified = file.metadata()?.modified()?;
+    let stale = is_stale(modified, SystemTime::now(), LEASE);
+    Ok((file, judge(lock, Holder::parse(&text).as_ref(), me, stale)))
+}
+
+/// This run's claims in one cache.
+#[derive(Debug)]
+pub struct Claims {
+    dir: PathBuf,
+    me: Holder,
+    held: Mutex<HashMap<Key, File>>,
+    seen: Mutex<Seen>,
+}
+
+impl Claims {
+    /// The claims of a run on `store` (creating the claims folder).
+    pub fn open(store: &Store) -> std::io::Result<Arc<Self>> {
+        let dir = store.dir().join(CLAIMS_DIR);
+        std::fs::create_dir_all(&dir)?;
+        Ok(Arc::new(Self {
+            dir,
+            me: Holder::me(),
+            held: Mutex::new(HashMap::new()),
+            seen: Mutex::new(Seen::from_scan(store.dir(), &KeySet::default(), false)),
+        }))
+    }
+
+    /// Judge whether a key is stored against `scan` (the scan this execution planned from) and
+    /// whatever is stored after it; with `force`, only against what is stored after it.
+    pub fn reset_view(&self, scan: &KeySet, force: bool) {
+        let cache = self.dir.parent().unwrap_or(&self.dir).to_path_buf();
+        *lock_ok(&self.seen) = Seen::from_scan(&cache, scan, force);
+    }
+
+    fn path(&self, key: &Key) -> PathBuf {
+        self.dir.join(key.hex())
+    }
+
+    /// Claim `key`: [`Take::Taken`] when this run now holds it, [`Take::Busy`] when a live holder
+    /// does, [`Take::Stored`] when it turns out to be stored already. A dead holder's claim is
+    /// taken over.
+    pub fn try_take(&self, key: Key) -> std::io::Result<Take> {
+        let path = self.path(&key);
+        for _ in 0..4 {
+            match self.create(&path) {
+                Ok(file) => {
+                    // Whoever stored the key removed its claim after storing it: look again.
+                    if lock_ok(&self.seen).contains(&key) {
+                        remove_own(&file, &path);
+                        return Ok(Take::Stored);
+                    }
+                    lock_ok(&self.held).insert(key, file);
+                    return Ok(Take::Taken);
+                }
+                Err(e) if e.kind() == ErrorKind::AlreadyExists => {}
+                Err(e) if e.kind() == ErrorKind::NotFound => {
+                    // Someone removed the folder (by hand): make it again.
+                    std::fs::create_dir_all(&self.dir)?;
+                    continue;
+                }
+                Err(e) => return Err(e),
+            }
+            let (file, liveness) = match inspect(&path, &self.me) {
+                Ok(found) => found,
+                Err(e) if e.kind() == ErrorKind::NotFound => continue,
+                Err(e) => return Err(e),
+            };
+            if liveness == Liveness::Live {
+                return Ok(Take::Busy);
+            }
+            // Take over: remove the dead claim (only if it is still the file judged) and make ours.
+            remove_own(&file, &path);
+        }
+        // Others keep making and removing it: treat it as busy and look again later.
+        Ok(Take::Busy)
+    }
+
+    /// Make the claim file at `path` with this process as holder, locked; fails with
+    /// `AlreadyExists` if there is one.
+    fn create(&self, path: &Path) -> std::io::Result<File> {
+        let nanos = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let tmp = self.dir.join(format!("{}{name}.{}.{nanos}", crate::atomic::TEMP_PREFIX, self.me.pid));
+        let made = (|| {
+            let mut file = File::options().read(true).write(true).create_new(true).open(&tmp)?;
+            // A fresh file nobody else has open: the lock is ours (or locks are unsupported).
+            try_lock(&file)?;
+            file.write_all(self.me.to_text().as_bytes())?;
+            std::fs::hard_link(&tmp, path).map(|()| file)
+        })();
+        let _ = std::fs::remove_file(&tmp);
+        match made {
+            Err(e) if e.kind() == ErrorKind::Unsupported || e.raw_os_error() == Some(libc::EPERM) => {
+                // No hard links on this file system: create the file in place (the holder's line
+                // follows a moment later; an empty claim counts as live within its lease).
+                let mut file = File::options().read(true).write(true).create_new(true).open(path)?;
+                try_lock(&file)?;
+                file.write_all(self.me.to_text().as_bytes())?;
+                Ok(file)
+            }
+            other => other,
+        }
+    }
+
+    /// Release the claims of `keys` (their trials are stored).
+    pub fn release(&self, keys: &[Key]) {
+        let mut held = lock_ok(&self.held);
+        for k in keys {
+            if let Some(file) = held.remove(k) {
+                remove_own(&file, &self.path(k));
+            }
+        }
+    }
+
+    /// Release every claim this run holds (the run ends, or was interrupted).
+    pub fn release_all(&self) {
+        let mut held = lock_ok(&self.held);
+        for (k, file) in held.drain() {
+            remove_own(&file, &self.path(&k));
+        }
+    }
+
+    /// Renew the lease of every claim held (call every [`lease::HEARTBEAT`]).
+    pub fn heartbeat(&self) {
+        let now = SystemTime::now();
+        for file in lock_ok(&self.held).values() {
+            let _ = file.set_modified(now);
+        }
+    }
+
+    /// Whether another run holds claims in this cache now (live or not): someone may be waiting
+    /// for this run's trials.
+    pub fn others_present(&self) -> bool {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else { return false };
+        let theirs = entries
+            .flatten()
+            .filter(|e| !e.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX))
+            .count();
+        theirs > self.held()
+    }
+
+    /// How many claims this run holds.
+    pub fn held(&self) -> usize {
+        lock_ok(&self.held).len()
+    }
+}
+
+impl Drop for Claims {
+    fn drop(&mut self) {
+        self.release_all();
+        // The cache looks as before once no run is on it; a run that just made the folder and
+        // meets it gone makes it again (see `try_take`). Fails harmlessly while others use it.
+        let _ = std::fs::remove_dir(&self.dir);
+    }
+}
+
+/// Remove the claim at `path` if `file` is still it (a claim taken over meanwhile is not ours).
+fn remove_own(file: &File, path: &Path) {
+    if is_at(file, path) {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
+/// A poisoned lock only means another thread panicked; the map itself is still sound.
+fn lock_ok<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+static REGISTERED: Mutex<Option<Weak<Claims>>> = Mutex::new(None);
+
+/// Let [`release_registered`] (the Ctrl-C / SIGTERM handler) release `claims`.
+pub fn register(claims: &Arc<Claims>) {
+    *lock_ok(&REGISTERED) = Some(Arc::downgrade(claims));
+}
+
+/// Release the registered run's claims now: an interrupted run gives its trials to the other
+/// runs at once instead of making them wait for a lease (or for its exit).
+pub fn release_registered() {
+    let claims = lock_ok(&REGISTERED).as_ref().and_then(Weak::upgrade);
+    if let Some(c) = claims {
+        c.release_all();
+    }
+}
+
+/// Of `keys`, how many another run is computing now (a live claim): `status`'s
+/// `running_elsewhere`. Reads the claims folder once.
+pub fn running_elsewhere<'a>(store: &Store, keys: impl IntoIterator<Item = &'a Key>) -> usize {
+    let dir = store.dir().join(CLAIMS_DIR);
+    let Ok(entries) = std::fs::read_dir(&dir) else { return 0 };
+    let claimed: std::collections::HashSet<Key> =
+        entries.flatten().filter_map(|e| Key::parse_hex(&e.file_name().to_string_lossy())).collect();
+    if claimed.is_empty() {
+        return 0;
+    }
+    let me = Holder::me();
+    let wanted: std::collections::HashSet<&Key> = keys.into_iter().filter(|k| claimed.contains(k)).collect();
+    wanted
+        .into_iter()
+        .filter(|k| inspect(&dir.join(k.hex()), &me).is_ok_and(|(_, liveness)| liveness == Liveness::Live))
+        .count()
+}
+
+/// What [`sweep`] found in the claims folder.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Swept {
+    /// Claims of dead holders (and stray temporary files), removed.
+    pub removed: usize,
+    /// Claims of live holders, left alone.
+    pub live: usize,
+}
+
+/// Remove the claims folder's debris: claims whose holder is dead, and temporary files left by
+/// a holder killed while making a claim. With `dry_run`, only count them.
+pub fn sweep(store: &Store, dry_run: bool) -> std::io::Result<Swept> {
+    let dir = store.dir().join(CLAIMS_DIR);
+    let mut out = Swept::default();
+    let entries = match std::fs::read_dir(&dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == ErrorKind::NotFound => return Ok(out),
+        Err(e) => return Err(e),
+    };
+    let me = Holder::me();
+    for entry in entries {
+        let entry = entry?;
+        let path = entry.path();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with(crate::atomic::TEMP_PREFIX) {
+            // Made and linked (or given up) within microseconds; an old one is a killed holder's.
+            let old = entry.metadata()?.modified()?.elapsed().is_ok_and(|age| age > LEASE);
+            if old {
+                out.removed += 1;
+                if !dry_run {
+                    let _ = std::fs::remove_file(&path);
+                }
+            }
+            continue;
+        }
+        let (file, liveness) = match inspect(&path, &me) {
+            Ok(found) => found,
+            Err(e) if e.kind() == ErrorKind::NotFound => continue,
+            Err(e) => return Err(e),
+        };
+        match liveness {
+            Liveness::Live => out.live += 1,
+            Liveness::Dead => {
+                out.removed += 1;
+                if !dry_run {
+                    remove_own(&file, &path);
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests;
