@@ -4,7 +4,7 @@
 //! stored (by its holder) or claimable (its holder stopped or died); before that, every
 //! [`BUSY_POLL`], so a dead holder's trials go to the next free worker.
 
-use super::Job;
+use super::job::Job;
 use crate::cache::claims::{Claims, Take};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;

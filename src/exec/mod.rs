@@ -12,16 +12,17 @@
 
 pub mod claimed;
 mod events;
+mod job;
 pub mod shard;
 
 pub use events::{Event, Reporter};
 
 use crate::cache::claims::{lease::HEARTBEAT, Claims};
-use crate::cache::{Key, TrialRecord};
-use crate::plan::Plan;
+use crate::cache::TrialRecord;
 use crate::sim::repr::ReprKind;
 use crate::sim::{run_trial, TrialConfig};
 use claimed::{Pick, Scheduler, POLL};
+pub use job::{jobs, Job};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
@@ -65,22 +66,6 @@ pub struct ExecReport {
     pub elsewhere: usize,
     /// Whether Ctrl-C stopped the run early.
     pub interrupted: bool,
-}
-
-/// A trial to run: configuration, seed and key.
-#[derive(Debug, Clone, Copy)]
-pub struct Job<'a> {
-    /// Its configuration.
-    pub config: &'a TrialConfig,
-    /// Its seed.
-    pub seed: u64,
-    /// Its key.
-    pub key: Key,
-}
-
-/// The distinct trials of `plan` as jobs, in plan order ([`Plan::unique_trials`]).
-pub fn jobs(plan: &Plan) -> Vec<Job<'_>> {
-    plan.unique_trials().into_iter().map(|(config, t)| Job { config, seed: t.seed, key: t.key }).collect()
 }
 
 /// CPU seconds the calling thread has used so far (`CLOCK_THREAD_CPUTIME_ID`): what a trial costs,
@@ -256,6 +241,7 @@ pub fn execute(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cache::Key;
     use crate::sim::env::SystemKind;
     use crate::sim::Algorithm;
 
