@@ -14,7 +14,7 @@ use super::folder::{write_folder, ReportSummary};
 use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
 use super::model::ReportData;
-use crate::atomic::write_atomic;
+use crate::atomic::write_if_changed;
 use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
 use crate::error::user_error;
@@ -50,6 +50,41 @@ pub struct ReportOutcome {
     pub replaced: Vec<String>,
     /// Files of the kept reports that this one no longer writes, removed.
     pub removed: Vec<PathBuf>,
+    /// Files (manifests included) whose bytes changed or that were new: written.
+    pub files_written: usize,
+    /// Files whose bytes would not change: left alone, their mtimes kept.
+    pub files_unchanged: usize,
+}
+
+/// When each file of a report folder (and of its `figures/`) was last written, and its size: taken
+/// before the folder is written, compared after, to tell rewritten files from unchanged ones
+/// (every write is a rename of a new file, so a rewritten file has a new mtime).
+#[derive(Debug, Default)]
+struct Stamps(std::collections::HashMap<String, (std::time::SystemTime, u64)>);
+
+impl Stamps {
+    fn of(dir: &Path) -> Self {
+        let mut out = std::collections::HashMap::new();
+        for (sub, prefix) in [(dir.to_path_buf(), ""), (dir.join("figures"), "figures/")] {
+            let Ok(entries) = std::fs::read_dir(&sub) else { continue };
+            for e in entries.flatten() {
+                if let Some(st) = stamp(&e.path()) {
+                    out.insert(format!("{prefix}{}", e.file_name().to_string_lossy()), st);
+                }
+            }
+        }
+        Self(out)
+    }
+
+    /// Whether `name` (relative to the folder) is as it was when the stamps were taken.
+    fn unchanged(&self, dir: &Path, name: &str) -> bool {
+        self.0.get(name).is_some_and(|before| stamp(&dir.join(name)).as_ref() == Some(before))
+    }
+}
+
+fn stamp(path: &Path) -> Option<(std::time::SystemTime, u64)> {
+    let m = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;
+    Some((m.modified().ok()?, m.len()))
 }
 
 /// The files an earlier qsweep wrote into a report folder without a manifest, as far as they are
@@ -79,6 +114,8 @@ struct Target {
     dir: PathBuf,
     counts: Counts,
     kept: Option<Kept>,
+    /// The folder's files before this report wrote them.
+    before: Stamps,
 }
 
 impl Target {
@@ -89,7 +126,7 @@ impl Target {
             Err(_) if force => None,
             Err(e) => return Err(e),
         };
-        Ok(Self { counts: Counts::of(plan, cached), kept, dir })
+        Ok(Self { counts: Counts::of(plan, cached), kept, before: Stamps::of(&dir), dir })
     }
 
     /// Refuse (unless `force`) to replace a kept report that holds more than this one would.
@@ -122,6 +159,13 @@ impl Target {
             files: names.clone(),
         };
         manifest::write(&self.dir, &m)?;
+        for name in names.iter().map(String::as_str).chain([manifest::MANIFEST]) {
+            if self.before.unchanged(&self.dir, name) {
+                out.files_unchanged += 1;
+            } else {
+                out.files_written += 1;
+            }
+        }
         let prefix = variant.map_or_else(PathBuf::new, PathBuf::from);
         out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
         out.summary.files.push(prefix.join(manifest::MANIFEST));
@@ -221,6 +265,8 @@ pub fn write(
         counts: Counts::of(plan, &scan.keys),
         replaced: Vec::new(),
         removed: Vec::new(),
+        files_written: 0,
+        files_unchanged: 0,
     };
     let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
     let mut digests: Vec<VariantDigest> = Vec::new();
@@ -281,7 +327,7 @@ pub fn write(
         let mut files = Vec::new();
         if let Some(first) = cells.first() {
             let all = arrow::compute::concat_batches(&first.schema(), &cells)?;
-            write_atomic(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
+            write_if_changed(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
             files.push(PathBuf::from("cells.parquet"));
         }
         if trials.take().map(TrialsSink::finish).transpose()?.unwrap_or(false) {
@@ -298,7 +344,8 @@ const TRIALS_ROW_GROUP: usize = 1024;
 
 /// The combined `trials.parquet`, written one experiment of one variant at a time, in row groups
 /// of [`TRIALS_ROW_GROUP`] trials, to a hidden temporary file beside it, renamed into place when
-/// complete (so memory holds one experiment's rows, and a reader never sees a partial file).
+/// complete (so memory holds one experiment's rows, and a reader never sees a partial file), or
+/// dropped when the file there already holds the same bytes (its mtime stays).
 struct TrialsSink {
     tmp: PathBuf,
     path: PathBuf,
@@ -336,10 +383,17 @@ impl TrialsSink {
         Ok(())
     }
 
-    /// Close, fsync and rename; `false` when no rows were pushed (no file).
+    /// Close, fsync and rename (or drop the temporary file when the kept one is the same); `false`
+    /// when no rows were pushed (no file).
     fn finish(mut self) -> anyhow::Result<bool> {
         let Some(w) = self.writer.take() else { return Ok(false) };
         let file = w.into_inner()?;
+        if crate::atomic::same_files(&self.tmp, &self.path) {
+            drop(file);
+            std::fs::remove_file(&self.tmp)
+                .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", self.tmp.display()))?;
+            return Ok(true);
+        }
         file.sync_all()?;
         std::fs::rename(&self.tmp, &self.path)
             .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.path.display()))?;
