@@ -105,6 +105,10 @@ pub struct ReportFlags {
     /// (cells.parquet), trials (trials.parquet), svg, png (figures), html (index.html).
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = DEFAULT_FORMATS)]
     pub formats: Vec<Format>,
+    /// Ignore the report folders' memos (memo.json) and recompute every folder; a file is still
+    /// rewritten only when its bytes change.
+    #[arg(long)]
+    pub rebuild: bool,
 }
 
 impl ReportFlags {
@@ -114,6 +118,7 @@ impl ReportFlags {
             dir: self.out.clone().unwrap_or_else(|| crate::report::default_dir(plan)),
             formats: Formats::of(&self.formats),
             force,
+            rebuild: self.rebuild,
         }
     }
 }

@@ -7,12 +7,19 @@
 //! every folder the report would replace: it refuses (exit 1, nothing written) only when the new
 //! report's plan lacks trials and the kept report holds more. A complete report of a changed
 //! plan replaces the old one, and [`ReportOutcome::replaced`] says what changed.
+//!
+//! Each folder's memo ([`memo`]) lets a rerun skip what has not changed: a folder whose inputs
+//! digest matches its memo and whose files are intact is neither recomputed nor rewritten. With a
+//! comparison of variants, which needs every variant's numbers, the whole report is skipped when
+//! every folder is intact, and otherwise recomputed (each file still written only when its bytes
+//! change). `--rebuild` ([`ReportOptions::rebuild`]) ignores the memos.
 
 use super::compare::{self, VariantDigest, VariantInfo};
 use super::datasets;
 use super::folder::{write_folder, ReportSummary};
 use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
+use super::memo::{self, Counted, Inputs, Memo, Role};
 use super::model::ReportData;
 use crate::atomic::write_if_changed;
 use crate::cache::store::{KeySet, Store};
@@ -31,6 +38,8 @@ pub struct ReportOptions {
     pub formats: Formats,
     /// Replace a kept report even when the new one holds fewer trials.
     pub force: bool,
+    /// Ignore the folders' memos: recompute every folder (`--rebuild`).
+    pub rebuild: bool,
 }
 
 /// Where a pipeline's report goes unless `--out` says otherwise: `reports/<name>`.
@@ -139,14 +148,18 @@ impl Target {
         }
     }
 
-    /// Write the manifest, remove the kept report's files that were not written again, say what
-    /// changed, and list the folder's files (under the variant's id) in the outcome's summary.
+    /// Write the manifest and the memo (from `inputs`, with the folder's `counted` summary and the
+    /// comparison's `chosen` reading), remove the kept report's files that were not written again,
+    /// say what changed, and list the folder's files (under the variant's id) in the outcome's
+    /// summary.
+    #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
         plan: &Plan,
         variant: Option<&str>,
         formats: Formats,
         files: Vec<PathBuf>,
+        memo: (&blake3::Hash, Counted, Option<&str>),
         out: &mut ReportOutcome,
     ) -> anyhow::Result<()> {
         let names: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
@@ -159,7 +172,10 @@ impl Target {
             files: names.clone(),
         };
         manifest::write(&self.dir, &m)?;
-        for name in names.iter().map(String::as_str).chain([manifest::MANIFEST]) {
+        let mut listed = names.clone();
+        listed.push(manifest::MANIFEST.to_string());
+        memo::write(&self.dir, memo.0, memo.1, memo.2, &listed)?;
+        for name in names.iter().map(String::as_str).chain([manifest::MANIFEST, memo::MEMO]) {
             if self.before.unchanged(&self.dir, name) {
                 out.files_unchanged += 1;
             } else {
@@ -169,6 +185,7 @@ impl Target {
         let prefix = variant.map_or_else(PathBuf::new, PathBuf::from);
         out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
         out.summary.files.push(prefix.join(manifest::MANIFEST));
+        out.summary.files.push(prefix.join(memo::MEMO));
         let Some(kept) = &self.kept else { return Ok(()) };
         // What the kept report wrote: its manifest says; an earlier layout's are known by name.
         let stale: Vec<String> = match kept {
@@ -242,6 +259,28 @@ pub fn write(
     };
     let with_comparison = !plan.variants.is_empty() && !plan.variant_subset;
 
+    // Each folder's inputs digest, against which its memo is checked.
+    let inputs = Inputs::new(plan, scan);
+    let sub_inputs: Vec<blake3::Hash> = subs
+        .iter()
+        .map(|(info, sub)| {
+            inputs.of(
+                sub,
+                info.as_ref().map(|v| v.id.as_str()),
+                formats,
+                Role::Folder { own_trials: info.is_none() },
+            )
+        })
+        .collect();
+    let top_inputs = inputs.of(plan, None, formats, Role::Comparison);
+    drop(inputs);
+    let intact = |dir: &Path, h: &blake3::Hash| if opts.rebuild { None } else { memo::intact(dir, h) };
+    if with_comparison {
+        if let Some(done) = all_intact(plan, &subs, &sub_inputs, (&top_inputs, dir), scan, &intact) {
+            return Ok(done);
+        }
+    }
+
     // In a full report of a pipeline with a grid, only the chosen reading gets a folder, written
     // after the comparison has chosen it (compare::has_folder); an exploratory reading gets none;
     // `--variant` writes any on demand.
@@ -276,7 +315,15 @@ pub fn write(
     if trials.is_some() {
         std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
     }
-    for ((info, sub), target) in subs.iter().zip(&targets) {
+    for (((info, sub), target), sub_hash) in subs.iter().zip(&targets).zip(&sub_inputs) {
+        // Without a comparison, a folder stands alone: an intact one is skipped by itself.
+        if let (Some(t), false) = (target, with_comparison) {
+            if let Some(m) = intact(&t.dir, sub_hash) {
+                let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
+                reuse(&m, &prefix, &mut out);
+                continue;
+            }
+        }
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
         // Episode lengths only for what draws or stores them: a folder's curves, the trial rows.
@@ -295,10 +342,12 @@ pub fn write(
             },
         );
         pushed?;
+        let counted = ReportSummary::of(&data, Vec::new());
         if let (Some(t), Some(files)) = (target, written?) {
-            t.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, files, &mut out)?;
+            let id = info.as_ref().map(|v| v.id.as_str());
+            t.finish(sub, id, formats, files, (sub_hash, Counted::of(&counted), None), &mut out)?;
         }
-        out.summary.add(&ReportSummary::of(&data, Vec::new()));
+        out.summary.add(&counted);
         if let (Some(v), true) = (info, with_comparison) {
             // An exploratory reading's cells are written with its folder, on demand.
             if in_cells {
@@ -310,17 +359,22 @@ pub fn write(
 
     // The chosen reading of a grid gets its folder once the comparison has chosen it.
     let chosen = compare::explore::chosen(plan, &digests).filter(|_| plan.has_grid()).cloned();
-    if let Some((info, sub)) =
-        subs.iter().find(|(i, _)| deferred(i) && i.as_ref().map(|v| &v.id) == chosen.as_ref().map(|c| &c.id))
+    let mut chosen_folder = None;
+    if let Some(((info, sub), sub_hash)) = subs
+        .iter()
+        .zip(&sub_inputs)
+        .find(|((i, _), _)| deferred(i) && i.as_ref().map(|v| &v.id) == chosen.as_ref().map(|c| &c.id))
     {
         let id = &info.as_ref().expect("a deferred folder is a variant's").id;
+        chosen_folder = Some(id.as_str());
         let t = Target::new(dir.join(id), sub, &scan.keys, opts.force)?;
         t.guard(opts.force, store.dir())?;
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
         let data = ReportData::build(sub, &outcomes);
         let files = write_folder(&data, &t.dir, formats, false)?;
-        t.finish(sub, Some(id), formats, files, &mut out)?;
+        let counted = Counted::of(&ReportSummary::of(&data, Vec::new()));
+        t.finish(sub, Some(id), formats, files, (sub_hash, counted, None), &mut out)?;
     }
 
     if let Some(top) = &top {
@@ -334,9 +388,57 @@ pub fn write(
             files.push(PathBuf::from("trials.parquet"));
         }
         files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
-        top.finish(plan, None, formats, files, &mut out)?;
+        let counted = Counted::of(&out.summary);
+        top.finish(plan, None, formats, files, (&top_inputs, counted, chosen_folder), &mut out)?;
     }
     Ok(out)
+}
+
+/// Count a folder kept as its memo says: its counts into the summary, its files as unchanged.
+fn reuse(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
+    out.summary.add(&m.summary.summary());
+    out.summary.files.extend(m.files.keys().map(|f| prefix.join(f)));
+    out.summary.files.push(prefix.join(memo::MEMO));
+    out.files_unchanged += m.files.len() + 1;
+}
+
+/// The outcome of a report with a comparison whose every folder is intact (the comparison's, each
+/// variant's with a folder, the chosen reading's): nothing to compute or write. `None` when one
+/// of them is not.
+fn all_intact(
+    plan: &Plan,
+    subs: &[(Option<VariantInfo>, Plan)],
+    sub_inputs: &[blake3::Hash],
+    top: (&blake3::Hash, &Path),
+    scan: &KeySet,
+    intact: &dyn Fn(&Path, &blake3::Hash) -> Option<Memo>,
+) -> Option<ReportOutcome> {
+    let (top_inputs, dir) = top;
+    let top = intact(dir, top_inputs)?;
+    let mut out = ReportOutcome {
+        summary: top.summary.summary(),
+        counts: Counts::of(plan, &scan.keys),
+        replaced: Vec::new(),
+        removed: Vec::new(),
+        files_written: 0,
+        files_unchanged: 0,
+    };
+    for ((info, _), h) in subs.iter().zip(sub_inputs) {
+        let Some(v) = info else { continue };
+        // The same rule as the stage's: a grid's readings and exploratory ones have no folder,
+        // but the chosen one.
+        let has_folder = !(plan.has_grid() || v.exploratory) || top.chosen.as_deref() == Some(v.id.as_str());
+        if has_folder {
+            let m = intact(&dir.join(&v.id), h)?;
+            out.summary.files.extend(m.files.keys().map(|f| PathBuf::from(&v.id).join(f)));
+            out.summary.files.push(PathBuf::from(&v.id).join(memo::MEMO));
+            out.files_unchanged += m.files.len() + 1;
+        }
+    }
+    out.summary.files.extend(top.files.keys().map(PathBuf::from));
+    out.summary.files.push(PathBuf::from(memo::MEMO));
+    out.files_unchanged += top.files.len() + 1;
+    Some(out)
 }
 
 /// Rows per row group of the combined `trials.parquet`.

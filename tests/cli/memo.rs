@@ -54,3 +54,117 @@ fn a_second_report_rewrites_no_file_and_keeps_every_mtime() {
     assert_eq!(mtimes(&out), before, "no file rewritten, trials.parquet included");
     assert!(before.contains_key(Path::new("trials.parquet")));
 }
+
+/// Every file under `dir` with its bytes.
+fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    mtimes(dir).into_keys().map(|p| (p.clone(), std::fs::read(dir.join(&p)).unwrap())).collect()
+}
+
+/// Report `pipeline` incrementally into `inc` (with `run`, so new trials are computed) and with
+/// `--rebuild` into a fresh folder; the two must be byte-identical, memos and trials included.
+/// Returns the incremental report's line.
+fn same_as_rebuild(sb: &Sandbox, pipeline: &Path, inc: &Path, extra: &[&str], what: &str) -> String {
+    let p = pipeline.to_str().unwrap();
+    let mut args = vec!["run", p, "--out", inc.to_str().unwrap()];
+    args.extend(extra);
+    let said = crate::helpers::stdout(&mut sb.qsweep(&args));
+    let fresh = sb.path("rebuilt");
+    let _ = std::fs::remove_dir_all(&fresh);
+    let mut args = vec!["report", p, "--rebuild", "--out", fresh.to_str().unwrap()];
+    args.extend(extra);
+    crate::helpers::stdout(&mut sb.qsweep(&args));
+    let (a, b) = (tree(inc), tree(&fresh));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>(), "{what}: the same files");
+    for (name, bytes) in &a {
+        assert!(bytes == &b[name], "{what}: {} differs from --rebuild's", name.display());
+    }
+    said
+}
+
+#[test]
+fn the_incremental_report_equals_rebuild_after_each_kind_of_change() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "nothing changed");
+    assert_eq!(files_line(&said).0, 0, "nothing rewritten: {said}");
+
+    // Seeds added (to every experiment, then back).
+    same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "seeds back");
+    assert!(files_line(&said).0 > 0, "{said}");
+    // A variant added.
+    let added = format!("{text}  - id: slow-crisp\n    set: {{ systems.mountain-car.crisp.alpha: 0.002 }}\n");
+    std::fs::write(&p, &added).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a variant added");
+    // A variant's set changed.
+    std::fs::write(&p, added.replace("alpha: 0.002", "alpha: 0.003")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a variant's set changed");
+    // A reference value changed.
+    std::fs::write(&p, added.replace("mean: 20, std: 5", "mean: 25, std: 5")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a reference value changed");
+    // The formats changed (and back).
+    same_as_rebuild(&sb, &p, &inc, &["--formats", "md,csv"], "formats changed");
+    same_as_rebuild(&sb, &p, &inc, &[], "formats back");
+}
+
+#[test]
+fn a_deleted_or_damaged_memo_or_report_is_recomputed_never_trusted() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    std::fs::remove_file(inc.join("fast-crisp/memo.json")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a memo deleted");
+    std::fs::write(inc.join("memo.json"), "{\"format_version\": 1, \"inputs\": ").unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a memo corrupted");
+    let m = std::fs::read_to_string(inc.join("as-written/memo.json")).unwrap();
+    let forged = m.replace("\"experiments\": ", "\"experiments\": 1");
+    assert_ne!(forged, m);
+    std::fs::write(inc.join("as-written/memo.json"), forged).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a memo's counts forged");
+    std::fs::remove_dir_all(inc.join("short-episodes")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a report folder deleted by hand");
+    std::fs::write(inc.join("fast-crisp/table3.md"), "edited by hand").unwrap();
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "a report file edited by hand");
+    assert!(files_line(&said).0 >= 1, "the edited file is rewritten: {said}");
+    std::fs::remove_file(inc.join("trials.parquet")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "trials.parquet deleted");
+}
+
+#[test]
+fn a_pipeline_without_variants_skips_its_intact_folder_and_rebuild_recomputes() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    let before = mtimes(&inc);
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "nothing changed");
+    assert_eq!(files_line(&said).0, 0, "{said}");
+    assert_eq!(mtimes(&inc), before);
+    std::fs::write(inc.join("index.html"), "edited").unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a file edited");
+    same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
+}
+
+#[test]
+fn grids_races_fresh_seeds_and_variant_subsets_are_skipped_when_intact() {
+    for fixture in ["grid.yaml", "race.yaml", "fresh.yaml"] {
+        let sb = Sandbox::new();
+        let p = sb.fixture(fixture);
+        let inc = sb.path("rep");
+        same_as_rebuild(&sb, &p, &inc, &[], fixture);
+        let before = mtimes(&inc);
+        let said = same_as_rebuild(&sb, &p, &inc, &[], fixture);
+        assert_eq!(files_line(&said).0, 0, "{fixture}: {said}");
+        assert_eq!(mtimes(&inc), before, "{fixture}");
+    }
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &["--variant", "fast-crisp"], "one variant");
+    let said = same_as_rebuild(&sb, &p, &inc, &["--variant", "fast-crisp"], "one variant again");
+    assert_eq!(files_line(&said).0, 0, "{said}");
+}
