@@ -206,19 +206,23 @@ fn experiment(e: &Experiment, found: &HashMap<Key, u64>) -> blake3::Hash {
         &e.fresh,
     );
     let _ = write!(h, "{head:?}");
-    let trials = |h: &mut blake3::Hasher, ts: &[PlannedTrial]| {
-        h.update(&(ts.len() as u64).to_le_bytes());
+    // Each cell into one buffer, hashed at once (many small updates are slow).
+    let mut buf: Vec<u8> = Vec::new();
+    let trials = |buf: &mut Vec<u8>, ts: &[PlannedTrial]| {
+        buf.extend_from_slice(&(ts.len() as u64).to_le_bytes());
         for t in ts {
-            h.update(&t.seed.to_le_bytes());
-            h.update(&t.key.0);
+            buf.extend_from_slice(&t.seed.to_le_bytes());
+            buf.extend_from_slice(&t.key.0);
             // 0: not cached (an id of 0 is as good as impossible and would only cost a recompute).
-            h.update(&found.get(&t.key).copied().unwrap_or(0).to_le_bytes());
+            buf.extend_from_slice(&found.get(&t.key).copied().unwrap_or(0).to_le_bytes());
         }
     };
     for c in &e.cells {
-        let _ = write!(h, "\0{:?} {:?} {:?} {:?}", c.algorithm, c.coords, c.contender, c.config);
-        trials(&mut h, &c.trials);
-        trials(&mut h, &c.fresh);
+        buf.clear();
+        let _ = write!(buf, "\0{:?} {:?} {:?} {:?}", c.algorithm, c.coords, c.contender, c.config);
+        trials(&mut buf, &c.trials);
+        trials(&mut buf, &c.fresh);
+        h.update(&buf);
     }
     h.finalize()
 }
