@@ -168,3 +168,34 @@ fn grids_races_fresh_seeds_and_variant_subsets_are_skipped_when_intact() {
     let said = same_as_rebuild(&sb, &p, &inc, &["--variant", "fast-crisp"], "one variant again");
     assert_eq!(files_line(&said).0, 0, "{said}");
 }
+
+/// The digest of every report file of the variants fixture (the memo and the trial rows, whose
+/// informational `seconds` vary, left out) recorded with the [`ANALYSIS_VERSION`] it was written
+/// under.
+///
+/// [`ANALYSIS_VERSION`]: qsweep::report::memo::ANALYSIS_VERSION
+const GOLDEN: (u32, &str) = (1, "c8d9c595345868e56110d8840baaa5c92364fd454d60e9fc93c1b9f3bebbf8d4");
+
+#[test]
+fn analysis_golden_outputs_change_only_with_analysis_version() {
+    let sb = Sandbox::new();
+    sb.fixture("variants.yaml");
+    let out = sb.path("rep");
+    // Relative paths: the pipeline's path is shown in the report.
+    let formats = "md,csv,tex,cells,svg,html";
+    sb.qsweep(&["run", "variants.yaml", "--quiet", "--formats", formats, "--out", "rep"]).assert().success();
+    let mut h = blake3::Hasher::new();
+    for (name, bytes) in tree(&out).iter().filter(|(n, _)| n.file_name().unwrap() != "memo.json") {
+        h.update(name.to_string_lossy().as_bytes());
+        h.update(&(bytes.len() as u64).to_le_bytes());
+        h.update(bytes);
+    }
+    let got = (qsweep::report::memo::ANALYSIS_VERSION, h.finalize().to_hex().to_string());
+    assert_eq!(
+        (got.0, got.1.as_str()),
+        GOLDEN,
+        "the report of a fixed input changed: if a definition or a file's layout changed on purpose, \
+         bump ANALYSIS_VERSION (src/report/memo.rs) so that no memo keeps the old files, and record \
+         the new pair here"
+    );
+}
