@@ -136,12 +136,15 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
     let page = if opts.formats.has(Format::Html) { "index.html" } else { "" };
     println!(
         "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
-         that uses it, the distinct trials are the `executed`/`cached` counts; files: {} rewritten, {} unchanged)",
+         that uses it, the distinct trials are the `executed`/`cached` counts; cells: {} recomputed, {} reused; \
+         files: {} rewritten, {} unchanged)",
         opts.dir.join(page).display(),
         s.trials_cached,
         s.trials_planned,
         s.cells_with_trials,
         s.cells,
+        o.cells_recomputed,
+        o.cells_reused,
         o.files_written,
         o.files_unchanged,
     );

@@ -63,6 +63,10 @@ pub struct ReportOutcome {
     pub files_written: usize,
     /// Files whose bytes would not change: left alone, their mtimes kept.
     pub files_unchanged: usize,
+    /// Cells whose statistics were computed (those of every folder or variant not skipped).
+    pub cells_recomputed: usize,
+    /// Cells of the folders skipped as their memos say (nothing read, nothing computed).
+    pub cells_reused: usize,
 }
 
 /// When each file of a report folder (and of its `figures/`) was last written, and its size: taken
@@ -306,6 +310,8 @@ pub fn write(
         removed: Vec::new(),
         files_written: 0,
         files_unchanged: 0,
+        cells_recomputed: 0,
+        cells_reused: 0,
     };
     let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
     let mut digests: Vec<VariantDigest> = Vec::new();
@@ -348,6 +354,7 @@ pub fn write(
             t.finish(sub, id, formats, files, (sub_hash, Counted::of(&counted), None), &mut out)?;
         }
         out.summary.add(&counted);
+        out.cells_recomputed += counted.cells;
         if let (Some(v), true) = (info, with_comparison) {
             // An exploratory reading's cells are written with its folder, on demand.
             if in_cells {
@@ -397,6 +404,7 @@ pub fn write(
 /// Count a folder kept as its memo says: its counts into the summary, its files as unchanged.
 fn reuse(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
     out.summary.add(&m.summary.summary());
+    out.cells_reused += m.summary.cells;
     out.summary.files.extend(m.files.keys().map(|f| prefix.join(f)));
     out.summary.files.push(prefix.join(memo::MEMO));
     out.files_unchanged += m.files.len() + 1;
@@ -422,6 +430,8 @@ fn all_intact(
         removed: Vec::new(),
         files_written: 0,
         files_unchanged: 0,
+        cells_recomputed: 0,
+        cells_reused: top.summary.cells,
     };
     for ((info, _), h) in subs.iter().zip(sub_inputs) {
         let Some(v) = info else { continue };

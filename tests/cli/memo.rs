@@ -199,3 +199,34 @@ fn analysis_golden_outputs_change_only_with_analysis_version() {
          the new pair here"
     );
 }
+
+#[test]
+fn report_json_says_what_was_recomputed_reused_and_written() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let (p, o) = (p.to_str().unwrap(), sb.path("rep"));
+    let o = o.to_str().unwrap();
+    let json = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["report", p, "--json", "--out", o];
+        args.extend(extra);
+        serde_json::from_str(&crate::helpers::stdout(&mut sb.qsweep(&args))).unwrap()
+    };
+    sb.qsweep(&["run", p, "--quiet", "--no-report"]).assert().success();
+    let first = json(&[]);
+    assert_eq!(first["format_version"], 1);
+    assert_eq!(first["pipeline"], "variants");
+    assert_eq!(first["cells_reused"], 0);
+    assert_eq!(first["files_unchanged"], 0);
+    let cells = first["cells_recomputed"].as_u64().unwrap();
+    let files = first["files_written"].as_u64().unwrap();
+    assert_eq!(cells, 3 * 12, "three variants of 12 cells");
+    assert!(first["seconds"].as_f64().unwrap() >= 0.0);
+    let again = json(&[]);
+    assert_eq!((again["cells_recomputed"].as_u64(), again["cells_reused"].as_u64()), (Some(0), Some(cells)));
+    assert_eq!((again["files_written"].as_u64(), again["files_unchanged"].as_u64()), (Some(0), Some(files)));
+    let rebuilt = json(&["--rebuild"]);
+    assert_eq!(
+        (rebuilt["cells_recomputed"].as_u64(), rebuilt["files_written"].as_u64()),
+        (Some(cells), Some(0))
+    );
+}
