@@ -290,6 +290,73 @@ pub fn write(
     Ok(())
 }
 
+/// What `qsweep verify` found of the memos under a reports directory.
+#[derive(Debug, Default, Clone, PartialEq, Eq)]
+pub struct MemoCheck {
+    /// Memos read and intact (every file they list present with its digest, or missing).
+    pub intact: usize,
+    /// Memos that cannot be read (unparsable, unsealed, another version): `(memo, why)`.
+    pub damaged: Vec<(std::path::PathBuf, String)>,
+    /// Files whose bytes differ from their memo's digest (edited since they were written).
+    pub differing: Vec<std::path::PathBuf>,
+    /// Files a memo lists that are not there (uncommitted ones like `trials.parquet` in a fresh
+    /// clone): not damage, the next report writes them.
+    pub missing: Vec<std::path::PathBuf>,
+}
+
+/// Check every `memo.json` under `root` (its report folders and their variants' folders, two
+/// levels deep): sealed and current, and each listed file with its recorded digest.
+pub fn check_tree(root: &Path) -> MemoCheck {
+    let mut out = MemoCheck::default();
+    let mut dirs = vec![root.to_path_buf()];
+    let mut i = 0;
+    while i < dirs.len() {
+        let depth = dirs[i].strip_prefix(root).map_or(0, |p| p.components().count());
+        if depth < 2 {
+            if let Ok(entries) = std::fs::read_dir(&dirs[i]) {
+                let mut subs: Vec<_> = entries.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect();
+                subs.sort();
+                dirs.extend(subs);
+            }
+        }
+        i += 1;
+    }
+    for dir in dirs {
+        let path = dir.join(MEMO);
+        if !path.is_file() {
+            continue;
+        }
+        let Some(m) = read(&dir) else {
+            let why = match std::fs::read(&path).ok().and_then(|b| serde_json::from_slice::<Memo>(&b).ok()) {
+                None => "not a memo this qsweep reads (unparsable or another format)".to_string(),
+                Some(m) if m.format_version != MEMO_VERSION || m.analysis_version != ANALYSIS_VERSION => {
+                    format!(
+                        "written by another qsweep (format {}, analysis {}); the next report recomputes it",
+                        m.format_version, m.analysis_version
+                    )
+                }
+                Some(_) => "its seal does not match its contents (edited or damaged)".to_string(),
+            };
+            out.damaged.push((path, why));
+            continue;
+        };
+        let mut ok = true;
+        for (name, digest) in &m.files {
+            let p = dir.join(name);
+            match file_digest(&p) {
+                None => out.missing.push(p),
+                Some(d) if d.to_hex().as_str() != digest => {
+                    ok = false;
+                    out.differing.push(p);
+                }
+                Some(_) => {}
+            }
+        }
+        out.intact += usize::from(ok);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -230,3 +230,19 @@ fn report_json_says_what_was_recomputed_reused_and_written() {
         (Some(cells), Some(0))
     );
 }
+
+#[test]
+fn verify_reports_damaged_memos_and_edited_report_files() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    sb.qsweep(&["run", p.to_str().unwrap(), "--quiet"]).assert().success();
+    let ok = crate::helpers::stdout(&mut sb.qsweep(&["verify"]));
+    assert!(ok.contains("report memos in reports: 4 intact, 0 damaged, 0 with edited files"), "{ok}");
+    std::fs::write(sb.path("reports/variants/fast-crisp/table3.md"), "edited").unwrap();
+    std::fs::write(sb.path("reports/variants/memo.json"), "{").unwrap();
+    let out = sb.qsweep(&["verify"]).assert().code(1).get_output().stdout.clone();
+    let out = String::from_utf8(out).unwrap();
+    assert!(out.contains("damaged memo: reports/variants/memo.json"), "{out}");
+    assert!(out.contains("differs from its memo: reports/variants/fast-crisp/table3.md"), "{out}");
+    assert!(out.contains("2 intact, 1 damaged, 1 with edited files"), "{out}");
+}
