@@ -248,6 +248,27 @@ pub fn intact(dir: &Path, inputs: &blake3::Hash) -> Option<Memo> {
     ok.then_some(m)
 }
 
+/// Why the folder `dir` would be recomputed by a report whose inputs digest is `inputs`; `None`
+/// when its memo is intact (the folder would be skipped).
+pub fn why_stale(dir: &Path, inputs: &blake3::Hash) -> Option<String> {
+    if !dir.join(MEMO).is_file() {
+        return Some("no memo.json (never reported, or by an older qsweep)".to_string());
+    }
+    let Some(m) = read(dir) else {
+        return Some("memo.json damaged or of another qsweep version".to_string());
+    };
+    if m.inputs != inputs.to_hex().as_str() {
+        return Some("its inputs changed (trials cached, settings, reference values or formats)".to_string());
+    }
+    let bad: Vec<&str> = m
+        .files
+        .iter()
+        .filter(|(name, digest)| file_digest(&dir.join(name)).is_none_or(|d| d.to_hex().as_str() != *digest))
+        .map(|(name, _)| name.as_str())
+        .collect();
+    (!bad.is_empty()).then(|| format!("files edited or missing since written: {}", bad.join(", ")))
+}
+
 /// blake3 of a file's bytes, read in chunks; `None` if it cannot be read.
 pub fn file_digest(path: &Path) -> Option<blake3::Hash> {
     let mut f = std::fs::File::open(path).ok()?;

@@ -246,3 +246,31 @@ fn verify_reports_damaged_memos_and_edited_report_files() {
     assert!(out.contains("differs from its memo: reports/variants/fast-crisp/table3.md"), "{out}");
     assert!(out.contains("2 intact, 1 damaged, 1 with edited files"), "{out}");
 }
+
+#[test]
+fn status_explain_says_which_report_folders_are_stale_and_why() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let p = p.to_str().unwrap();
+    sb.qsweep(&["run", p, "--quiet"]).assert().success();
+    let fresh = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain"]));
+    assert!(fresh.contains("report folders: 4 of 4 up to date"), "{fresh}");
+    std::fs::write(sb.path("reports/variants/fast-crisp/table3.md"), "edited").unwrap();
+    sb.qsweep(&["run", p, "--quiet", "--no-report", "--variant", "short-episodes", "--set", "seeds=3"])
+        .assert()
+        .success();
+    let said = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain"]));
+    assert!(
+        said.contains("report reports/variants/fast-crisp is recomputed by the next report: files edited or missing since written: table3.md"),
+        "{said}"
+    );
+    assert!(
+        said.contains("report folders: 3 of 4 up to date"),
+        "trials cached for another plan change nothing: {said}"
+    );
+    let more = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain", "--set", "seeds=3"]));
+    assert!(
+        more.contains("reports/variants/as-written is recomputed by the next report: its inputs changed"),
+        "{more}"
+    );
+}
