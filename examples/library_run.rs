@@ -37,6 +37,7 @@ fn main() -> anyhow::Result<()> {
         dir: work.join("report"),
         formats: Formats::of(&[Format::Md, Format::Csv]),
         force: false,
+        rebuild: false,
     };
     let report = qsweep::report::write(plan.clone(), &store, &keys, &opts)?;
     println!(

@@ -31,6 +31,49 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Write `bytes` to `path` like [`write_atomic`], unless the file already holds exactly these
+/// bytes: then it is left alone (its mtime stays, so build tools and `git status` see nothing).
+/// Returns whether the file was written.
+pub fn write_if_changed(path: &Path, bytes: &[u8]) -> anyhow::Result<bool> {
+    if same_bytes(path, bytes) {
+        return Ok(false);
+    }
+    write_atomic(path, bytes)?;
+    Ok(true)
+}
+
+/// Whether `path` is a file holding exactly `bytes` (the length is compared first, so a changed
+/// file of another size is not read).
+fn same_bytes(path: &Path, bytes: &[u8]) -> bool {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() && m.len() == bytes.len() as u64 => {
+            std::fs::read(path).is_ok_and(|old| old == bytes)
+        }
+        _ => false,
+    }
+}
+
+/// Whether two files hold the same bytes, read in chunks (for files too large to hold twice,
+/// like the combined `trials.parquet`). A file that cannot be read differs.
+pub fn same_files(a: &Path, b: &Path) -> bool {
+    use std::io::Read;
+    let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else { return false };
+    if !ma.is_file() || !mb.is_file() || ma.len() != mb.len() {
+        return false;
+    }
+    let (Ok(mut fa), Ok(mut fb)) = (std::fs::File::open(a), std::fs::File::open(b)) else { return false };
+    let (mut ba, mut bb) = (vec![0u8; 1 << 16], vec![0u8; 1 << 16]);
+    loop {
+        let Ok(n) = fa.read(&mut ba) else { return false };
+        if n == 0 {
+            return fb.read(&mut bb[..1]).is_ok_and(|m| m == 0);
+        }
+        if fb.read_exact(&mut bb[..n]).is_err() || ba[..n] != bb[..n] {
+            return false;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -44,6 +87,26 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, ["a.txt"]);
+    }
+
+    #[test]
+    fn an_unchanged_file_is_not_rewritten() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.txt");
+        assert!(write_if_changed(&p, b"one").unwrap(), "a new file is written");
+        let before = std::fs::metadata(&p).unwrap().modified().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        assert!(!write_if_changed(&p, b"one").unwrap(), "same bytes: left alone");
+        assert_eq!(std::fs::metadata(&p).unwrap().modified().unwrap(), before, "mtime kept");
+        assert!(write_if_changed(&p, b"two").unwrap());
+        assert!(write_if_changed(&p, b"twos").unwrap(), "another length");
+        assert_eq!(std::fs::read(&p).unwrap(), b"twos");
+        let q = dir.path().join("b.txt");
+        std::fs::write(&q, b"twos").unwrap();
+        assert!(same_files(&p, &q));
+        std::fs::write(&q, b"twoz").unwrap();
+        assert!(!same_files(&p, &q));
+        assert!(!same_files(&p, &dir.path().join("missing")));
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! The `--json` outputs of `run`, `status`, `trial`, `bench` and `feasible`: one struct per format, each with
+//! The `--json` outputs of `run`, `report`, `status`, `trial`, `bench` and `feasible`: one struct per format, each with
 //! a `format_version`.
 //!
 //! Like cargo-nextest's machine-readable formats, a format's version is bumped only on an
@@ -38,6 +38,32 @@ pub struct RunSummary {
 
 impl RunSummary {
     /// The current version of the `run --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// `qsweep report --json`: what the report stage computed, reused and wrote.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReportJson {
+    /// Version of this format ([`ReportJson::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Pipeline name.
+    pub pipeline: String,
+    /// The report directory.
+    pub dir: String,
+    /// Cells whose statistics were computed from their trials.
+    pub cells_recomputed: usize,
+    /// Cells of report folders whose memo matched (nothing read or computed for them).
+    pub cells_reused: usize,
+    /// Files written (new, or their bytes changed).
+    pub files_written: usize,
+    /// Files left alone because their bytes would not change.
+    pub files_unchanged: usize,
+    /// Wall-clock seconds of the command.
+    pub seconds: f64,
+}
+
+impl ReportJson {
+    /// The current version of the `report --json` format.
     pub const FORMAT_VERSION: u32 = 1;
 }
 

@@ -136,6 +136,10 @@ pub struct ReportFlags {
     /// (cells.parquet), trials (trials.parquet), svg, png (figures), html (index.html).
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = DEFAULT_FORMATS)]
     pub formats: Vec<Format>,
+    /// Ignore the report folders' memos (memo.json) and recompute every folder; a file is still
+    /// rewritten only when its bytes change.
+    #[arg(long)]
+    pub rebuild: bool,
 }
 
 impl ReportFlags {
@@ -145,6 +149,7 @@ impl ReportFlags {
             dir: self.out.clone().unwrap_or_else(|| crate::report::default_dir(plan)),
             formats: Formats::of(&self.formats),
             force,
+            rebuild: self.rebuild,
         }
     }
 }
@@ -162,12 +167,17 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
     let page = if opts.formats.has(Format::Html) { "index.html" } else { "" };
     println!(
         "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
-         that uses it, the distinct trials are the `executed`/`cached` counts)",
+         that uses it, the distinct trials are the `executed`/`cached` counts; cells: {} recomputed, {} reused; \
+         files: {} rewritten, {} unchanged)",
         opts.dir.join(page).display(),
         s.trials_cached,
         s.trials_planned,
         s.cells_with_trials,
-        s.cells
+        s.cells,
+        o.cells_recomputed,
+        o.cells_reused,
+        o.files_written,
+        o.files_unchanged,
     );
     for r in &o.replaced {
         println!("replaced {r}");

@@ -22,17 +22,34 @@ pub struct ReportArgs {
     /// Print nothing but errors.
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// Print what was recomputed, reused and written as one JSON object (README: JSON formats).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Run `qsweep report`.
 pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
+    let start = std::time::Instant::now();
     let plan = a.pipeline.plan()?;
+    let pipeline = plan.name.clone();
     let store = a.pipeline.cache.required_store()?;
     let scan = crate::pipeline::scan(&store)?;
     warn_quarantined(&scan);
     let opts = a.report.options(&plan, a.force);
     let outcome = crate::report::write(plan, &store, &scan.stored, &opts)?;
-    if !a.quiet {
+    if a.json {
+        let v = crate::formats::ReportJson {
+            format_version: crate::formats::ReportJson::FORMAT_VERSION,
+            pipeline,
+            dir: opts.dir.display().to_string(),
+            cells_recomputed: outcome.cells_recomputed,
+            cells_reused: outcome.cells_reused,
+            files_written: outcome.files_written,
+            files_unchanged: outcome.files_unchanged,
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        println!("{}", serde_json::to_string(&v)?);
+    } else if !a.quiet {
         print_report(&outcome, &opts);
     }
     Ok(exit::OK)

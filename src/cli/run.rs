@@ -91,10 +91,16 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         return Ok(crate::error::exit::INTERRUPTED);
     }
     if !a.no_report {
-        // The trials just stored are in new segments: scan again (the old scan's keys freed first).
-        drop(scan);
-        let scan = crate::pipeline::scan(&store)?;
-        warn_quarantined(&scan);
+        // The trials just stored are in new segments: scan again (the old scan's keys freed first);
+        // when nothing was stored the scan stands (a no-op run reads the keys once).
+        let scan = if report.executed == 0 && report.failed == 0 {
+            scan
+        } else {
+            drop(scan);
+            let scan = crate::pipeline::scan(&store)?;
+            warn_quarantined(&scan);
+            scan
+        };
         let ropts = a.report.options(&plan, false);
         let outcome = crate::report::write(plan, &store, &scan.stored, &ropts)?;
         if !(a.quiet || a.json) {

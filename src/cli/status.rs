@@ -16,7 +16,9 @@ pub struct StatusArgs {
     #[arg(long)]
     pub json: bool,
     /// For missing cells, show which resolved fields differ from the cached trial at the same grid
-    /// position (same system, representation, algorithm, resolution, actions and seed).
+    /// position (same system, representation, algorithm, resolution, actions and seed); and for
+    /// each folder of the report (reports/<name>, default formats), whether the next report
+    /// recomputes it and why (its memo.json).
     #[arg(long)]
     pub explain: bool,
 }
@@ -72,6 +74,23 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     }
     if let Some(cells) = &s.explanation {
         print_explanation(&s.plan, cells);
+    }
+    if let (true, false, Some(store)) = (a.explain, a.json, &store) {
+        let dir = crate::report::default_dir(&plan);
+        let keys = store.keys()?;
+        let formats = crate::report::formats::Formats::default();
+        let folders = crate::report::staleness(plan, store, &keys, &dir, formats)?;
+        let stale = folders.iter().filter(|(_, why)| why.is_some()).count();
+        for (d, why) in &folders {
+            if let Some(why) = why {
+                println!("report {} is recomputed by the next report: {why}", d.display());
+            }
+        }
+        println!(
+            "report folders: {} of {} up to date (their memo.json matches; default formats)",
+            folders.len() - stale,
+            folders.len()
+        );
     }
     Ok(crate::error::exit::OK)
 }

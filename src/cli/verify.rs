@@ -22,6 +22,10 @@ pub struct VerifyArgs {
     /// Seed of the `--recompute` draw (the same seed draws the same trials from the same cache).
     #[arg(long, value_name = "S", default_value_t = 0, requires = "recompute")]
     pub seed: u64,
+    /// Also check the report memos (memo.json) under this directory: each sealed, each file it
+    /// lists with its recorded digest [default: reports, when it exists].
+    #[arg(long, value_name = "DIR")]
+    pub reports: Option<std::path::PathBuf>,
 }
 
 /// Run `qsweep verify`: exit 0 when every segment is intact, 1 when damage was found, 2 when the
@@ -49,6 +53,29 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
         }
     );
     let mut ok = report.damaged.is_empty();
+    let reports = a.reports.clone().unwrap_or_else(|| std::path::PathBuf::from("reports"));
+    if reports.is_dir() {
+        let m = crate::report::memo::check_tree(&reports);
+        for (p, why) in &m.damaged {
+            println!("damaged memo: {} ({why})", p.display());
+        }
+        for p in &m.differing {
+            println!(
+                "differs from its memo: {} (edited since written; the next report rewrites it)",
+                p.display()
+            );
+        }
+        println!(
+            "report memos in {}: {} intact, {} damaged, {} with edited files, {} listed files not there (the next \
+             report writes them)",
+            reports.display(),
+            m.intact,
+            m.damaged.len(),
+            m.differing.len(),
+            m.missing.len()
+        );
+        ok &= m.damaged.is_empty() && m.differing.is_empty();
+    }
     if let Some(n) = a.recompute {
         let started = std::time::Instant::now();
         let r = store.recompute(n, a.seed)?;

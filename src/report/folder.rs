@@ -5,7 +5,7 @@ use super::formats::{Format, Formats};
 
 use super::model::ReportData;
 use super::{curves, datasets, figures, html, markdown, table};
-use crate::atomic::write_atomic;
+use crate::atomic::write_if_changed;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
@@ -69,9 +69,10 @@ impl<'d> Folder<'d> {
         Ok(Self { dir, files: Vec::new() })
     }
 
-    /// Write `name` (relative to the folder).
+    /// Write `name` (relative to the folder), unless it already holds these bytes (then it is
+    /// left alone, its mtime kept); either way it is one of the folder's files.
     pub fn put(&mut self, name: &str, bytes: &[u8]) -> anyhow::Result<()> {
-        write_atomic(&self.dir.join(name), bytes)?;
+        write_if_changed(&self.dir.join(name), bytes)?;
         self.files.push(PathBuf::from(name));
         Ok(())
     }

@@ -174,12 +174,12 @@ pub fn guard(target: &Path, kept: &Kept, new: &Counts, cache: &Path) -> Result<(
     ))
 }
 
-/// Write `m` into `dir` (atomically).
+/// Write `m` into `dir` (atomically; left alone when its bytes would not change).
 pub fn write(dir: &Path, m: &Manifest) -> anyhow::Result<PathBuf> {
     let path = dir.join(MANIFEST);
     let mut text = serde_json::to_string_pretty(m)?;
     text.push('\n');
-    crate::atomic::write_atomic(&path, text.as_bytes())?;
+    crate::atomic::write_if_changed(&path, text.as_bytes())?;
     Ok(path)
 }
 

@@ -7,7 +7,9 @@
 //! - `figures/<system>-curves.svg`: learning curves of the best cells (see [`curves`]);
 //! - `index.html` and `README.md`: the tables and the figures on one page, for a browser and for
 //!   a repository web page;
-//! - `manifest.json`: what the folder holds ([`manifest`]), read by the overwrite guard.
+//! - `manifest.json`: what the folder holds ([`manifest`]), read by the overwrite guard;
+//! - `memo.json`: what the folder was computed from and each file's digest ([`memo`]), so a
+//!   rerun skips a folder whose inputs have not changed.
 //!
 //! [`stage::write`] is the whole stage for a pipeline, one variant at a time ([`compare`] for the
 //! comparison of variants). Which files are written is chosen by [`formats`]. Trials missing from the records are left
@@ -25,6 +27,7 @@ pub mod glyphs;
 pub mod html;
 pub mod manifest;
 pub mod markdown;
+pub mod memo;
 pub mod model;
 pub mod stage;
 pub mod svg;
@@ -34,4 +37,4 @@ pub mod table;
 pub use crate::atomic::write_atomic;
 pub use folder::{existing_trials, write_folder, ReportSummary};
 pub use model::{Outcomes, ReportData};
-pub use stage::{default_dir, write, ReportOptions, ReportOutcome};
+pub use stage::{default_dir, staleness, write, ReportOptions, ReportOutcome};

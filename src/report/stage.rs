@@ -7,14 +7,21 @@
 //! every folder the report would replace: it refuses (exit 1, nothing written) only when the new
 //! report's plan lacks trials and the kept report holds more. A complete report of a changed
 //! plan replaces the old one, and [`ReportOutcome::replaced`] says what changed.
+//!
+//! Each folder's memo ([`memo`]) lets a rerun skip what has not changed: a folder whose inputs
+//! digest matches its memo and whose files are intact is neither recomputed nor rewritten. With a
+//! comparison of variants, which needs every variant's numbers, the whole report is skipped when
+//! every folder is intact, and otherwise recomputed (each file still written only when its bytes
+//! change). `--rebuild` ([`ReportOptions::rebuild`]) ignores the memos.
 
 use super::compare::{self, VariantDigest, VariantInfo};
 use super::datasets;
 use super::folder::{write_folder, ReportSummary};
 use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
+use super::memo::{self, Counted, Inputs, Memo, Role};
 use super::model::ReportData;
-use crate::atomic::write_atomic;
+use crate::atomic::write_if_changed;
 use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
 use crate::error::user_error;
@@ -31,6 +38,8 @@ pub struct ReportOptions {
     pub formats: Formats,
     /// Replace a kept report even when the new one holds fewer trials.
     pub force: bool,
+    /// Ignore the folders' memos: recompute every folder (`--rebuild`).
+    pub rebuild: bool,
 }
 
 /// Where a pipeline's report goes unless `--out` says otherwise: `reports/<name>`.
@@ -50,6 +59,45 @@ pub struct ReportOutcome {
     pub replaced: Vec<String>,
     /// Files of the kept reports that this one no longer writes, removed.
     pub removed: Vec<PathBuf>,
+    /// Files (manifests included) whose bytes changed or that were new: written.
+    pub files_written: usize,
+    /// Files whose bytes would not change: left alone, their mtimes kept.
+    pub files_unchanged: usize,
+    /// Cells whose statistics were computed (those of every folder or variant not skipped).
+    pub cells_recomputed: usize,
+    /// Cells of the folders skipped as their memos say (nothing read, nothing computed).
+    pub cells_reused: usize,
+}
+
+/// When each file of a report folder (and of its `figures/`) was last written, and its size: taken
+/// before the folder is written, compared after, to tell rewritten files from unchanged ones
+/// (every write is a rename of a new file, so a rewritten file has a new mtime).
+#[derive(Debug, Default)]
+struct Stamps(std::collections::HashMap<String, (std::time::SystemTime, u64)>);
+
+impl Stamps {
+    fn of(dir: &Path) -> Self {
+        let mut out = std::collections::HashMap::new();
+        for (sub, prefix) in [(dir.to_path_buf(), ""), (dir.join("figures"), "figures/")] {
+            let Ok(entries) = std::fs::read_dir(&sub) else { continue };
+            for e in entries.flatten() {
+                if let Some(st) = stamp(&e.path()) {
+                    out.insert(format!("{prefix}{}", e.file_name().to_string_lossy()), st);
+                }
+            }
+        }
+        Self(out)
+    }
+
+    /// Whether `name` (relative to the folder) is as it was when the stamps were taken.
+    fn unchanged(&self, dir: &Path, name: &str) -> bool {
+        self.0.get(name).is_some_and(|before| stamp(&dir.join(name)).as_ref() == Some(before))
+    }
+}
+
+fn stamp(path: &Path) -> Option<(std::time::SystemTime, u64)> {
+    let m = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;
+    Some((m.modified().ok()?, m.len()))
 }
 
 /// The files an earlier qsweep wrote into a report folder without a manifest, as far as they are
@@ -79,6 +127,8 @@ struct Target {
     dir: PathBuf,
     counts: Counts,
     kept: Option<Kept>,
+    /// The folder's files before this report wrote them.
+    before: Stamps,
 }
 
 impl Target {
@@ -89,7 +139,7 @@ impl Target {
             Err(_) if force => None,
             Err(e) => return Err(e),
         };
-        Ok(Self { counts: Counts::of(plan, cached), kept, dir })
+        Ok(Self { counts: Counts::of(plan, cached), kept, before: Stamps::of(&dir), dir })
     }
 
     /// Refuse (unless `force`) to replace a kept report that holds more than this one would.
@@ -102,14 +152,18 @@ impl Target {
         }
     }
 
-    /// Write the manifest, remove the kept report's files that were not written again, say what
-    /// changed, and list the folder's files (under the variant's id) in the outcome's summary.
+    /// Write the manifest and the memo (from `inputs`, with the folder's `counted` summary and the
+    /// comparison's `chosen` reading), remove the kept report's files that were not written again,
+    /// say what changed, and list the folder's files (under the variant's id) in the outcome's
+    /// summary.
+    #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
         plan: &Plan,
         variant: Option<&str>,
         formats: Formats,
         files: Vec<PathBuf>,
+        memo: (&blake3::Hash, Counted, Option<&str>),
         out: &mut ReportOutcome,
     ) -> anyhow::Result<()> {
         let names: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
@@ -122,9 +176,20 @@ impl Target {
             files: names.clone(),
         };
         manifest::write(&self.dir, &m)?;
+        let mut listed = names.clone();
+        listed.push(manifest::MANIFEST.to_string());
+        memo::write(&self.dir, memo.0, memo.1, memo.2, &listed)?;
+        for name in names.iter().map(String::as_str).chain([manifest::MANIFEST, memo::MEMO]) {
+            if self.before.unchanged(&self.dir, name) {
+                out.files_unchanged += 1;
+            } else {
+                out.files_written += 1;
+            }
+        }
         let prefix = variant.map_or_else(PathBuf::new, PathBuf::from);
         out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
         out.summary.files.push(prefix.join(manifest::MANIFEST));
+        out.summary.files.push(prefix.join(memo::MEMO));
         let Some(kept) = &self.kept else { return Ok(()) };
         // What the kept report wrote: its manifest says; an earlier layout's are known by name.
         let stale: Vec<String> = match kept {
@@ -198,6 +263,28 @@ pub fn write(
     };
     let with_comparison = !plan.variants.is_empty() && !plan.variant_subset;
 
+    // Each folder's inputs digest, against which its memo is checked.
+    let inputs = Inputs::new(plan, scan);
+    let sub_inputs: Vec<blake3::Hash> = subs
+        .iter()
+        .map(|(info, sub)| {
+            inputs.of(
+                sub,
+                info.as_ref().map(|v| v.id.as_str()),
+                formats,
+                Role::Folder { own_trials: info.is_none() },
+            )
+        })
+        .collect();
+    let top_inputs = inputs.of(plan, None, formats, Role::Comparison);
+    drop(inputs);
+    let intact = |dir: &Path, h: &blake3::Hash| if opts.rebuild { None } else { memo::intact(dir, h) };
+    if with_comparison {
+        if let Some(done) = all_intact(plan, &subs, &sub_inputs, (&top_inputs, dir), scan, &intact) {
+            return Ok(done);
+        }
+    }
+
     // In a full report of a pipeline with a grid, only the chosen reading gets a folder, written
     // after the comparison has chosen it (compare::has_folder); an exploratory reading gets none;
     // `--variant` writes any on demand.
@@ -221,6 +308,10 @@ pub fn write(
         counts: Counts::of(plan, &scan.keys),
         replaced: Vec::new(),
         removed: Vec::new(),
+        files_written: 0,
+        files_unchanged: 0,
+        cells_recomputed: 0,
+        cells_reused: 0,
     };
     let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
     let mut digests: Vec<VariantDigest> = Vec::new();
@@ -230,7 +321,15 @@ pub fn write(
     if trials.is_some() {
         std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
     }
-    for ((info, sub), target) in subs.iter().zip(&targets) {
+    for (((info, sub), target), sub_hash) in subs.iter().zip(&targets).zip(&sub_inputs) {
+        // Without a comparison, a folder stands alone: an intact one is skipped by itself.
+        if let (Some(t), false) = (target, with_comparison) {
+            if let Some(m) = intact(&t.dir, sub_hash) {
+                let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
+                reuse(&m, &prefix, &mut out);
+                continue;
+            }
+        }
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
         // Episode lengths only for what draws or stores them: a folder's curves, the trial rows.
@@ -249,10 +348,13 @@ pub fn write(
             },
         );
         pushed?;
+        let counted = ReportSummary::of(&data, Vec::new());
         if let (Some(t), Some(files)) = (target, written?) {
-            t.finish(sub, info.as_ref().map(|v| v.id.as_str()), formats, files, &mut out)?;
+            let id = info.as_ref().map(|v| v.id.as_str());
+            t.finish(sub, id, formats, files, (sub_hash, Counted::of(&counted), None), &mut out)?;
         }
-        out.summary.add(&ReportSummary::of(&data, Vec::new()));
+        out.summary.add(&counted);
+        out.cells_recomputed += counted.cells;
         if let (Some(v), true) = (info, with_comparison) {
             // An exploratory reading's cells are written with its folder, on demand.
             if in_cells {
@@ -264,33 +366,127 @@ pub fn write(
 
     // The chosen reading of a grid gets its folder once the comparison has chosen it.
     let chosen = compare::explore::chosen(plan, &digests).filter(|_| plan.has_grid()).cloned();
-    if let Some((info, sub)) =
-        subs.iter().find(|(i, _)| deferred(i) && i.as_ref().map(|v| &v.id) == chosen.as_ref().map(|c| &c.id))
+    let mut chosen_folder = None;
+    if let Some(((info, sub), sub_hash)) = subs
+        .iter()
+        .zip(&sub_inputs)
+        .find(|((i, _), _)| deferred(i) && i.as_ref().map(|v| &v.id) == chosen.as_ref().map(|c| &c.id))
     {
         let id = &info.as_ref().expect("a deferred folder is a variant's").id;
+        chosen_folder = Some(id.as_str());
         let t = Target::new(dir.join(id), sub, &scan.keys, opts.force)?;
         t.guard(opts.force, store.dir())?;
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
         let data = ReportData::build(sub, &outcomes);
         let files = write_folder(&data, &t.dir, formats, false)?;
-        t.finish(sub, Some(id), formats, files, &mut out)?;
+        let counted = Counted::of(&ReportSummary::of(&data, Vec::new()));
+        t.finish(sub, Some(id), formats, files, (sub_hash, counted, None), &mut out)?;
     }
 
     if let Some(top) = &top {
         let mut files = Vec::new();
         if let Some(first) = cells.first() {
             let all = arrow::compute::concat_batches(&first.schema(), &cells)?;
-            write_atomic(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
+            write_if_changed(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
             files.push(PathBuf::from("cells.parquet"));
         }
         if trials.take().map(TrialsSink::finish).transpose()?.unwrap_or(false) {
             files.push(PathBuf::from("trials.parquet"));
         }
         files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
-        top.finish(plan, None, formats, files, &mut out)?;
+        let counted = Counted::of(&out.summary);
+        top.finish(plan, None, formats, files, (&top_inputs, counted, chosen_folder), &mut out)?;
     }
     Ok(out)
+}
+
+/// For each folder a report of `plan` into `dir` in `formats` would write (each variant's with a
+/// folder, the comparison's, the chosen reading's as the comparison's memo names it), why it would
+/// be recomputed, or `None` when its memo is intact: what `qsweep status --explain` says.
+pub fn staleness(
+    plan: Plan,
+    store: &Store,
+    scan: &KeySet,
+    dir: &Path,
+    formats: Formats,
+) -> anyhow::Result<Vec<(PathBuf, Option<String>)>> {
+    let plan =
+        if plan.is_staged() { crate::race::replay_cached_owned(plan, store, scan)?.plan } else { plan };
+    let inputs = Inputs::new(&plan, scan);
+    let mut out = Vec::new();
+    if plan.variants.is_empty() {
+        let h = inputs.of(&plan, None, formats, Role::Folder { own_trials: true });
+        out.push((dir.to_path_buf(), memo::why_stale(dir, &h)));
+        return Ok(out);
+    }
+    let with_comparison = !plan.variant_subset;
+    let chosen = memo::read(dir).and_then(|m| m.chosen);
+    for v in &plan.variants {
+        let deferred = with_comparison && (plan.has_grid() || v.exploratory);
+        if deferred && chosen.as_deref() != Some(v.id.as_str()) {
+            continue;
+        }
+        let sub = plan.only_variant(&v.id);
+        let h = inputs.of(&sub, Some(&v.id), formats, Role::Folder { own_trials: false });
+        let d = dir.join(&v.id);
+        out.push((d.clone(), memo::why_stale(&d, &h)));
+    }
+    if with_comparison {
+        let h = inputs.of(&plan, None, formats, Role::Comparison);
+        out.push((dir.to_path_buf(), memo::why_stale(dir, &h)));
+    }
+    Ok(out)
+}
+
+/// Count a folder kept as its memo says: its counts into the summary, its files as unchanged.
+fn reuse(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
+    out.summary.add(&m.summary.summary());
+    out.cells_reused += m.summary.cells;
+    out.summary.files.extend(m.files.keys().map(|f| prefix.join(f)));
+    out.summary.files.push(prefix.join(memo::MEMO));
+    out.files_unchanged += m.files.len() + 1;
+}
+
+/// The outcome of a report with a comparison whose every folder is intact (the comparison's, each
+/// variant's with a folder, the chosen reading's): nothing to compute or write. `None` when one
+/// of them is not.
+fn all_intact(
+    plan: &Plan,
+    subs: &[(Option<VariantInfo>, Plan)],
+    sub_inputs: &[blake3::Hash],
+    top: (&blake3::Hash, &Path),
+    scan: &KeySet,
+    intact: &dyn Fn(&Path, &blake3::Hash) -> Option<Memo>,
+) -> Option<ReportOutcome> {
+    let (top_inputs, dir) = top;
+    let top = intact(dir, top_inputs)?;
+    let mut out = ReportOutcome {
+        summary: top.summary.summary(),
+        counts: Counts::of(plan, &scan.keys),
+        replaced: Vec::new(),
+        removed: Vec::new(),
+        files_written: 0,
+        files_unchanged: 0,
+        cells_recomputed: 0,
+        cells_reused: top.summary.cells,
+    };
+    for ((info, _), h) in subs.iter().zip(sub_inputs) {
+        let Some(v) = info else { continue };
+        // The same rule as the stage's: a grid's readings and exploratory ones have no folder,
+        // but the chosen one.
+        let has_folder = !(plan.has_grid() || v.exploratory) || top.chosen.as_deref() == Some(v.id.as_str());
+        if has_folder {
+            let m = intact(&dir.join(&v.id), h)?;
+            out.summary.files.extend(m.files.keys().map(|f| PathBuf::from(&v.id).join(f)));
+            out.summary.files.push(PathBuf::from(&v.id).join(memo::MEMO));
+            out.files_unchanged += m.files.len() + 1;
+        }
+    }
+    out.summary.files.extend(top.files.keys().map(PathBuf::from));
+    out.summary.files.push(PathBuf::from(memo::MEMO));
+    out.files_unchanged += top.files.len() + 1;
+    Some(out)
 }
 
 /// Rows per row group of the combined `trials.parquet`.
@@ -298,7 +494,8 @@ const TRIALS_ROW_GROUP: usize = 1024;
 
 /// The combined `trials.parquet`, written one experiment of one variant at a time, in row groups
 /// of [`TRIALS_ROW_GROUP`] trials, to a hidden temporary file beside it, renamed into place when
-/// complete (so memory holds one experiment's rows, and a reader never sees a partial file).
+/// complete (so memory holds one experiment's rows, and a reader never sees a partial file), or
+/// dropped when the file there already holds the same bytes (its mtime stays).
 struct TrialsSink {
     tmp: PathBuf,
     path: PathBuf,
@@ -336,10 +533,17 @@ impl TrialsSink {
         Ok(())
     }
 
-    /// Close, fsync and rename; `false` when no rows were pushed (no file).
+    /// Close, fsync and rename (or drop the temporary file when the kept one is the same); `false`
+    /// when no rows were pushed (no file).
     fn finish(mut self) -> anyhow::Result<bool> {
         let Some(w) = self.writer.take() else { return Ok(false) };
         let file = w.into_inner()?;
+        if crate::atomic::same_files(&self.tmp, &self.path) {
+            drop(file);
+            std::fs::remove_file(&self.tmp)
+                .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", self.tmp.display()))?;
+            return Ok(true);
+        }
         file.sync_all()?;
         std::fs::rename(&self.tmp, &self.path)
             .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.path.display()))?;

@@ -15,6 +15,7 @@ mod helpers;
 mod json_formats;
 mod layering;
 mod library;
+mod memo;
 mod mutations;
 mod no_overwrite;
 mod pipeline;

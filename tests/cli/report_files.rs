@@ -80,7 +80,7 @@ fn cache_of(records: &HashMap<Key, TrialRecord>, dir: &Path) -> Store {
 /// The report of `plan` from `store` into `dir` in `formats`, as `qsweep report` writes it.
 fn write_report(plan: &Plan, store: &Store, dir: &Path, formats: Formats) -> ReportSummary {
     let scan = qsweep::pipeline::scan(store).unwrap();
-    let opts = ReportOptions { dir: dir.to_path_buf(), formats, force: false };
+    let opts = ReportOptions { dir: dir.to_path_buf(), formats, force: false, rebuild: false };
     report::write(plan.clone(), store, &scan.stored, &opts).unwrap().summary
 }
 
@@ -139,6 +139,7 @@ fn quick_report_is_complete_valid_and_deterministic() {
         "index.html",
         "README.md",
         "manifest.json",
+        "memo.json",
     ]
     .iter()
     .map(PathBuf::from)
@@ -233,14 +234,15 @@ fn quick_report_is_complete_valid_and_deterministic() {
     write_report(&plan, &store, &other, all);
     assert_eq!(files_under(&other), files);
 
-    // The default formats: no PNG, the same bytes for everything else (but the manifest, which
-    // lists the formats and files).
+    // The default formats: no PNG, the same bytes for everything else (but the manifest and the
+    // memo, which list the formats and files).
     let default = tmp.path().join("default");
     let s = write_report(&plan, &store, &default, Formats::default());
     assert!(s.files.iter().all(|f| f.extension().is_some_and(|e| e != "png")), "{:?}", s.files);
     let d = files_under(&default);
     assert_eq!(d.len() + 6, files.len());
-    for (name, bytes) in d.iter().filter(|(n, _)| n.as_path() != Path::new("manifest.json")) {
+    let own = |n: &Path| n == Path::new("manifest.json") || n == Path::new("memo.json");
+    for (name, bytes) in d.iter().filter(|(n, _)| !own(n)) {
         assert_eq!(&files[name], bytes, "{}", name.display());
     }
 }

@@ -77,6 +77,7 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
     ];
     let cases: Vec<(&str, String)> = vec![
         ("`qsweep run --json`", qsweep(d, &["run", "tiny.yaml", "--json", "--no-report", "--quiet"])),
+        ("`qsweep report --json`", qsweep(d, &["report", "tiny.yaml", "--json", "--out", "r"])),
         // A raced pipeline, so the optional `race` list is printed too.
         ("`qsweep status --json`", qsweep(d, &["status", "race.yaml", "--json"])),
         ("`qsweep trial --json`", qsweep(d, &trial)),

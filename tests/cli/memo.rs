@@ -1,0 +1,276 @@
+//! The report reruns only what changed (issue 37): a file whose bytes would not change is not
+//! rewritten (its mtime stays), and the report line says how many files were rewritten.
+
+use crate::helpers::Sandbox;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+/// Every file under `dir` (recursively) with its mtime.
+fn mtimes(dir: &Path) -> BTreeMap<PathBuf, SystemTime> {
+    let mut out = BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                out.insert(
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    e.metadata().unwrap().modified().unwrap(),
+                );
+            }
+        }
+    }
+    out
+}
+
+/// `files: N rewritten, M unchanged` of a report line.
+fn files_line(stdout: &str) -> (usize, usize) {
+    let tail = stdout.split("files: ").nth(1).unwrap_or_else(|| panic!("no files count: {stdout}"));
+    let n: Vec<usize> = tail
+        .split(|c: char| !c.is_ascii_digit())
+        .filter(|s| !s.is_empty())
+        .take(2)
+        .map(|s| s.parse().unwrap())
+        .collect();
+    (n[0], n[1])
+}
+
+#[test]
+fn a_second_report_rewrites_no_file_and_keeps_every_mtime() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let (p, out) = (p.to_str().unwrap(), sb.path("rep"));
+    let o = out.to_str().unwrap();
+    let first = crate::helpers::stdout(&mut sb.qsweep(&["run", p, "--out", o]));
+    let (written, unchanged) = files_line(&first);
+    assert!(written > 20 && unchanged == 0, "{first}");
+    let before = mtimes(&out);
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    let again = crate::helpers::stdout(&mut sb.qsweep(&["report", p, "--out", o]));
+    assert_eq!(files_line(&again), (0, written), "{again}");
+    assert_eq!(mtimes(&out), before, "no file rewritten, trials.parquet included");
+    assert!(before.contains_key(Path::new("trials.parquet")));
+}
+
+/// Every file under `dir` with its bytes.
+fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    mtimes(dir).into_keys().map(|p| (p.clone(), std::fs::read(dir.join(&p)).unwrap())).collect()
+}
+
+/// Report `pipeline` incrementally into `inc` (with `run`, so new trials are computed) and with
+/// `--rebuild` into a fresh folder; the two must be byte-identical, memos and trials included.
+/// Returns the incremental report's line.
+fn same_as_rebuild(sb: &Sandbox, pipeline: &Path, inc: &Path, extra: &[&str], what: &str) -> String {
+    let p = pipeline.to_str().unwrap();
+    let mut args = vec!["run", p, "--out", inc.to_str().unwrap()];
+    args.extend(extra);
+    let said = crate::helpers::stdout(&mut sb.qsweep(&args));
+    let fresh = sb.path("rebuilt");
+    let _ = std::fs::remove_dir_all(&fresh);
+    let mut args = vec!["report", p, "--rebuild", "--out", fresh.to_str().unwrap()];
+    args.extend(extra);
+    crate::helpers::stdout(&mut sb.qsweep(&args));
+    let (a, b) = (tree(inc), tree(&fresh));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>(), "{what}: the same files");
+    for (name, bytes) in &a {
+        assert!(bytes == &b[name], "{what}: {} differs from --rebuild's", name.display());
+    }
+    said
+}
+
+#[test]
+fn the_incremental_report_equals_rebuild_after_each_kind_of_change() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "nothing changed");
+    assert_eq!(files_line(&said).0, 0, "nothing rewritten: {said}");
+
+    // Seeds added (to every experiment, then back).
+    same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "seeds back");
+    assert!(files_line(&said).0 > 0, "{said}");
+    // A variant added.
+    let added = format!("{text}  - id: slow-crisp\n    set: {{ systems.mountain-car.crisp.alpha: 0.002 }}\n");
+    std::fs::write(&p, &added).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a variant added");
+    // A variant's set changed.
+    std::fs::write(&p, added.replace("alpha: 0.002", "alpha: 0.003")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a variant's set changed");
+    // A reference value changed.
+    std::fs::write(&p, added.replace("mean: 20, std: 5", "mean: 25, std: 5")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a reference value changed");
+    // The formats changed (and back).
+    same_as_rebuild(&sb, &p, &inc, &["--formats", "md,csv"], "formats changed");
+    same_as_rebuild(&sb, &p, &inc, &[], "formats back");
+}
+
+#[test]
+fn a_deleted_or_damaged_memo_or_report_is_recomputed_never_trusted() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    std::fs::remove_file(inc.join("fast-crisp/memo.json")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a memo deleted");
+    std::fs::write(inc.join("memo.json"), "{\"format_version\": 1, \"inputs\": ").unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a memo corrupted");
+    let m = std::fs::read_to_string(inc.join("as-written/memo.json")).unwrap();
+    let forged = m.replace("\"experiments\": ", "\"experiments\": 1");
+    assert_ne!(forged, m);
+    std::fs::write(inc.join("as-written/memo.json"), forged).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a memo's counts forged");
+    std::fs::remove_dir_all(inc.join("short-episodes")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a report folder deleted by hand");
+    std::fs::write(inc.join("fast-crisp/table3.md"), "edited by hand").unwrap();
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "a report file edited by hand");
+    assert!(files_line(&said).0 >= 1, "the edited file is rewritten: {said}");
+    std::fs::remove_file(inc.join("trials.parquet")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "trials.parquet deleted");
+}
+
+#[test]
+fn a_pipeline_without_variants_skips_its_intact_folder_and_rebuild_recomputes() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("tiny.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    let before = mtimes(&inc);
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "nothing changed");
+    assert_eq!(files_line(&said).0, 0, "{said}");
+    assert_eq!(mtimes(&inc), before);
+    std::fs::write(inc.join("index.html"), "edited").unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a file edited");
+    same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
+}
+
+#[test]
+fn grids_races_fresh_seeds_and_variant_subsets_are_skipped_when_intact() {
+    for fixture in ["grid.yaml", "race.yaml", "fresh.yaml"] {
+        let sb = Sandbox::new();
+        let p = sb.fixture(fixture);
+        let inc = sb.path("rep");
+        same_as_rebuild(&sb, &p, &inc, &[], fixture);
+        let before = mtimes(&inc);
+        let said = same_as_rebuild(&sb, &p, &inc, &[], fixture);
+        assert_eq!(files_line(&said).0, 0, "{fixture}: {said}");
+        assert_eq!(mtimes(&inc), before, "{fixture}");
+    }
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &["--variant", "fast-crisp"], "one variant");
+    let said = same_as_rebuild(&sb, &p, &inc, &["--variant", "fast-crisp"], "one variant again");
+    assert_eq!(files_line(&said).0, 0, "{said}");
+}
+
+/// The digest of every report file of the variants fixture (the memo and the trial rows, whose
+/// informational `seconds` vary, left out) recorded with the [`ANALYSIS_VERSION`] it was written
+/// under.
+///
+/// [`ANALYSIS_VERSION`]: qsweep::report::memo::ANALYSIS_VERSION
+const GOLDEN: (u32, &str) = (1, "c8d9c595345868e56110d8840baaa5c92364fd454d60e9fc93c1b9f3bebbf8d4");
+
+#[test]
+fn analysis_golden_outputs_change_only_with_analysis_version() {
+    let sb = Sandbox::new();
+    sb.fixture("variants.yaml");
+    let out = sb.path("rep");
+    // Relative paths: the pipeline's path is shown in the report.
+    let formats = "md,csv,tex,cells,svg,html";
+    sb.qsweep(&["run", "variants.yaml", "--quiet", "--formats", formats, "--out", "rep"]).assert().success();
+    let mut h = blake3::Hasher::new();
+    for (name, bytes) in tree(&out).iter().filter(|(n, _)| n.file_name().unwrap() != "memo.json") {
+        h.update(name.to_string_lossy().as_bytes());
+        h.update(&(bytes.len() as u64).to_le_bytes());
+        h.update(bytes);
+    }
+    let got = (qsweep::report::memo::ANALYSIS_VERSION, h.finalize().to_hex().to_string());
+    assert_eq!(
+        (got.0, got.1.as_str()),
+        GOLDEN,
+        "the report of a fixed input changed: if a definition or a file's layout changed on purpose, \
+         bump ANALYSIS_VERSION (src/report/memo.rs) so that no memo keeps the old files, and record \
+         the new pair here"
+    );
+}
+
+#[test]
+fn report_json_says_what_was_recomputed_reused_and_written() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let (p, o) = (p.to_str().unwrap(), sb.path("rep"));
+    let o = o.to_str().unwrap();
+    let json = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["report", p, "--json", "--out", o];
+        args.extend(extra);
+        serde_json::from_str(&crate::helpers::stdout(&mut sb.qsweep(&args))).unwrap()
+    };
+    sb.qsweep(&["run", p, "--quiet", "--no-report"]).assert().success();
+    let first = json(&[]);
+    assert_eq!(first["format_version"], 1);
+    assert_eq!(first["pipeline"], "variants");
+    assert_eq!(first["cells_reused"], 0);
+    assert_eq!(first["files_unchanged"], 0);
+    let cells = first["cells_recomputed"].as_u64().unwrap();
+    let files = first["files_written"].as_u64().unwrap();
+    assert_eq!(cells, 3 * 12, "three variants of 12 cells");
+    assert!(first["seconds"].as_f64().unwrap() >= 0.0);
+    let again = json(&[]);
+    assert_eq!((again["cells_recomputed"].as_u64(), again["cells_reused"].as_u64()), (Some(0), Some(cells)));
+    assert_eq!((again["files_written"].as_u64(), again["files_unchanged"].as_u64()), (Some(0), Some(files)));
+    let rebuilt = json(&["--rebuild"]);
+    assert_eq!(
+        (rebuilt["cells_recomputed"].as_u64(), rebuilt["files_written"].as_u64()),
+        (Some(cells), Some(0))
+    );
+}
+
+#[test]
+fn verify_reports_damaged_memos_and_edited_report_files() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    sb.qsweep(&["run", p.to_str().unwrap(), "--quiet"]).assert().success();
+    let ok = crate::helpers::stdout(&mut sb.qsweep(&["verify"]));
+    assert!(ok.contains("report memos in reports: 4 intact, 0 damaged, 0 with edited files"), "{ok}");
+    std::fs::write(sb.path("reports/variants/fast-crisp/table3.md"), "edited").unwrap();
+    std::fs::write(sb.path("reports/variants/memo.json"), "{").unwrap();
+    let out = sb.qsweep(&["verify"]).assert().code(1).get_output().stdout.clone();
+    let out = String::from_utf8(out).unwrap();
+    assert!(out.contains("damaged memo: reports/variants/memo.json"), "{out}");
+    assert!(out.contains("differs from its memo: reports/variants/fast-crisp/table3.md"), "{out}");
+    assert!(out.contains("2 intact, 1 damaged, 1 with edited files"), "{out}");
+}
+
+#[test]
+fn status_explain_says_which_report_folders_are_stale_and_why() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let p = p.to_str().unwrap();
+    sb.qsweep(&["run", p, "--quiet"]).assert().success();
+    let fresh = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain"]));
+    assert!(fresh.contains("report folders: 4 of 4 up to date"), "{fresh}");
+    std::fs::write(sb.path("reports/variants/fast-crisp/table3.md"), "edited").unwrap();
+    sb.qsweep(&["run", p, "--quiet", "--no-report", "--variant", "short-episodes", "--set", "seeds=3"])
+        .assert()
+        .success();
+    let said = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain"]));
+    assert!(
+        said.contains("report reports/variants/fast-crisp is recomputed by the next report: files edited or missing since written: table3.md"),
+        "{said}"
+    );
+    assert!(
+        said.contains("report folders: 3 of 4 up to date"),
+        "trials cached for another plan change nothing: {said}"
+    );
+    let more = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain", "--set", "seeds=3"]));
+    assert!(
+        more.contains("reports/variants/as-written is recomputed by the next report: its inputs changed"),
+        "{more}"
+    );
+}
