@@ -78,25 +78,37 @@ fn main() {
     // A warm cache: one synthetic row per trial, in segments of 500 (what --batch-trials writes).
     let dir = tempfile::tempdir().unwrap();
     let store = Store::open(dir.path()).unwrap();
-    let records: Vec<TrialRecord> = unique
-        .iter()
-        .map(|t| {
-            let outcome = Outcome {
-                converged: true,
-                episodes_to_goal: Some(20),
-                episodes: 20,
-                total_steps: 20 * 500,
-                stop: StopReason::Goal,
-                failure: None,
-                episode_lengths: vec![500; 20],
-            };
-            TrialRecord::new(t.config.clone(), t.seed, outcome, 0.1)
-        })
-        .collect();
+    let synthetic = |jobs: &[qsweep::exec::Job<'_>]| -> Vec<TrialRecord> {
+        jobs.iter()
+            .map(|t| {
+                let outcome = Outcome {
+                    converged: true,
+                    episodes_to_goal: Some(20),
+                    episodes: 20,
+                    total_steps: 20 * 500,
+                    stop: StopReason::Goal,
+                    failure: None,
+                    episode_lengths: vec![500; 20],
+                };
+                TrialRecord::new(t.config.clone(), t.seed, outcome, 0.1)
+            })
+            .collect()
+    };
+    let mut records = synthetic(&unique);
     let start = Instant::now();
     for chunk in records.chunks(500) {
         store.write_segment(chunk).unwrap();
     }
+    // The fresh-seed stage is planned from the grid's stored outcomes: replay it and store its
+    // trials too, so that the no-op run below has nothing to run.
+    let staged = qsweep::race::replay_cached(&plan, &store, &store.keys().unwrap()).unwrap().plan;
+    let grid: std::collections::HashSet<_> = unique.iter().map(|t| t.key).collect();
+    let fresh: Vec<_> = qsweep::exec::jobs(&staged).into_iter().filter(|t| !grid.contains(&t.key)).collect();
+    let fresh_records = synthetic(&fresh);
+    for chunk in fresh_records.chunks(500) {
+        store.write_segment(chunk).unwrap();
+    }
+    records.extend(fresh_records);
     println!(
         "store {} rows in {} segments: {:.3} s",
         records.len(),
