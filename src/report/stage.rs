@@ -69,6 +69,22 @@ pub struct ReportOutcome {
     pub cells_reused: usize,
 }
 
+impl ReportOutcome {
+    /// Nothing written yet, of a plan with these counts.
+    fn empty(counts: Counts) -> Self {
+        Self {
+            summary: ReportSummary::default(),
+            counts,
+            replaced: Vec::new(),
+            removed: Vec::new(),
+            files_written: 0,
+            files_unchanged: 0,
+            cells_recomputed: 0,
+            cells_reused: 0,
+        }
+    }
+}
+
 /// When each file of a report folder (and of its `figures/`) was last written, and its size: taken
 /// before the folder is written, compared after, to tell rewritten files from unchanged ones
 /// (every write is a rename of a new file, so a rewritten file has a new mtime).
@@ -303,16 +319,7 @@ pub fn write(
         t.guard(opts.force, store.dir())?;
     }
 
-    let mut out = ReportOutcome {
-        summary: ReportSummary::default(),
-        counts: Counts::of(plan, &scan.keys),
-        replaced: Vec::new(),
-        removed: Vec::new(),
-        files_written: 0,
-        files_unchanged: 0,
-        cells_recomputed: 0,
-        cells_reused: 0,
-    };
+    let mut out = ReportOutcome::empty(Counts::of(plan, &scan.keys));
     let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
     let mut digests: Vec<VariantDigest> = Vec::new();
     let mut cells = Vec::new();
@@ -463,13 +470,8 @@ fn all_intact(
     let top = intact(dir, top_inputs)?;
     let mut out = ReportOutcome {
         summary: top.summary.summary(),
-        counts: Counts::of(plan, &scan.keys),
-        replaced: Vec::new(),
-        removed: Vec::new(),
-        files_written: 0,
-        files_unchanged: 0,
-        cells_recomputed: 0,
         cells_reused: top.summary.cells,
+        ..ReportOutcome::empty(Counts::of(plan, &scan.keys))
     };
     for ((info, _), h) in subs.iter().zip(sub_inputs) {
         let Some(v) = info else { continue };

@@ -115,24 +115,17 @@ pub fn write_comparison(
         }
     }
     let notes = dir.join(NOTES).is_file();
+    let tables = Tables {
+        fit: &table,
+        held_out: held_out.as_ref(),
+        matrix: matrix.as_ref(),
+        consistency: consistency.as_ref(),
+    };
+    let answer = answer::Answer { series: &series, figure: forest_size };
     if formats.has(Format::Html) {
-        let tables = Tables {
-            fit: &table,
-            held_out: held_out.as_ref(),
-            matrix: matrix.as_ref(),
-            consistency: consistency.as_ref(),
-        };
-        let answer = answer::Answer { series: &series, figure: forest_size };
         put("index.html", page(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        let tables = Tables {
-            fit: &table,
-            held_out: held_out.as_ref(),
-            matrix: matrix.as_ref(),
-            consistency: consistency.as_ref(),
-        };
-        let answer = answer::Answer { series: &series, figure: forest_size };
         put("README.md", readme(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
     Ok(out.files)
