@@ -54,6 +54,10 @@ pub struct ReportJson {
     pub cells_recomputed: usize,
     /// Cells of report folders whose memo matched (nothing read or computed for them).
     pub cells_reused: usize,
+    /// Bootstrap intervals (cells', differences', claim sets) computed by the folders recomputed.
+    pub intervals_computed: usize,
+    /// Of those folders' intervals, taken from the statistics' memo (`<cache>/_derived/`).
+    pub intervals_reused: usize,
     /// Files written (new, or their bytes changed).
     pub files_written: usize,
     /// Files left alone because their bytes would not change.

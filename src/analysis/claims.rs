@@ -254,9 +254,14 @@ pub fn evaluate(cells: &[ClaimCell]) -> Vec<ClaimResult> {
             let mut values: Vec<f64> = reps.iter().filter_map(|r| r[k]).collect();
             let interval =
                 (estimate.is_some() && values.len() * 2 > CLAIM_RESAMPLES).then(|| interval_95(&mut values));
-            ClaimResult { claim, estimate, interval, verdict: verdict(claim, interval) }
+            result(claim, estimate, interval)
         })
         .collect()
+}
+
+/// A claim's result from its estimate and interval (the verdict follows from the interval).
+pub fn result(claim: &'static Claim, estimate: Option<f64>, interval: Option<(f64, f64)>) -> ClaimResult {
+    ClaimResult { claim, estimate, interval, verdict: verdict(claim, interval) }
 }
 
 /// Resamples drawn at once per cell ([`evaluate`]).

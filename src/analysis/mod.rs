@@ -7,6 +7,7 @@
 mod best;
 pub mod claims;
 pub mod consistency;
+pub mod derived;
 pub mod equivalence;
 pub mod rank;
 mod summary;

@@ -41,12 +41,22 @@ impl Summary {
     /// Summarise `values`, with the bootstrap interval only when `seed` is given (a summary that
     /// no page shows skips its resamples; `ci_lo`/`ci_hi` are then `None`).
     pub fn with_interval(values: &[f64], seed: Option<u64>) -> Self {
+        Self::with_interval_by(values, seed, bootstrap_ci)
+    }
+
+    /// [`Summary::with_interval`], its interval given by `ci` (the same function as
+    /// [`bootstrap_ci`], e.g. memoized: [`super::derived::Derived::bootstrap_ci`]).
+    pub fn with_interval_by(
+        values: &[f64],
+        seed: Option<u64>,
+        ci: impl FnOnce(&[f64], usize, u64) -> (f64, f64),
+    ) -> Self {
         if values.is_empty() {
             return Self::default();
         }
         let mut sorted = values.to_vec();
         sorted.sort_by(f64::total_cmp);
-        let ci = seed.map(|s| bootstrap_ci(values, BOOTSTRAP_RESAMPLES, s));
+        let ci = seed.map(|s| ci(values, BOOTSTRAP_RESAMPLES, s));
         Self {
             n: values.len(),
             mean: Some(mean(values)),

@@ -1,4 +1,5 @@
-//! `qsweep gc`: compact the cache and drop rows no given pipeline references.
+//! `qsweep gc`: compact the cache and drop rows (and statistics' memos) no given pipeline
+//! references.
 
 use super::pipeline_args::CacheArgs;
 use crate::error::exit;
@@ -22,14 +23,17 @@ pub struct GcArgs {
 /// Run `qsweep gc`.
 pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     let store = a.cache.required_store()?;
-    let keep = if a.pipelines.is_empty() {
-        None
+    let (keep, names) = if a.pipelines.is_empty() {
+        (None, None)
     } else {
         let plans =
             a.pipelines.iter().map(|p| plan(&load(p, &[])?, None)).collect::<anyhow::Result<Vec<_>>>()?;
-        Some(crate::pipeline::referenced_keys(&plans, &store)?)
+        let names = plans.iter().map(|p| p.name.clone()).collect();
+        (Some(crate::pipeline::referenced_keys(&plans, &store)?), Some(names))
     };
     let r = store.gc(keep.as_ref(), a.dry_run)?;
+    let version = crate::report::memo::ANALYSIS_VERSION;
+    let memos = crate::analysis::derived::gc(store.dir(), names.as_ref(), version, a.dry_run)?;
     for s in &r.skipped {
         eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");
     }
@@ -45,7 +49,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         )
     };
     println!(
-        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files, {} dead runs' claims; {sizes}",
+        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files, {} dead runs' claims, {} statistics' memos; {sizes}",
         if a.dry_run { "dry run: " } else { "" },
         r.segments_before,
         r.segments_after,
@@ -54,6 +58,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         r.duplicates,
         r.stale_temps,
         r.stale_claims,
+        memos,
     );
     Ok(exit::OK)
 }

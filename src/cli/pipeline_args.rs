@@ -168,7 +168,7 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
     println!(
         "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
          that uses it, the distinct trials are the `executed`/`cached` counts; cells: {} recomputed, {} reused; \
-         files: {} rewritten, {} unchanged)",
+         intervals: {} computed, {} reused; files: {} rewritten, {} unchanged)",
         opts.dir.join(page).display(),
         s.trials_cached,
         s.trials_planned,
@@ -176,9 +176,14 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
         s.cells,
         o.cells_recomputed,
         o.cells_reused,
+        o.statistics.computed,
+        o.statistics.reused,
         o.files_written,
         o.files_unchanged,
     );
+    for w in &o.warnings {
+        eprintln!("warning: {w}");
+    }
     for r in &o.replaced {
         println!("replaced {r}");
     }

@@ -44,11 +44,16 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
             dir: opts.dir.display().to_string(),
             cells_recomputed: outcome.cells_recomputed,
             cells_reused: outcome.cells_reused,
+            intervals_computed: outcome.statistics.computed,
+            intervals_reused: outcome.statistics.reused,
             files_written: outcome.files_written,
             files_unchanged: outcome.files_unchanged,
             seconds: start.elapsed().as_secs_f64(),
         };
         println!("{}", serde_json::to_string(&v)?);
+        for w in &outcome.warnings {
+            eprintln!("warning: {w}");
+        }
     } else if !a.quiet {
         print_report(&outcome, &opts);
     }

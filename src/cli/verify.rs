@@ -53,6 +53,14 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
         }
     );
     let mut ok = report.damaged.is_empty();
+    // The statistics' memos: a damaged one loses nothing (the next report recomputes it), but it
+    // is damage all the same, like a damaged segment.
+    let d = crate::analysis::derived::check(store.dir());
+    for (p, why) in &d.damaged {
+        println!("damaged statistics' memo: {} ({why}; the next report recomputes it)", p.display());
+    }
+    println!("statistics' memos: {} intact ({} entries), {} damaged", d.intact, d.entries, d.damaged.len());
+    ok &= d.damaged.is_empty();
     let reports = a.reports.clone().unwrap_or_else(|| std::path::PathBuf::from("reports"));
     if reports.is_dir() {
         let m = crate::report::memo::check_tree(&reports);

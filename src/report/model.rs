@@ -7,6 +7,7 @@
 
 use crate::analysis::claims::ClaimCell;
 use crate::analysis::consistency::Published;
+use crate::analysis::derived::Derived;
 use crate::analysis::{best_cell, episodes_counted, Best, Candidate, Summary};
 use crate::cache::rows::StoredOutcome;
 use crate::cache::{Key, TrialRecord};
@@ -237,13 +238,13 @@ impl<'a> ReportData<'a> {
     /// Each cell's statistics are computed here, once (in parallel; each cell's bootstrap is
     /// seeded by its own trials, so the result does not depend on the threads).
     pub fn build(plan: &'a Plan, records: &'a dyn Outcomes) -> Self {
-        Self::build_as(plan, records, true)
+        Self::build_as(plan, records, Some(&Derived::fresh(super::memo::ANALYSIS_VERSION)))
     }
 
-    /// [`ReportData::build`], with the cells' bootstrap intervals only when `intervals`: a reading
-    /// that writes no folder (an exploratory or not-chosen one) only needs its means for the
-    /// comparison.
-    pub fn build_as(plan: &'a Plan, records: &'a dyn Outcomes, intervals: bool) -> Self {
+    /// [`ReportData::build`], with the cells' bootstrap intervals only when `intervals` gives the
+    /// statistics' memo they are taken from or recorded in: a reading that writes no folder (an
+    /// exploratory or not-chosen one) only needs its means for the comparison.
+    pub fn build_as(plan: &'a Plan, records: &'a dyn Outcomes, intervals: Option<&Derived>) -> Self {
         let planned = plan.trial_count();
         let mut present = 0;
         let experiments = plan
@@ -392,12 +393,16 @@ fn cell_data<'a>(
     cell: &'a Cell,
     trials: Vec<TrialData<'a>>,
     fresh: Vec<TrialData<'a>>,
-    intervals: bool,
+    intervals: Option<&Derived>,
 ) -> CellData<'a> {
     let summarize = |trials: &[TrialData]| {
         let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
-        let seed = intervals.then(|| seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
-        Summary::with_interval(&values, seed)
+        let seed = intervals
+            .is_some()
+            .then(|| seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
+        Summary::with_interval_by(&values, seed, |v, r, s| {
+            intervals.expect("a seed only with a memo").bootstrap_ci(v, r, s)
+        })
     };
     let successes = trials.iter().filter(|t| t.outcome.converged).count();
     let summary = summarize(&trials);

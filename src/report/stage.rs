@@ -21,6 +21,7 @@ use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
 use super::memo::{self, Counted, Inputs, Memo, Role};
 use super::model::ReportData;
+use crate::analysis::derived::{Derived, DerivedCounts};
 use crate::atomic::write_if_changed;
 use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
@@ -67,6 +68,11 @@ pub struct ReportOutcome {
     pub cells_recomputed: usize,
     /// Cells of the folders skipped as their memos say (nothing read, nothing computed).
     pub cells_reused: usize,
+    /// Bootstrap intervals and claim sets computed, and taken from the statistics' memo
+    /// ([`Derived`]), by the folders recomputed.
+    pub statistics: DerivedCounts,
+    /// What went wrong without failing the report (the statistics' memo could not be saved).
+    pub warnings: Vec<String>,
 }
 
 impl ReportOutcome {
@@ -81,6 +87,8 @@ impl ReportOutcome {
             files_unchanged: 0,
             cells_recomputed: 0,
             cells_reused: 0,
+            statistics: DerivedCounts::default(),
+            warnings: Vec::new(),
         }
     }
 }
@@ -320,6 +328,11 @@ pub fn write(
     }
 
     let mut out = ReportOutcome::empty(Counts::of(plan, &scan.keys));
+    // The statistics' memo: every interval and claim set whose inputs are unchanged is reused.
+    let memo_path = Derived::path(store.dir(), &plan.name);
+    let derived = Derived::load(&memo_path, memo::ANALYSIS_VERSION, !opts.rebuild);
+    // A folder skipped by its memo used no statistics: the memo then keeps what it holds.
+    let mut skipped = false;
     let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
     let mut digests: Vec<VariantDigest> = Vec::new();
     let mut cells = Vec::new();
@@ -334,6 +347,7 @@ pub fn write(
             if let Some(m) = intact(&t.dir, sub_hash) {
                 let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
                 reuse(&m, &prefix, &mut out);
+                skipped = true;
                 continue;
             }
         }
@@ -344,7 +358,7 @@ pub fn write(
         let outcomes = store.read_outcomes(scan, &wanted, lengths && (target.is_some() || to_push))?;
         // Intervals where a page or the combined cells.parquet shows them.
         let in_cells = with_comparison && formats.has(Format::Cells) && !exploratory;
-        let data = ReportData::build_as(sub, &outcomes, target.is_some() || in_cells);
+        let data = ReportData::build_as(sub, &outcomes, (target.is_some() || in_cells).then_some(&derived));
         // The folder's files and this variant's rows of the combined trials.parquet at once.
         let (written, pushed) = rayon::join(
             || target.as_ref().map(|t| write_folder(&data, &t.dir, formats, info.is_none())).transpose(),
@@ -367,7 +381,7 @@ pub fn write(
             if in_cells {
                 cells.push(datasets::cells_batch(&data)?);
             }
-            digests.push(VariantDigest::of(v.clone(), sub, &data));
+            digests.push(VariantDigest::of(v.clone(), sub, &data, &derived));
         }
     }
 
@@ -385,7 +399,7 @@ pub fn write(
         t.guard(opts.force, store.dir())?;
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
-        let data = ReportData::build(sub, &outcomes);
+        let data = ReportData::build_as(sub, &outcomes, Some(&derived));
         let files = write_folder(&data, &t.dir, formats, false)?;
         let counted = Counted::of(&ReportSummary::of(&data, Vec::new()));
         t.finish(sub, Some(id), formats, files, (sub_hash, counted, None), &mut out)?;
@@ -401,9 +415,15 @@ pub fn write(
         if trials.take().map(TrialsSink::finish).transpose()?.unwrap_or(false) {
             files.push(PathBuf::from("trials.parquet"));
         }
-        files.extend(compare::write_comparison(dir, plan, &digests, formats)?);
+        files.extend(compare::write_comparison(dir, plan, &digests, formats, &derived)?);
         let counted = Counted::of(&out.summary);
         top.finish(plan, None, formats, files, (&top_inputs, counted, chosen_folder), &mut out)?;
+    }
+    out.statistics = derived.counts();
+    // A full report keeps exactly the statistics it used; a partial one adds to the memo. A cache
+    // this run cannot write to costs only the next report's recomputation.
+    if let Err(e) = derived.save(&memo_path, !plan.variant_subset && !skipped) {
+        out.warnings.push(format!("the statistics' memo {} was not saved: {e:#}", memo_path.display()));
     }
     Ok(out)
 }

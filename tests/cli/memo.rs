@@ -60,6 +60,16 @@ fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     mtimes(dir).into_keys().map(|p| (p.clone(), std::fs::read(dir.join(&p)).unwrap())).collect()
 }
 
+/// The cache's statistics' memos with their bytes.
+fn derived_files(sb: &Sandbox) -> BTreeMap<PathBuf, Vec<u8>> {
+    let dir = sb.cache().join("_derived");
+    if dir.is_dir() {
+        tree(&dir)
+    } else {
+        BTreeMap::new()
+    }
+}
+
 /// Report `pipeline` incrementally into `inc` (with `run`, so new trials are computed) and with
 /// `--rebuild` into a fresh folder; the two must be byte-identical, memos and trials included.
 /// Returns the incremental report's line.
@@ -68,11 +78,17 @@ fn same_as_rebuild(sb: &Sandbox, pipeline: &Path, inc: &Path, extra: &[&str], wh
     let mut args = vec!["run", p, "--out", inc.to_str().unwrap()];
     args.extend(extra);
     let said = crate::helpers::stdout(&mut sb.qsweep(&args));
+    let derived = derived_files(sb);
     let fresh = sb.path("rebuilt");
     let _ = std::fs::remove_dir_all(&fresh);
     let mut args = vec!["report", p, "--rebuild", "--out", fresh.to_str().unwrap()];
     args.extend(extra);
     crate::helpers::stdout(&mut sb.qsweep(&args));
+    // The statistics' memo holds what --rebuild computes, bit for bit (a report of some variants
+    // adds to it; a skipped folder leaves it as it was).
+    if !extra.contains(&"--variant") && said.contains("intervals: ") && !said.contains(" 0 recomputed") {
+        assert!(derived == derived_files(sb), "{what}: the statistics' memo differs from --rebuild's");
+    }
     let (a, b) = (tree(inc), tree(&fresh));
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>(), "{what}: the same files");
     for (name, bytes) in &a {
@@ -273,4 +289,59 @@ fn status_explain_says_which_report_folders_are_stale_and_why() {
         more.contains("reports/variants/as-written is recomputed by the next report: its inputs changed"),
         "{more}"
     );
+}
+
+#[test]
+fn the_statistics_memo_recomputes_only_the_intervals_whose_trials_changed() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    let (ps, out) = (p.to_str().unwrap(), sb.path("rep"));
+    let o = out.to_str().unwrap();
+    let json = || -> serde_json::Value {
+        let s = crate::helpers::stdout(&mut sb.qsweep(&["report", ps, "--json", "--out", o]));
+        serde_json::from_str(&s).unwrap()
+    };
+    let counts = |v: &serde_json::Value| {
+        (v["intervals_computed"].as_u64().unwrap(), v["intervals_reused"].as_u64().unwrap())
+    };
+    sb.qsweep(&["run", ps, "--quiet", "--no-report"]).assert().success();
+    let (all, none) = counts(&json());
+    assert!(all > 36 && none == 0, "every cell's interval and every difference's: {all}");
+    let memo = sb.cache().join("_derived/variants.bin");
+    assert!(memo.is_file());
+
+    // The report recomputed (its memo.json gone): every interval is taken from the memo.
+    std::fs::remove_file(out.join("memo.json")).unwrap();
+    let again = json();
+    assert_eq!(counts(&again), (0, all));
+    assert_eq!(again["files_written"], 1, "only memo.json, written again");
+
+    // A variant added: its own intervals and differences are computed, the others' reused (and
+    // its cells whose trials are the base's too).
+    let added = format!("{text}  - id: slow-crisp\n    set: {{ systems.mountain-car.crisp.alpha: 0.002 }}\n");
+    std::fs::write(&p, &added).unwrap();
+    sb.qsweep(&["run", ps, "--quiet", "--no-report"]).assert().success();
+    let (computed, reused) = counts(&json());
+    assert!(computed > 0 && computed < all && reused > 0, "{computed} computed, {reused} reused of {all}");
+
+    // A damaged memo: verify says so (exit 1), the report recomputes everything and mends it.
+    let mut bytes = std::fs::read(&memo).unwrap();
+    bytes[40] ^= 0xff;
+    std::fs::write(&memo, &bytes).unwrap();
+    let v = sb.qsweep(&["verify", "--reports", o]).assert().code(1).get_output().stdout.clone();
+    let v = String::from_utf8(v).unwrap();
+    assert!(v.contains("damaged statistics' memo: ") && v.contains("0 intact (0 entries), 1 damaged"), "{v}");
+    std::fs::remove_file(out.join("memo.json")).unwrap();
+    assert_eq!(counts(&json()), (computed + reused, 0));
+    same_as_rebuild(&sb, &p, &out, &[], "after a damaged statistics' memo");
+    let v = crate::helpers::stdout(&mut sb.qsweep(&["verify", "--reports", o]));
+    assert!(v.contains("statistics' memos: 1 intact"), "{v}");
+
+    // gc keeps the memo of the pipelines it is given, drops the others'.
+    let kept = crate::helpers::stdout(&mut sb.qsweep(&["gc", ps]));
+    assert!(kept.contains(", 0 statistics' memos;") && memo.is_file(), "{kept}");
+    let other = sb.fixture("tiny.yaml");
+    let gone = crate::helpers::stdout(&mut sb.qsweep(&["gc", other.to_str().unwrap()]));
+    assert!(gone.contains(", 1 statistics' memos;") && !memo.exists(), "{gone}");
 }

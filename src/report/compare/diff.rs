@@ -6,7 +6,8 @@ use super::super::figures::{
     self, cell_label_value, columns, ink_on, Canvas, Drawn, Grid, Picture, Res, INK, MISSING, SUBTLE,
 };
 use super::digest::{CellDigest, ExpDigest, VariantDigest};
-use crate::analysis::{bootstrap_diff_ci, BOOTSTRAP_RESAMPLES};
+use crate::analysis::derived::Derived;
+use crate::analysis::BOOTSTRAP_RESAMPLES;
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 use plotters::prelude::*;
@@ -46,12 +47,12 @@ pub fn diff_seed(base: &CellDigest, other: &CellDigest) -> u64 {
 
 impl CellDiff {
     /// Compare two cells; `None` when either has no trials.
-    pub fn of(base: &CellDigest, other: &CellDigest) -> Option<Self> {
+    pub fn of(base: &CellDigest, other: &CellDigest, memo: &Derived) -> Option<Self> {
         let (a, b) = (&base.values, &other.values);
         if a.is_empty() || b.is_empty() {
             return None;
         }
-        let ci = bootstrap_diff_ci(a, b, BOOTSTRAP_RESAMPLES, diff_seed(base, other));
+        let ci = memo.bootstrap_diff_ci(a, b, BOOTSTRAP_RESAMPLES, diff_seed(base, other));
         let diff = other.mean? - base.mean?;
         let significant = a.len() >= 2 && b.len() >= 2 && (ci.0 > 0.0 || ci.1 < 0.0);
         Some(Self { diff, ci, significant })
@@ -67,7 +68,7 @@ pub fn matching<'d, 'a>(base: &'d VariantDigest<'a>, e: &ExpDigest, i: usize) ->
 
 /// Every cell's difference of `other` against `base`, in `other`'s experiment and cell order.
 /// Each is its own seeded bootstrap, so they are computed in parallel.
-pub fn all_diffs(base: &VariantDigest, other: &VariantDigest) -> Vec<Vec<Option<CellDiff>>> {
+pub fn all_diffs(base: &VariantDigest, other: &VariantDigest, memo: &Derived) -> Vec<Vec<Option<CellDiff>>> {
     use rayon::prelude::*;
     other
         .exps
@@ -75,7 +76,7 @@ pub fn all_diffs(base: &VariantDigest, other: &VariantDigest) -> Vec<Vec<Option<
         .map(|e| {
             (0..e.cells.len())
                 .into_par_iter()
-                .map(|i| matching(base, e, i).and_then(|b| CellDiff::of(b, &e.cells[i])))
+                .map(|i| matching(base, e, i).and_then(|b| CellDiff::of(b, &e.cells[i], memo)))
                 .collect()
         })
         .collect()

@@ -5,6 +5,7 @@ use super::fit::{rows_of, Fit, RowFit};
 use super::forest::ForestRow;
 pub use super::info::VariantInfo;
 use crate::analysis::claims::ClaimResult;
+use crate::analysis::derived::Derived;
 use crate::cache::Key;
 use crate::plan::{Cell, Experiment, Plan};
 use crate::report::model::ReportData;
@@ -72,7 +73,7 @@ pub struct VariantDigest<'p> {
 impl<'p> VariantDigest<'p> {
     /// The digest of `data`, the report data of `plan` (whose cells the digest borrows, so it
     /// outlives the trials `data` borrows).
-    pub fn of(info: VariantInfo, plan: &'p Plan, data: &ReportData) -> Self {
+    pub fn of(info: VariantInfo, plan: &'p Plan, data: &ReportData, memo: &Derived) -> Self {
         let exps = plan
             .experiments
             .iter()
@@ -95,7 +96,7 @@ impl<'p> VariantDigest<'p> {
         let rows = rows_of(data);
         // The claims speak of the paper's whole study: every system, with the published values.
         let claims = if data.has_reference() && data.systems().len() == SystemKind::ALL.len() {
-            crate::analysis::claims::evaluate(&data.claim_cells())
+            memo.claims(&data.claim_cells())
         } else {
             Vec::new()
         };

@@ -46,6 +46,7 @@ pub fn write_comparison(
     plan: &Plan,
     variants: &[VariantDigest],
     formats: Formats,
+    memo: &crate::analysis::derived::Derived,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = super::folder::Folder::create(dir)?;
     let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
@@ -97,7 +98,7 @@ pub fn write_comparison(
     if let Some(base) = variants.first() {
         // A generated reading has its own folder and difference figures only when chosen.
         for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
-            let diffs = if svg || png { all_diffs(base, v) } else { Vec::new() };
+            let diffs = if svg || png { all_diffs(base, v, memo) } else { Vec::new() };
             for system in v.systems() {
                 let stem = format!("figures/diff-{}-{}", v.info.id, system.name());
                 if svg || png {

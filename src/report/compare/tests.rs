@@ -11,6 +11,11 @@ use crate::spec::{load_str, LoadedSpec, Override};
 use plotters::style::RGBColor;
 use std::collections::{BTreeMap, HashMap};
 
+/// A statistics' memo that reuses nothing.
+fn memo() -> crate::analysis::derived::Derived {
+    crate::analysis::derived::Derived::fresh(0)
+}
+
 /// Two Ball-Beam experiments (a 2 × 2 grid and a 3-cell row), 4 seeds, short trials.
 const PIPELINE: &str = "\
 name: vt
@@ -135,16 +140,18 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
             VariantInfo { id: "as-written".into(), title: Some("The text".into()), exploratory: false },
             &base,
             &data[0],
+            &memo(),
         ),
         VariantDigest::of(
             VariantInfo { id: "fast".into(), title: None, exploratory: false },
             &other,
             &data[1],
+            &memo(),
         ),
     ];
     let all = Formats::of(&Format::ALL);
     let tmp = tempfile::tempdir().unwrap();
-    let written = write_comparison(tmp.path(), &base, &variants, all).unwrap();
+    let written = write_comparison(tmp.path(), &base, &variants, all, &memo()).unwrap();
     let names: Vec<String> = written.iter().map(|p| p.to_string_lossy().into_owned()).collect();
     assert_eq!(
         names,
@@ -224,10 +231,10 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
     let mut marked = 0;
     let mut unmarked = 0;
     let mut missing = 0;
-    let diffs = all_diffs(b, o);
+    let diffs = all_diffs(b, o, &memo());
     for (k, e) in o.exps.iter().enumerate() {
         for (i, c) in e.cells.iter().enumerate() {
-            let Some(d) = matching(b, e, i).and_then(|bc| CellDiff::of(bc, c)) else {
+            let Some(d) = matching(b, e, i).and_then(|bc| CellDiff::of(bc, c, &memo())) else {
                 missing += 1;
                 assert_eq!(diffs[k][i], None);
                 continue;
@@ -270,8 +277,8 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
 
     // Determinism: a second write gives identical bytes.
     let again = tempfile::tempdir().unwrap();
-    write_comparison(again.path(), &base, &variants, all).unwrap();
+    write_comparison(again.path(), &base, &variants, all, &memo()).unwrap();
     assert_eq!(files(again.path()), out);
-    write_comparison(tmp.path(), &base, &variants, all).unwrap();
+    write_comparison(tmp.path(), &base, &variants, all, &memo()).unwrap();
     assert_eq!(files(tmp.path()), out);
 }
