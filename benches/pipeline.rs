@@ -6,7 +6,8 @@
 //! for that grid (every variant's report and the comparison) measured; planning + hashing +
 //! storing under 1% of trial compute on the quick pipeline, and so claiming each trial in the cache
 //! (what lets concurrent runs share it, `docs/sharing-a-cache.md`); the real report of `paper.yaml` from
-//! the committed cache (every variant, real trials) in at most 5 s and 250 MB peak RSS; the paper
+//! the committed cache (every variant, real trials): the no-op `run` (≤ 1 s, ≤ 1.3× the CPU of
+//! `status`, ≤ 120 MB) and the report recomputed with and without the statistics' memo; the paper
 //! race (`paper-race.yaml`) against `max_seeds` seeds in every cell, in trials and in simulated
 //! steps (target: at most 25 % of the trials).
 
@@ -29,13 +30,93 @@ fn qsweep(args: &[&str], cache: &Path) -> (f64, String) {
     (secs, String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
-/// Peak RSS (MB) and CPU seconds of the children waited for so far.
-fn children_usage() -> (f64, f64) {
-    // SAFETY: getrusage only writes the struct it is given.
+/// One run of `qsweep args` in `dir`: wall seconds, CPU seconds (user + system), peak RSS (MB)
+/// and the first line it printed, from the child's own rusage (`wait4`), so that neither other
+/// load nor earlier children count.
+fn measured(dir: &Path, args: &[&str]) -> (f64, f64, f64, String) {
+    use std::io::Read;
+    let start = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_qsweep"))
+        .current_dir(dir)
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("qsweep runs");
+    let mut said = String::new();
+    child.stdout.take().expect("piped").read_to_string(&mut said).expect("stdout");
+    let mut status = 0;
+    // SAFETY: wait4 only writes the status and the struct it is given, for our own child.
     let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
+    let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut u) };
+    let wall = start.elapsed().as_secs_f64();
+    assert!(pid > 0 && libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0, "{args:?} failed");
     let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    (u.ru_maxrss as f64 / 1024.0, secs(u.ru_utime) + secs(u.ru_stime))
+    let line = said.lines().last().unwrap_or("").to_string();
+    (wall, secs(u.ru_utime) + secs(u.ru_stime), u.ru_maxrss as f64 / 1024.0, line)
+}
+
+/// `paper.yaml` on the committed cache and reports: the no-op run against `status` (issue 37's
+/// targets: ≤ 1 s wall, ≤ 1.3× status's CPU, ≤ 120 MB), then the report recomputed into a new
+/// folder with every statistic computed (`--rebuild`) and with every statistic in the memo.
+fn committed_cache_figures(root: &Path, paper: &Path, cache: &Path) {
+    // Relative, as the README writes it: the pages name the pipeline's path.
+    let p = paper.strip_prefix(root).unwrap_or(paper).to_str().unwrap();
+    let c = cache.to_str().unwrap();
+    let show = |what: &str, (wall, cpu, rss, _): &(f64, f64, f64, String)| {
+        println!("{what}: {wall:.2} s wall, {cpu:.2} s CPU, peak RSS {rss:.0} MB");
+    };
+    let status = measured(root, &["status", p, "--cache", c]);
+    show("status paper.yaml (committed cache)", &status);
+    let noop = measured(root, &["run", p, "--cache", c]);
+    assert!(noop.3.contains("files: 0 rewritten"), "the no-op run rewrote files: {}", noop.3);
+    show("no-op run paper.yaml (committed cache and reports; targets ≤ 1 s, ≤ 120 MB)", &noop);
+    println!("no-op run / status, CPU: {:.2} (target ≤ 1.3)", noop.1 / status.1);
+    let out = tempfile::tempdir().unwrap();
+    let dir = |name: &str| out.path().join(name).to_str().unwrap().to_string();
+    let (a, b) = (dir("rebuilt"), dir("memo"));
+    let rebuild = measured(root, &["report", p, "--cache", c, "--rebuild", "--out", &a]);
+    show("report paper.yaml into a new folder, --rebuild (every statistic computed)", &rebuild);
+    let memo = measured(root, &["report", p, "--cache", c, "--out", &b]);
+    assert!(memo.3.contains("intervals: 0 computed"), "{}", memo.3);
+    show("report paper.yaml into a new folder, every statistic from the memo", &memo);
+    println!("with the memo / --rebuild, CPU: {:.2}", memo.1 / rebuild.1);
+    twentieth_reading(root, paper, cache);
+}
+
+/// A reading added to `paper.yaml` whose trials are all cached (gym-v0's settings under another
+/// id), in a copy of the cache and of the committed report: the report of the whole pipeline,
+/// against that reading's report alone (`--variant`; issue 37's target: ≤ 1 s more).
+fn twentieth_reading(root: &Path, paper: &Path, cache: &Path) {
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = |from: &Path, to: &Path| {
+        let ok = Command::new("cp").arg("-a").arg(from).arg(to).status().is_ok_and(|s| s.success());
+        assert!(ok, "cp -a {} {}", from.display(), to.display());
+    };
+    let (c, r) = (tmp.path().join("cache"), tmp.path().join("report"));
+    copy(cache, &c);
+    copy(&root.join("reports/paper"), &r);
+    let text = std::fs::read_to_string(paper).unwrap();
+    let reading = "  - id: gym-v0-again\n    title: \"gym-v0 under another id\"\n    set:\n      \
+                   systems.cart-pole.success.steps: 200\n      systems.mountain-car.success.within: 200\n      \
+                   systems.mountain-car.success.max_episode_steps: 200\n";
+    let p = tmp.path().join("paper.yaml");
+    std::fs::write(&p, format!("{text}{reading}")).unwrap();
+    let (p, c) = (p.to_str().unwrap(), c.to_str().unwrap());
+    let all = measured(root, &["report", p, "--cache", c, "--out", r.to_str().unwrap()]);
+    let alone_dir = tmp.path().join("alone");
+    let alone = measured(
+        root,
+        &["report", p, "--cache", c, "--variant", "gym-v0-again", "--out", alone_dir.to_str().unwrap()],
+    );
+    println!(
+        "a 20th reading, trials cached: the report {:.2} s wall ({:.2} s CPU); that reading alone {:.2} s wall \
+         ({:.2} s CPU); {:.2} s more (target ≤ 1 s)",
+        all.0,
+        all.1,
+        alone.0,
+        alone.1,
+        all.0 - alone.0
+    );
 }
 
 fn main() {
@@ -43,19 +124,12 @@ fn main() {
     let paper = root.join("pipelines/paper.yaml");
     let quick = root.join("pipelines/quick.yaml");
 
-    // The real report first (so the children's peak RSS is its own): every variant of paper.yaml
-    // from the committed cache, into a temporary folder.
+    // The real pipeline on the committed cache first: the README's main command with nothing to
+    // do, against `status` of the same plan, then the report recomputed with and without the
+    // statistics' memo.
     let cache = root.join("cache");
-    if cache.join(".gitkeep").exists() || cache.is_dir() {
-        let out = tempfile::tempdir().unwrap();
-        let p = paper.to_str().unwrap();
-        let (secs, said) = qsweep(&["report", p, "--out", out.path().to_str().unwrap()], &cache);
-        let (rss, cpu) = children_usage();
-        println!(
-            "report paper.yaml from the committed cache: {secs:.2} s wall, {cpu:.2} s CPU, peak RSS {rss:.0} MB \
-             (targets ≤ 5 s on 2 cores, ≤ 250 MB): {}",
-            said.lines().next().unwrap_or("")
-        );
+    if cache.is_dir() {
+        committed_cache_figures(root, &paper, &cache);
     }
 
     if cache.is_dir() {
