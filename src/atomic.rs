@@ -3,17 +3,23 @@
 
 use anyhow::Context;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Prefix of the temporary files [`write_atomic`] makes (hidden; `qsweep gc` removes stale ones).
 pub const TEMP_PREFIX: &str = ".tmp-";
 
+/// The hidden temporary file a write of `path` goes to before it is renamed into place: beside
+/// it (one file system, so the rename is atomic), named for it and this process.
+pub fn temp_beside(path: &Path) -> PathBuf {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    dir.join(format!("{TEMP_PREFIX}{name}.{}", std::process::id()))
+}
+
 /// Write `bytes` to `path` through a temporary file in the same directory, fsync and a rename;
 /// on failure the temporary file is removed and the old file, if any, is left as it was.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!("{TEMP_PREFIX}{name}.{}", std::process::id()));
+    let tmp = temp_beside(path);
     let result = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
@@ -25,6 +31,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     }
     result.with_context(|| format!("cannot write {}", path.display()))?;
     // Make the rename durable too; best effort (not every filesystem allows opening a directory).
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if let Ok(d) = std::fs::File::open(dir) {
         let _ = d.sync_all();
     }

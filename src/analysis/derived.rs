@@ -310,8 +310,9 @@ pub fn check(cache: &Path) -> DerivedCheck {
 }
 
 /// Remove the memo files of the cache at `cache` that no report would read: those of pipelines
-/// not in `keep` (when given), and those not of this format and definitions `version`. With
-/// `dry_run`, remove nothing. Returns how many files (would) go.
+/// not in `keep` (when given), with their trial parts, and those not of this format and
+/// definitions `version`. With `dry_run`, remove nothing. Returns how many files and parts'
+/// folders (would) go.
 pub fn gc(
     cache: &Path,
     keep: Option<&std::collections::HashSet<String>>,
@@ -320,14 +321,26 @@ pub fn gc(
 ) -> anyhow::Result<usize> {
     let Ok(dir) = std::fs::read_dir(cache.join(DERIVED_DIR)) else { return Ok(0) };
     let mut removed = 0;
-    for p in dir.flatten().map(|e| e.path()).filter(|p| is_memo(p)) {
+    let paths: Vec<PathBuf> = dir.flatten().map(|e| e.path()).collect();
+    // A pipeline's trial parts (`<name>.trials/`, report::trials) go with it.
+    for p in paths.iter().filter(|p| p.is_dir() && p.extension().is_some_and(|x| x == "trials")) {
+        let name = p.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if keep.is_some_and(|k| !k.contains(&name)) {
+            removed += 1;
+            if !dry_run {
+                std::fs::remove_dir_all(p)
+                    .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
+            }
+        }
+    }
+    for p in paths.iter().filter(|p| is_memo(p)) {
         let name = p.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let unused = keep.is_some_and(|k| !k.contains(&name));
-        let unreadable = std::fs::read(&p).ok().and_then(|b| decode(&b, version)).is_none();
+        let unreadable = std::fs::read(p).ok().and_then(|b| decode(&b, version)).is_none();
         if unused || unreadable {
             removed += 1;
             if !dry_run {
-                std::fs::remove_file(&p)
+                std::fs::remove_file(p)
                     .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
             }
         }

@@ -39,7 +39,7 @@ use std::path::Path;
 /// instead of keeping files an older definition wrote. The golden test
 /// (`tests/cli/memo.rs::analysis_golden_*`) fails when the outputs of a fixed input change while
 /// this does not.
-pub const ANALYSIS_VERSION: u32 = 2;
+pub const ANALYSIS_VERSION: u32 = 3;
 
 /// The memo's file name in a report folder.
 pub const MEMO: &str = "memo.json";
@@ -173,7 +173,7 @@ impl Inputs {
 
 /// For every stored key, an 8-byte id of the segment its outcome is read from (the first
 /// segment holding it, as [`crate::cache::store::Store::read_outcomes`] reads).
-fn where_stored(scan: &KeySet) -> HashMap<Key, u64> {
+pub(crate) fn where_stored(scan: &KeySet) -> HashMap<Key, u64> {
     let mut out = HashMap::with_capacity(scan.keys.len());
     for (path, keys) in &scan.segments {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

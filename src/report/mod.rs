@@ -33,6 +33,7 @@ pub mod stage;
 pub mod svg;
 pub mod svg_grid;
 pub mod table;
+pub mod trials;
 
 pub use crate::atomic::write_atomic;
 pub use folder::{existing_trials, write_folder, ReportSummary};

@@ -21,6 +21,7 @@ use super::formats::{Format, Formats};
 use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
 use super::memo::{self, Counted, Inputs, Memo, Role};
 use super::model::ReportData;
+use super::trials::TrialParts;
 use crate::analysis::derived::{Derived, DerivedCounts};
 use crate::atomic::write_if_changed;
 use crate::cache::store::{KeySet, Store};
@@ -336,8 +337,9 @@ pub fn write(
     let lengths = formats.has(Format::Trials) || formats.has(Format::Svg) || formats.has(Format::Png);
     let mut digests: Vec<VariantDigest> = Vec::new();
     let mut cells = Vec::new();
-    let mut trials =
-        (with_comparison && formats.has(Format::Trials)).then(|| TrialsSink::new(dir.join("trials.parquet")));
+    // The combined trials.parquet, from one part per declared reading (report::trials).
+    let mut trials = (with_comparison && formats.has(Format::Trials))
+        .then(|| TrialParts::new(store.dir(), &plan.name, scan, opts.rebuild));
     if trials.is_some() {
         std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
     }
@@ -353,18 +355,36 @@ pub fn write(
         }
         let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
+        // With a comparison, a variant whose folder is intact keeps its files; the comparison
+        // still needs its numbers, but not its episode lengths unless its trial rows are encoded.
+        let kept = target.as_ref().filter(|_| with_comparison).and_then(|t| intact(&t.dir, sub_hash));
+        let draws = target.is_some() && kept.is_none();
+        // An exploratory reading's rows are its declared twin's: written with its folder.
+        let part = trials.as_ref().filter(|_| info.is_some() && !exploratory).map(|p| p.digest(sub));
+        // A kept part holds a row per present trial (each cell's, its fresh ones included).
+        let rows = || sub.trials().filter(|(_, _, t)| scan.keys.contains(&t.key)).count();
+        let reuse_part = part.as_ref().is_some_and(|d| trials.as_ref().is_some_and(|p| p.have(d, rows())));
         // Episode lengths only for what draws or stores them: a folder's curves, the trial rows.
-        let to_push = trials.is_some() && info.is_some() && !exploratory;
-        let outcomes = store.read_outcomes(scan, &wanted, lengths && (target.is_some() || to_push))?;
+        let encode = part.is_some() && !reuse_part;
+        let outcomes = store.read_outcomes(scan, &wanted, lengths && (draws || encode))?;
         // Intervals where a page or the combined cells.parquet shows them.
         let in_cells = with_comparison && formats.has(Format::Cells) && !exploratory;
-        let data = ReportData::build_as(sub, &outcomes, (target.is_some() || in_cells).then_some(&derived));
+        let data = ReportData::build_as(sub, &outcomes, (draws || in_cells).then_some(&derived));
         // The folder's files and this variant's rows of the combined trials.parquet at once.
         let (written, pushed) = rayon::join(
-            || target.as_ref().map(|t| write_folder(&data, &t.dir, formats, info.is_none())).transpose(),
-            || match &mut trials {
-                // An exploratory reading's rows are its declared twin's: written with its folder.
-                Some(sink) if to_push => sink.push(&data),
+            || {
+                target
+                    .as_ref()
+                    .filter(|_| draws)
+                    .map(|t| write_folder(&data, &t.dir, formats, info.is_none()))
+                    .transpose()
+            },
+            || match (&mut trials, &part) {
+                (Some(parts), Some(d)) if reuse_part => {
+                    parts.reuse(d);
+                    Ok(())
+                }
+                (Some(parts), Some(d)) => parts.write(d, &data),
                 _ => Ok(()),
             },
         );
@@ -373,6 +393,9 @@ pub fn write(
         if let (Some(t), Some(files)) = (target, written?) {
             let id = info.as_ref().map(|v| v.id.as_str());
             t.finish(sub, id, formats, files, (sub_hash, Counted::of(&counted), None), &mut out)?;
+        }
+        if let (Some(m), Some(v)) = (&kept, info) {
+            keep_files(m, Path::new(&v.id), &mut out);
         }
         out.summary.add(&counted);
         out.cells_recomputed += counted.cells;
@@ -396,13 +419,17 @@ pub fn write(
         let id = &info.as_ref().expect("a deferred folder is a variant's").id;
         chosen_folder = Some(id.as_str());
         let t = Target::new(dir.join(id), sub, &scan.keys, opts.force)?;
-        t.guard(opts.force, store.dir())?;
-        let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
-        let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
-        let data = ReportData::build_as(sub, &outcomes, Some(&derived));
-        let files = write_folder(&data, &t.dir, formats, false)?;
-        let counted = Counted::of(&ReportSummary::of(&data, Vec::new()));
-        t.finish(sub, Some(id), formats, files, (sub_hash, counted, None), &mut out)?;
+        if let Some(m) = intact(&t.dir, sub_hash) {
+            keep_files(&m, Path::new(id), &mut out);
+        } else {
+            t.guard(opts.force, store.dir())?;
+            let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
+            let outcomes = store.read_outcomes(scan, &wanted, lengths)?;
+            let data = ReportData::build_as(sub, &outcomes, Some(&derived));
+            let files = write_folder(&data, &t.dir, formats, false)?;
+            let counted = Counted::of(&ReportSummary::of(&data, Vec::new()));
+            t.finish(sub, Some(id), formats, files, (sub_hash, counted, None), &mut out)?;
+        }
     }
 
     if let Some(top) = &top {
@@ -412,7 +439,8 @@ pub fn write(
             write_if_changed(&dir.join("cells.parquet"), &crate::parquet_io::to_parquet(&all)?)?;
             files.push(PathBuf::from("cells.parquet"));
         }
-        if trials.take().map(TrialsSink::finish).transpose()?.unwrap_or(false) {
+        let prune = !plan.variant_subset;
+        if trials.take().map(|p| p.finish(&dir.join("trials.parquet"), prune)).transpose()?.unwrap_or(false) {
             files.push(PathBuf::from("trials.parquet"));
         }
         files.extend(compare::write_comparison(dir, plan, &digests, formats, &derived)?);
@@ -470,6 +498,11 @@ pub fn staleness(
 fn reuse(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
     out.summary.add(&m.summary.summary());
     out.cells_reused += m.summary.cells;
+    keep_files(m, prefix, out);
+}
+
+/// List a kept folder's files (under `prefix`) in the outcome, as unchanged.
+fn keep_files(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
     out.summary.files.extend(m.files.keys().map(|f| prefix.join(f)));
     out.summary.files.push(prefix.join(memo::MEMO));
     out.files_unchanged += m.files.len() + 1;
@@ -509,75 +542,4 @@ fn all_intact(
     out.summary.files.push(PathBuf::from(memo::MEMO));
     out.files_unchanged += top.files.len() + 1;
     Some(out)
-}
-
-/// Rows per row group of the combined `trials.parquet`.
-const TRIALS_ROW_GROUP: usize = 1024;
-
-/// The combined `trials.parquet`, written one experiment of one variant at a time, in row groups
-/// of [`TRIALS_ROW_GROUP`] trials, to a hidden temporary file beside it, renamed into place when
-/// complete (so memory holds one experiment's rows, and a reader never sees a partial file), or
-/// dropped when the file there already holds the same bytes (its mtime stays).
-struct TrialsSink {
-    tmp: PathBuf,
-    path: PathBuf,
-    writer: Option<::parquet::arrow::ArrowWriter<std::fs::File>>,
-}
-
-impl TrialsSink {
-    fn new(path: PathBuf) -> Self {
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let tmp = path.with_file_name(format!("{}{name}.{}", crate::atomic::TEMP_PREFIX, std::process::id()));
-        Self { tmp, path, writer: None }
-    }
-
-    /// Append one report's rows, built an experiment at a time and flushed every
-    /// [`TRIALS_ROW_GROUP`] trials, so at most one experiment's rows are in memory uncompressed and
-    /// one row group's encoded.
-    fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
-        for k in 0..data.experiments.len() {
-            let batch = datasets::trials_batch_of(&data.experiments[k..k + 1])?;
-            if self.writer.is_none() {
-                let file = std::fs::File::create(&self.tmp)
-                    .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.tmp.display()))?;
-                let props = crate::parquet_io::writer_properties()?;
-                self.writer =
-                    Some(::parquet::arrow::ArrowWriter::try_new(file, batch.schema(), Some(props))?);
-            }
-            let w = self.writer.as_mut().expect("created above");
-            // A row group per TRIALS_ROW_GROUP rows: the writer buffers one group's encoded
-            // columns, episode_lengths lists included, until it is flushed.
-            for start in (0..batch.num_rows()).step_by(TRIALS_ROW_GROUP) {
-                w.write(&batch.slice(start, TRIALS_ROW_GROUP.min(batch.num_rows() - start)))?;
-                w.flush()?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Close, fsync and rename (or drop the temporary file when the kept one is the same); `false`
-    /// when no rows were pushed (no file).
-    fn finish(mut self) -> anyhow::Result<bool> {
-        let Some(w) = self.writer.take() else { return Ok(false) };
-        let file = w.into_inner()?;
-        if crate::atomic::same_files(&self.tmp, &self.path) {
-            drop(file);
-            std::fs::remove_file(&self.tmp)
-                .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", self.tmp.display()))?;
-            return Ok(true);
-        }
-        file.sync_all()?;
-        std::fs::rename(&self.tmp, &self.path)
-            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.path.display()))?;
-        Ok(true)
-    }
-}
-
-impl Drop for TrialsSink {
-    fn drop(&mut self) {
-        // Not finished (an error on the way): leave no temporary file behind.
-        if self.writer.is_some() {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
-    }
 }

@@ -190,7 +190,7 @@ fn grids_races_fresh_seeds_and_variant_subsets_are_skipped_when_intact() {
 /// under.
 ///
 /// [`ANALYSIS_VERSION`]: qsweep::report::memo::ANALYSIS_VERSION
-const GOLDEN: (u32, &str) = (2, "9ebdac052bcf42f5089c94095370cf3306cffa138f61da56a67b899eb6e690ad");
+const GOLDEN: (u32, &str) = (3, "9ebdac052bcf42f5089c94095370cf3306cffa138f61da56a67b899eb6e690ad");
 
 #[test]
 fn analysis_golden_outputs_change_only_with_analysis_version() {
@@ -340,8 +340,44 @@ fn the_statistics_memo_recomputes_only_the_intervals_whose_trials_changed() {
 
     // gc keeps the memo of the pipelines it is given, drops the others'.
     let kept = crate::helpers::stdout(&mut sb.qsweep(&["gc", ps]));
-    assert!(kept.contains(", 0 statistics' memos;") && memo.is_file(), "{kept}");
+    assert!(kept.contains(", 0 statistics' memos and trial parts;") && memo.is_file(), "{kept}");
     let other = sb.fixture("tiny.yaml");
     let gone = crate::helpers::stdout(&mut sb.qsweep(&["gc", other.to_str().unwrap()]));
-    assert!(gone.contains(", 1 statistics' memos;") && !memo.exists(), "{gone}");
+    assert!(gone.contains(", 2 statistics' memos and trial parts;") && !memo.exists(), "{gone}");
+    assert!(!sb.cache().join("_derived/variants.trials").exists(), "its trial parts go with it");
+}
+
+#[test]
+fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    let parts_dir = sb.cache().join("_derived/variants.trials");
+    let parts = || -> BTreeMap<PathBuf, SystemTime> { mtimes(&parts_dir) };
+    let before = parts();
+    assert_eq!(before.len(), 3, "one part per declared reading: {before:?}");
+    // The comparison recomputed: every part is reused as it is.
+    std::fs::remove_file(inc.join("memo.json")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "the comparison recomputed");
+    std::fs::remove_file(inc.join("memo.json")).unwrap();
+    let after_rebuild = parts();
+    let said = crate::helpers::stdout(&mut sb.qsweep(&[
+        "report",
+        p.to_str().unwrap(),
+        "--out",
+        inc.to_str().unwrap(),
+    ]));
+    assert_eq!(parts(), after_rebuild, "no part encoded again: {said}");
+    // A damaged part is encoded again, and the combined file is still --rebuild's.
+    let (name, _) = after_rebuild.iter().next().unwrap();
+    let part = parts_dir.join(name);
+    let bytes = std::fs::read(&part).unwrap();
+    std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::remove_file(inc.join("memo.json")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a damaged part");
+    assert_eq!(std::fs::read(&part).unwrap(), bytes, "the part encoded again is the same");
+    // A reading changed: its part is replaced, the others stay.
+    same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
+    assert_eq!(parts().len(), 3, "a full report keeps only the parts it used");
 }
