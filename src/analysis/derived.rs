@@ -340,8 +340,7 @@ pub fn gc(
         if unused || unreadable {
             removed += 1;
             if !dry_run {
-                std::fs::remove_file(p)
-                    .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
+                std::fs::remove_file(p).map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
             }
         }
     }

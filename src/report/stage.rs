@@ -343,33 +343,60 @@ pub fn write(
     if trials.is_some() {
         std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
     }
-    for (((info, sub), target), sub_hash) in subs.iter().zip(&targets).zip(&sub_inputs) {
+    // What each folder needs, decided before any trial is read (see Need).
+    let needs: Vec<Need> = subs
+        .iter()
+        .zip(&targets)
+        .zip(&sub_inputs)
+        .map(|(((info, sub), target), sub_hash)| {
+            let kept = target.as_ref().and_then(|t| intact(&t.dir, sub_hash));
+            let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
+            // An exploratory reading's rows are its declared twin's: written with its folder.
+            let part = trials.as_ref().filter(|_| info.is_some() && !exploratory).map(|p| p.digest(sub));
+            // A kept part holds a row per present trial (each cell's, its fresh ones included).
+            let rows = || sub.trials().filter(|(_, _, t)| scan.keys.contains(&t.key)).count();
+            let reuse_part =
+                part.as_ref().is_some_and(|d| trials.as_ref().is_some_and(|p| p.have(d, rows())));
+            let draws = target.is_some() && kept.is_none();
+            // Episode lengths only for what draws or stores them: a folder's curves, the trial rows.
+            let lengths = lengths && (draws || (part.is_some() && !reuse_part));
+            Need { kept, part, reuse_part, draws, lengths }
+        })
+        .collect();
+    // The outcomes of every variant that needs no episode lengths, read once for all of them
+    // (variants share most trials).
+    let shared = if with_comparison {
+        let wanted: HashSet<Key> = subs
+            .iter()
+            .zip(&needs)
+            .filter(|(_, n)| !n.lengths)
+            .flat_map(|((_, sub), _)| sub.trials().map(|(_, _, t)| t.key))
+            .collect();
+        store.read_outcomes(scan, &wanted, false)?
+    } else {
+        std::collections::HashMap::new()
+    };
+    for ((((info, sub), target), sub_hash), need) in subs.iter().zip(&targets).zip(&sub_inputs).zip(needs) {
         // Without a comparison, a folder stands alone: an intact one is skipped by itself.
-        if let (Some(t), false) = (target, with_comparison) {
-            if let Some(m) = intact(&t.dir, sub_hash) {
-                let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
-                reuse(&m, &prefix, &mut out);
-                skipped = true;
-                continue;
-            }
+        if let (Some(m), false) = (&need.kept, with_comparison) {
+            let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
+            reuse(m, &prefix, &mut out);
+            skipped = true;
+            continue;
         }
-        let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
         let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
-        // With a comparison, a variant whose folder is intact keeps its files; the comparison
-        // still needs its numbers, but not its episode lengths unless its trial rows are encoded.
-        let kept = target.as_ref().filter(|_| with_comparison).and_then(|t| intact(&t.dir, sub_hash));
-        let draws = target.is_some() && kept.is_none();
-        // An exploratory reading's rows are its declared twin's: written with its folder.
-        let part = trials.as_ref().filter(|_| info.is_some() && !exploratory).map(|p| p.digest(sub));
-        // A kept part holds a row per present trial (each cell's, its fresh ones included).
-        let rows = || sub.trials().filter(|(_, _, t)| scan.keys.contains(&t.key)).count();
-        let reuse_part = part.as_ref().is_some_and(|d| trials.as_ref().is_some_and(|p| p.have(d, rows())));
-        // Episode lengths only for what draws or stores them: a folder's curves, the trial rows.
-        let encode = part.is_some() && !reuse_part;
-        let outcomes = store.read_outcomes(scan, &wanted, lengths && (draws || encode))?;
+        let Need { kept, part, reuse_part, draws, .. } = need;
+        let own;
+        let outcomes = if need.lengths || !with_comparison {
+            let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
+            own = store.read_outcomes(scan, &wanted, need.lengths)?;
+            &own
+        } else {
+            &shared
+        };
         // Intervals where a page or the combined cells.parquet shows them.
         let in_cells = with_comparison && formats.has(Format::Cells) && !exploratory;
-        let data = ReportData::build_as(sub, &outcomes, (draws || in_cells).then_some(&derived));
+        let data = ReportData::build_as(sub, outcomes, (draws || in_cells).then_some(&derived));
         // The folder's files and this variant's rows of the combined trials.parquet at once.
         let (written, pushed) = rayon::join(
             || {
@@ -492,6 +519,20 @@ pub fn staleness(
         out.push((dir.to_path_buf(), memo::why_stale(dir, &h)));
     }
     Ok(out)
+}
+
+/// What one folder of a report needs, decided before any trial is read.
+struct Need {
+    /// Its memo, when intact: the folder is kept (without a comparison, skipped altogether).
+    kept: Option<Memo>,
+    /// The digest of its part of the combined `trials.parquet` (a declared variant's).
+    part: Option<blake3::Hash>,
+    /// That part is there to reuse.
+    reuse_part: bool,
+    /// Its folder is drawn and written.
+    draws: bool,
+    /// Its trials are read with their episode lengths (for its curves or its trial rows).
+    lengths: bool,
 }
 
 /// Count a folder kept as its memo says: its counts into the summary, its files as unchanged.
