@@ -146,12 +146,23 @@ impl Derived {
         h
     }
 
-    /// [`super::bootstrap_ci`], memoized.
-    pub fn bootstrap_ci(&self, values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
+    /// The id of [`Derived::bootstrap_ci`]'s entry.
+    fn ci_id(&self, values: &[f64], resamples: usize, seed: u64) -> Id {
         let mut h = self.hasher("bootstrap-ci");
         put_params(&mut h, resamples, seed);
         put_values(&mut h, values);
-        let v = self.get(id(&h), || {
+        id(&h)
+    }
+
+    /// Whether [`Derived::bootstrap_ci`] of these inputs is in the memo (what a report would
+    /// reuse rather than compute).
+    pub fn has_ci(&self, values: &[f64], resamples: usize, seed: u64) -> bool {
+        self.reuse && self.kept.contains_key(&self.ci_id(values, resamples, seed))
+    }
+
+    /// [`super::bootstrap_ci`], memoized.
+    pub fn bootstrap_ci(&self, values: &[f64], resamples: usize, seed: u64) -> (f64, f64) {
+        let v = self.get(self.ci_id(values, resamples, seed), || {
             let (lo, hi) = super::bootstrap_ci(values, resamples, seed);
             vec![lo.to_bits(), hi.to_bits()]
         });
@@ -374,6 +385,8 @@ mod tests {
         assert!(!m.save(&path, true).unwrap(), "the same entries are the same bytes: not rewritten");
 
         let again = Derived::load(&path, 7, true);
+        assert!(again.has_ci(&values(), 2000, 11) && !again.has_ci(&values(), 2000, 12));
+        assert!(!Derived::load(&path, 7, false).has_ci(&values(), 2000, 11), "--rebuild reuses nothing");
         assert_eq!(again.bootstrap_ci(&values(), 2000, 11), ci);
         assert_eq!(again.bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5), d);
         assert_eq!(again.counts(), DerivedCounts { computed: 0, reused: 2 });

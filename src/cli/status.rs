@@ -79,9 +79,10 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         let dir = crate::report::default_dir(&plan);
         let keys = store.keys()?;
         let formats = crate::report::formats::Formats::default();
-        let folders = crate::report::staleness(plan, store, &keys, &dir, formats)?;
+        let explained = crate::report::staleness(plan, store, &keys, &dir, formats)?;
+        let folders = &explained.folders;
         let stale = folders.iter().filter(|(_, why)| why.is_some()).count();
-        for (d, why) in &folders {
+        for (d, why) in folders {
             if let Some(why) = why {
                 println!("report {} is recomputed by the next report: {why}", d.display());
             }
@@ -91,8 +92,26 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
             folders.len() - stale,
             folders.len()
         );
+        print_stale_intervals(&explained);
     }
     Ok(crate::error::exit::OK)
+}
+
+/// The cells whose intervals the next report computes, at most [`LISTED`] of them by name.
+fn print_stale_intervals(e: &crate::report::Staleness) {
+    const LISTED: usize = 20;
+    for name in e.stale.iter().take(LISTED) {
+        println!("interval computed by the next report (not in the statistics' memo: new trials, or never reported): {name}");
+    }
+    if e.stale.len() > LISTED {
+        println!("... and {} more", e.stale.len() - LISTED);
+    }
+    println!(
+        "cell intervals: {} of {} in the statistics' memo {}",
+        e.intervals - e.stale.len(),
+        e.intervals,
+        e.memo.display()
+    );
 }
 
 /// One line per missing cell, then how many cells each reason explains when there are several.

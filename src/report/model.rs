@@ -396,11 +396,8 @@ fn cell_data<'a>(
     intervals: Option<&Derived>,
 ) -> CellData<'a> {
     let summarize = |trials: &[TrialData]| {
-        let values: Vec<f64> = trials.iter().map(|t| f64::from(t.counted)).collect();
-        let seed = intervals
-            .is_some()
-            .then(|| seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)));
-        Summary::with_interval_by(&values, seed, |v, r, s| {
+        let (values, seed) = interval_inputs(trials);
+        Summary::with_interval_by(&values, intervals.and(Some(seed)), |v, r, s| {
             intervals.expect("a seed only with a memo").bootstrap_ci(v, r, s)
         })
     };
@@ -408,6 +405,13 @@ fn cell_data<'a>(
     let summary = summarize(&trials);
     let fresh_summary = (!fresh.is_empty()).then(|| summarize(&fresh));
     CellData { cell, trials, successes, summary, fresh, fresh_summary }
+}
+
+/// What a sample's bootstrap interval is computed from: its counted episodes and its seed (from
+/// its trials' keys).
+pub fn interval_inputs(trials: &[TrialData]) -> (Vec<f64>, u64) {
+    let values = trials.iter().map(|t| f64::from(t.counted)).collect();
+    (values, seed_of(b"qsweep-bootstrap\0", trials.iter().map(|t| &t.planned.key)))
 }
 
 /// A seed for a cell's resamples: derived from the keys of its present trials (after a `domain`

@@ -483,44 +483,6 @@ pub fn write(
     Ok(out)
 }
 
-/// For each folder a report of `plan` into `dir` in `formats` would write (each variant's with a
-/// folder, the comparison's, the chosen reading's as the comparison's memo names it), why it would
-/// be recomputed, or `None` when its memo is intact: what `qsweep status --explain` says.
-pub fn staleness(
-    plan: Plan,
-    store: &Store,
-    scan: &KeySet,
-    dir: &Path,
-    formats: Formats,
-) -> anyhow::Result<Vec<(PathBuf, Option<String>)>> {
-    let plan =
-        if plan.is_staged() { crate::race::replay_cached_owned(plan, store, scan)?.plan } else { plan };
-    let inputs = Inputs::new(&plan, scan);
-    let mut out = Vec::new();
-    if plan.variants.is_empty() {
-        let h = inputs.of(&plan, None, formats, Role::Folder { own_trials: true });
-        out.push((dir.to_path_buf(), memo::why_stale(dir, &h)));
-        return Ok(out);
-    }
-    let with_comparison = !plan.variant_subset;
-    let chosen = memo::read(dir).and_then(|m| m.chosen);
-    for v in &plan.variants {
-        let deferred = with_comparison && (plan.has_grid() || v.exploratory);
-        if deferred && chosen.as_deref() != Some(v.id.as_str()) {
-            continue;
-        }
-        let sub = plan.only_variant(&v.id);
-        let h = inputs.of(&sub, Some(&v.id), formats, Role::Folder { own_trials: false });
-        let d = dir.join(&v.id);
-        out.push((d.clone(), memo::why_stale(&d, &h)));
-    }
-    if with_comparison {
-        let h = inputs.of(&plan, None, formats, Role::Comparison);
-        out.push((dir.to_path_buf(), memo::why_stale(dir, &h)));
-    }
-    Ok(out)
-}
-
 /// What one folder of a report needs, decided before any trial is read.
 struct Need {
     /// Its memo, when intact: the folder is kept (without a comparison, skipped altogether).

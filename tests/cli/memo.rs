@@ -271,6 +271,8 @@ fn status_explain_says_which_report_folders_are_stale_and_why() {
     sb.qsweep(&["run", p, "--quiet"]).assert().success();
     let fresh = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain"]));
     assert!(fresh.contains("report folders: 4 of 4 up to date"), "{fresh}");
+    assert!(fresh.contains("cell intervals: 36 of 36 in the statistics' memo"), "{fresh}");
+    assert!(!fresh.contains("interval computed by the next report"), "{fresh}");
     std::fs::write(sb.path("reports/variants/fast-crisp/table3.md"), "edited").unwrap();
     sb.qsweep(&["run", p, "--quiet", "--no-report", "--variant", "short-episodes", "--set", "seeds=3"])
         .assert()
@@ -285,6 +287,11 @@ fn status_explain_says_which_report_folders_are_stale_and_why() {
         "trials cached for another plan change nothing: {said}"
     );
     let more = crate::helpers::stdout(&mut sb.qsweep(&["status", p, "--explain", "--set", "seeds=3"]));
+    // Only the cells that got a third seed need a new interval; the others' samples are as before.
+    let stale: Vec<&str> =
+        more.lines().filter(|l| l.starts_with("interval computed by the next report")).collect();
+    assert!(!stale.is_empty() && stale.iter().all(|l| l.contains(": short-episodes:")), "{more}");
+    assert!(more.contains(&format!("cell intervals: {} of 36", 36 - stale.len())), "{more}");
     assert!(
         more.contains("reports/variants/as-written is recomputed by the next report: its inputs changed"),
         "{more}"
