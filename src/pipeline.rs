@@ -10,6 +10,7 @@ use crate::cache::Key;
 use crate::exec::shard::{assign, key_owner, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
 use crate::plan::Plan;
+use crate::race::Replayed;
 use std::path::PathBuf;
 
 /// The cache's keys, after every damaged segment was moved to the quarantine folder.
@@ -101,6 +102,22 @@ pub fn run_trials(
     opts: &ExecOptions,
     reporter: &mut dyn crate::exec::Reporter,
 ) -> anyhow::Result<RunOutcome> {
+    Ok(run_trials_replayed(plan, store, scan, sel, opts, reporter)?.0)
+}
+
+/// [`run_trials`], and for a staged plan of which nothing was run (its first round found every
+/// trial cached), the plan as it replayed it against `scan`: exactly what a report of `scan`
+/// would replay, so `qsweep run` hands it on instead of replaying the plan a second time.
+/// `None` for a plan without stages (its report reads it as it is) or once something ran (the
+/// cache changed since `scan`).
+pub fn run_trials_replayed(
+    plan: &Plan,
+    store: &Store,
+    scan: &KeySet,
+    sel: Selection,
+    opts: &ExecOptions,
+    reporter: &mut dyn crate::exec::Reporter,
+) -> anyhow::Result<(RunOutcome, Option<Replayed>)> {
     let flush = |batch: &[crate::cache::TrialRecord]| {
         store.write_segment(batch)?;
         Ok(())
@@ -111,13 +128,15 @@ pub fn run_trials(
             c.reset_view(scan, sel.force);
         }
         let exec = execute(&jobs, opts, flush, reporter)?;
-        return Ok(RunOutcome { exec, cached: unique.len() - jobs.len() });
+        return Ok((RunOutcome { exec, cached: unique.len() - jobs.len() }, None));
     }
     let mut total = ExecReport::default();
     let mut rescanned;
     let mut scan = scan;
     // `--force` recomputes each trial once, not once per round.
     let mut forced: std::collections::HashSet<crate::cache::Key> = std::collections::HashSet::new();
+    // Whether this round replays against the caller's `scan` (nothing run yet).
+    let mut first = true;
     loop {
         let raced = crate::race::replay_cached(plan, store, scan)?;
         // This round's trials, of this task's shard (owned by key: see shard_owners).
@@ -128,7 +147,9 @@ pub fn run_trials(
             unique.iter().filter(|t| !scan.keys.contains(&t.key)).copied().collect()
         };
         if jobs.is_empty() {
-            return Ok(RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total });
+            let done = RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total };
+            drop((jobs, unique));
+            return Ok((done, first.then(|| raced.into_replayed())));
         }
         if let Some(c) = &opts.claims {
             c.reset_view(scan, sel.force);
@@ -139,10 +160,11 @@ pub fn run_trials(
         total.failed += exec.failed;
         total.interrupted |= exec.interrupted;
         if exec.interrupted || sel.shard.is_some() {
-            return Ok(RunOutcome { cached: unique.len() - jobs.len(), exec: total });
+            return Ok((RunOutcome { cached: unique.len() - jobs.len(), exec: total }, None));
         }
         rescanned = store.keys()?;
         scan = &rescanned;
+        first = false;
     }
 }
 

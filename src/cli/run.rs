@@ -58,7 +58,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();
     let reporter: &mut dyn Reporter = if a.quiet || a.json { &mut () } else { &mut bar };
-    let done = crate::pipeline::run_trials(&plan, &store, &scan.stored, sel, &opts, reporter)?;
+    let (done, replayed) =
+        crate::pipeline::run_trials_replayed(&plan, &store, &scan.stored, sel, &opts, reporter)?;
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
@@ -93,16 +94,26 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     if !a.no_report {
         // The trials just stored are in new segments: scan again (the old scan's keys freed first);
         // when nothing was stored the scan stands (a no-op run reads the keys once).
-        let scan = if report.executed == 0 && report.failed == 0 {
-            scan
-        } else {
-            drop(scan);
-            let scan = crate::pipeline::scan(&store)?;
-            warn_quarantined(&scan);
-            scan
-        };
         let ropts = a.report.options(&plan, false);
-        let outcome = crate::report::write(plan, &store, &scan.stored, &ropts)?;
+        let (scan, plan) = match (replayed, report.executed == 0 && report.failed == 0) {
+            // Nothing ran: the plan as the run replayed it against this scan is the report's.
+            (Some(replayed), true) => {
+                drop(plan);
+                (scan, replayed)
+            }
+            (None, true) => {
+                let plan = crate::race::Replayed::of(plan, &store, &scan.stored)?;
+                (scan, plan)
+            }
+            (replayed, false) => {
+                drop((scan, replayed));
+                let scan = crate::pipeline::scan(&store)?;
+                warn_quarantined(&scan);
+                let plan = crate::race::Replayed::of(plan, &store, &scan.stored)?;
+                (scan, plan)
+            }
+        };
+        let outcome = crate::report::write_replayed(plan, &store, &scan.stored, &ropts)?;
         if !(a.quiet || a.json) {
             print_report(&outcome, &ropts);
         }

@@ -199,6 +199,14 @@ impl Plan {
                 .filter(|e| e.variant.as_deref() == Some(id))
                 .cloned()
                 .collect(),
+            ..self.variant_header(id)
+        }
+    }
+
+    /// [`Plan::only_variant`] without its experiments: the header a report of the variant shows,
+    /// without copying its cells.
+    pub fn variant_header(&self, id: &str) -> Plan {
+        Plan {
             variants: self.variants.iter().filter(|v| v.id == id).cloned().collect(),
             warnings: Vec::new(),
             seeds: self

@@ -116,6 +116,41 @@ struct Heat {
     finished: bool,
 }
 
+/// A plan whose stages (races, fresh seeds) are replayed against one scan of the cache: what a
+/// report reads. Only [`Replayed::of`] and [`replay_cached_owned`]'s result make one, so a report
+/// handed one never replays it again (a no-op `qsweep run` replays its plan once, not twice).
+#[derive(Debug, Clone)]
+pub struct Replayed(Plan);
+
+impl Replayed {
+    /// `plan` replayed against what `store` holds of the trials `scan` lists; a plan without
+    /// stages comes back as it is (not copied).
+    pub fn of(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Self> {
+        if plan.is_staged() {
+            Ok(Self(replay_cached_owned(plan, store, scan)?.plan))
+        } else {
+            Ok(Self(plan))
+        }
+    }
+
+    /// The replayed plan.
+    pub fn plan(&self) -> &Plan {
+        &self.0
+    }
+
+    /// The replayed plan, given up.
+    pub fn into_plan(self) -> Plan {
+        self.0
+    }
+}
+
+impl Raced {
+    /// Its plan, as replayed against the scan it was replayed against.
+    pub fn into_replayed(self) -> Replayed {
+        Replayed(self.plan)
+    }
+}
+
 /// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
 /// the trials `scan` lists (the plan itself, with no race).
 pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {

@@ -37,4 +37,4 @@ pub mod table;
 pub use crate::atomic::write_atomic;
 pub use folder::{existing_trials, write_folder, ReportSummary};
 pub use model::{Outcomes, ReportData};
-pub use stage::{default_dir, staleness, write, ReportOptions, ReportOutcome};
+pub use stage::{default_dir, staleness, write, write_replayed, ReportOptions, ReportOutcome};
