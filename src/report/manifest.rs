@@ -79,7 +79,8 @@ impl Counts {
     fn of_experiments(exps: &[&Experiment], cached: &HashSet<Key>) -> Self {
         use rayon::slice::ParallelSliceMut;
         let cells: Vec<_> = exps.iter().flat_map(|e| &e.cells).collect();
-        let mut keys: Vec<Key> = cells.iter().flat_map(|c| c.trials.iter().chain(&c.fresh)).map(|t| t.key).collect();
+        let mut keys: Vec<Key> =
+            cells.iter().flat_map(|c| c.trials.iter().chain(&c.fresh)).map(|t| t.key).collect();
         keys.par_sort_unstable();
         keys.dedup();
         let mut h = blake3::Hasher::new();

@@ -451,7 +451,6 @@ pub fn write_replayed(
     Ok(out)
 }
 
-
 /// For each folder a report of `plan` into `dir` in `formats` would write (each variant's with a
 /// folder, the comparison's, the chosen reading's as the comparison's memo names it), why it would
 /// be recomputed, or `None` when its memo is intact: what `qsweep status --explain` says.
