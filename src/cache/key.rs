@@ -23,8 +23,17 @@ pub const ENGINE_VERSION: u32 = 2;
 pub const SEMANTICS_FINGERPRINT: (u32, &str) = (2, "1a055701a3123ccf");
 
 /// A trial's cache key (32 bytes of blake3).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub struct Key(pub [u8; 32]);
+
+/// A key is already a uniform hash: a hash map of keys (the cache's 100,000s) hashes its first
+/// 8 bytes, not all 32 with a length prefix. Equal keys hash equally, as `Eq` requires.
+impl std::hash::Hash for Key {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        let [a, b, c, d, e, f, g, h, ..] = self.0;
+        state.write_u64(u64::from_le_bytes([a, b, c, d, e, f, g, h]));
+    }
+}
 
 impl Key {
     /// The key of a resolved trial configuration and seed.
@@ -49,12 +58,21 @@ impl Key {
 
     /// Parse 64 hex characters.
     pub fn parse_hex(s: &str) -> Option<Self> {
-        if s.len() != 64 || !s.is_ascii() {
+        fn nibble(c: u8) -> Option<u8> {
+            match c {
+                b'0'..=b'9' => Some(c - b'0'),
+                b'a'..=b'f' => Some(c - b'a' + 10),
+                b'A'..=b'F' => Some(c - b'A' + 10),
+                _ => None,
+            }
+        }
+        let s = s.as_bytes();
+        if s.len() != 64 {
             return None;
         }
         let mut out = [0u8; 32];
-        for (i, byte) in out.iter_mut().enumerate() {
-            *byte = u8::from_str_radix(&s[2 * i..2 * i + 2], 16).ok()?;
+        for (byte, pair) in out.iter_mut().zip(s.chunks_exact(2)) {
+            *byte = (nibble(pair[0])? << 4) | nibble(pair[1])?;
         }
         Some(Self(out))
     }
@@ -94,6 +112,11 @@ mod tests {
         let k = Key::of(&cfg(), 3);
         assert_eq!(Key::parse_hex(&k.hex()), Some(k));
         assert_eq!(Key::parse_hex("zz"), None);
+        assert_eq!(Key::parse_hex(&k.hex().to_uppercase()), Some(k));
+        for bad in ["+", "g", " ", "é"] {
+            let text = format!("{bad}{}", &k.hex()[bad.len()..]);
+            assert_eq!(Key::parse_hex(&text), None, "{text}");
+        }
     }
 
     #[test]

@@ -29,7 +29,7 @@
 use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
 use crate::cache::store::{KeySet, Store};
 use crate::cache::{Key, ENGINE_VERSION};
-use crate::plan::{Plan, PlannedTrial};
+use crate::plan::{Plan, PlannedTrial, StageOutcome};
 use crate::sim::{Algorithm, Outcome};
 use std::collections::{HashMap, HashSet};
 
@@ -161,7 +161,7 @@ pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Resul
 /// readings holds no second copy of its 37,000 cells).
 pub fn replay_cached_owned(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
     replay_owned(plan, &scan.keys, &mut |wanted| {
-        Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
+        store.read_outcomes_as(scan, wanted, false, |k, s| (k, StageOutcome::from(&s.outcome)))
     })
 }
 
@@ -206,7 +206,7 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
         }
     }
     // Every heatmap advances as far as the cache allows; they share one read per pass.
-    let mut known: HashMap<Key, Outcome> = HashMap::new();
+    let mut known: HashMap<Key, StageOutcome> = HashMap::new();
     loop {
         let mut wanted = HashSet::new();
         for h in heats.iter().filter(|h| !h.finished) {
@@ -218,7 +218,9 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
             }
         }
         if !wanted.is_empty() {
-            known.extend(read(&wanted)?);
+            let got = read(&wanted)?;
+            known.reserve(got.len());
+            known.extend(got);
         }
         let mut advanced = false;
         for h in heats.iter_mut().filter(|h| !h.finished) {
@@ -234,7 +236,8 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
                 }
                 let cell = &e.cells[i];
                 let (limits, counting) = (&cell.config.limits, e.counting);
-                let outcomes: Option<Vec<&Outcome>> = cell.trials.iter().map(|t| known.get(&t.key)).collect();
+                let outcomes: Option<Vec<Outcome>> =
+                    cell.trials.iter().map(|t| known.get(&t.key).map(StageOutcome::outcome)).collect();
                 match outcomes {
                     Some(os) => samples.push(Some(Sample {
                         values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
@@ -405,9 +408,10 @@ mod tests {
         let mut per_round = Vec::new();
         loop {
             let cached: HashSet<Key> = store.keys().copied().collect();
-            let raced =
-                replay(plan, &cached, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect()))
-                    .unwrap();
+            let raced = replay(plan, &cached, &mut |w| {
+                Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+            })
+            .unwrap();
             let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
                 .cells
                 .iter()
@@ -460,7 +464,7 @@ mod tests {
     #[test]
     fn a_race_stops_where_the_cache_stops_and_plans_the_next_round() {
         let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        let none = replay(&p, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let none = replay(&p, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
         let h = &none.heats[0];
         assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.cached), (0, false, 3, 9, 0));
         assert!(none.plan.experiments[0]
@@ -470,7 +474,7 @@ mod tests {
         // Without a race the plan comes back untouched.
         let mut plain = p.clone();
         plain.experiments[0].race = None;
-        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
         assert!(r.heats.is_empty() && r.plan.experiments[0].cells.iter().all(|c| c.contender.is_none()));
     }
 }
