@@ -207,6 +207,11 @@ mod tests {
         assert!(again.plan.trials().all(|(_, _, t)| cached.contains(&t.key)));
         assert_eq!(again.plan.experiments[0].cells[best].fresh, cells[best].fresh);
         assert_eq!(done.trial_count(), 9 * 5 + 20);
+        // The replay taken back is the plan as planned: no fresh trials.
+        let back = crate::race::Unreplay::of(&p).expect("nothing to replace").undo(done.clone());
+        assert!(back.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
+        let trials = |q: &Plan| q.experiments[0].cells.iter().map(|c| c.trials.clone()).collect::<Vec<_>>();
+        assert_eq!(trials(&back), trials(&p));
     }
 
     #[test]

@@ -151,6 +151,42 @@ impl Raced {
     }
 }
 
+/// What a replay ([`replay_owned`]) changes in a plan, noted before it, so that the replayed plan
+/// can be taken back to the plan as planned instead of replaying a copy: a replay only appends
+/// trials to a raced cell, sets its `contender` and sets the fresh trials of a best cell.
+#[derive(Debug, Clone)]
+pub struct Unreplay(Vec<(usize, Vec<(usize, Option<bool>)>)>);
+
+impl Unreplay {
+    /// The staged experiments' cells of `plan` as they are: each cell's trial count and race
+    /// state. `None` when a cell already has fresh trials (a replay replaces them: not undone).
+    pub fn of(plan: &Plan) -> Option<Self> {
+        let mut out = Vec::new();
+        for (ei, e) in plan.experiments.iter().enumerate() {
+            if e.race.is_none() && e.fresh.is_none() {
+                continue;
+            }
+            if e.cells.iter().any(|c| !c.fresh.is_empty()) {
+                return None;
+            }
+            out.push((ei, e.cells.iter().map(|c| (c.trials.len(), c.contender)).collect()));
+        }
+        Some(Self(out))
+    }
+
+    /// `replayed`, the plan this was noted of after a replay, as it was before.
+    pub fn undo(self, mut replayed: Plan) -> Plan {
+        for (ei, cells) in self.0 {
+            for (c, (n, contender)) in replayed.experiments[ei].cells.iter_mut().zip(cells) {
+                c.trials.truncate(n);
+                c.contender = contender;
+                c.fresh.clear();
+            }
+        }
+        replayed
+    }
+}
+
 /// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
 /// the trials `scan` lists (the plan itself, with no race).
 pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
@@ -448,6 +484,31 @@ mod tests {
         let h = &raced.heats[0];
         assert_eq!((h.rounds_done, h.rounds_max, h.finished, h.contenders), (4, 4, true, 2));
         assert_eq!((h.trials, h.cached, h.without_race), (19, 19, 24));
+    }
+
+    /// Each cell's trials, race state and fresh trials.
+    type CellState = (Vec<PlannedTrial>, Option<bool>, Vec<PlannedTrial>);
+
+    fn cells(p: &Plan) -> Vec<CellState> {
+        p.experiments
+            .iter()
+            .flat_map(|e| &e.cells)
+            .map(|c| (c.trials.clone(), c.contender, c.fresh.clone()))
+            .collect()
+    }
+
+    #[test]
+    fn an_undone_replay_is_the_plan_as_planned() {
+        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
+        let (raced, _) = race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
+        assert_ne!(cells(&raced.plan), cells(&p), "the replay added rounds and decided the race");
+        let undo = Unreplay::of(&p).expect("nothing to replace");
+        assert_eq!(cells(&undo.undo(raced.plan)), cells(&p));
+        // A plan whose cells already have fresh trials is not undone (a replay replaces them).
+        let mut with_fresh = p.clone();
+        with_fresh.experiments[0].fresh = Some(vec![100]);
+        with_fresh.experiments[0].cells[0].fresh = with_fresh.experiments[0].cells[1].trials.clone();
+        assert!(Unreplay::of(&with_fresh).is_none());
     }
 
     #[test]

@@ -65,13 +65,23 @@ fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
         let sel = Selection { shard: None, force: false };
         let opts = ExecOptions { jobs: 2, ..Default::default() };
         let first = scan(&store).unwrap().stored;
-        let (done, handed) = run_trials_replayed(&plan, &store, &first, sel, &opts, &mut ()).unwrap();
-        assert!(done.exec.executed > 0 && handed.is_none(), "{fixture}: trials ran, nothing is handed on");
+        let (done, handed) = run_trials_replayed(plan.clone(), &store, &first, sel, &opts, &mut ()).unwrap();
+        let qsweep::pipeline::AfterRun::Planned(back) = handed else {
+            panic!("{fixture}: trials ran, nothing is handed on")
+        };
+        // Each round replayed the plan in place and took it back: the plan as planned.
+        assert_eq!(replayed_cells(&back), replayed_cells(&plan), "{fixture}");
         let scanned = scan(&store).unwrap().stored;
-        let (again, handed) = run_trials_replayed(&plan, &store, &scanned, sel, &opts, &mut ()).unwrap();
+        let (again, handed) =
+            run_trials_replayed(plan.clone(), &store, &scanned, sel, &opts, &mut ()).unwrap();
         assert_eq!(again.exec.executed, 0, "{fixture}");
-        let handed = handed.expect("nothing ran: the replayed plan is handed on");
+        let qsweep::pipeline::AfterRun::Replayed(handed) = handed else {
+            panic!("{fixture}: nothing ran: the replayed plan is handed on")
+        };
         let own = qsweep::race::Replayed::of(plan.clone(), &store, &scanned).unwrap();
+        // Every trial of the replayed plan ran in the first call, each once.
+        let distinct: std::collections::HashSet<_> = own.plan().trials().map(|(_, _, t)| t.key).collect();
+        assert_eq!(done.exec.executed, distinct.len(), "{fixture}");
         assert_eq!(replayed_cells(handed.plan()), replayed_cells(own.plan()), "{fixture}");
         // It is the staged plan, replayed: the fresh seeds or the later rounds are in it.
         assert!(handed.plan().trial_count() > plan.trial_count(), "{fixture}");
