@@ -154,7 +154,7 @@ pub fn run_trials_replayed(
     loop {
         let (raced, kept) = match Unreplay::of(&plan).filter(|_| sel.shard.is_none()) {
             Some(undo) => (crate::race::replay_cached_owned(plan, store, scan)?, Kept::Undo(undo)),
-            None => (crate::race::replay_cached(&plan, store, scan)?, Kept::Planned(plan)),
+            None => (crate::race::replay_cached(&plan, store, scan)?, Kept::Planned(Box::new(plan))),
         };
         let as_planned = match &kept {
             Kept::Planned(p) => p,
@@ -202,7 +202,7 @@ pub fn run_trials_replayed(
 /// itself (its copy was replayed).
 enum Kept {
     Undo(Unreplay),
-    Planned(Plan),
+    Planned(Box<Plan>),
 }
 
 impl Kept {
@@ -210,7 +210,7 @@ impl Kept {
     fn back(self, raced: crate::race::Raced) -> Plan {
         match self {
             Self::Undo(u) => u.undo(raced.plan),
-            Self::Planned(p) => p,
+            Self::Planned(p) => *p,
         }
     }
 }

@@ -155,7 +155,10 @@ impl Raced {
 /// can be taken back to the plan as planned instead of replaying a copy: a replay only appends
 /// trials to a raced cell, sets its `contender` and sets the fresh trials of a best cell.
 #[derive(Debug, Clone)]
-pub struct Unreplay(Vec<(usize, Vec<(usize, Option<bool>)>)>);
+pub struct Unreplay(Vec<(usize, Vec<CellAsPlanned>)>);
+
+/// A staged cell as planned: its trial count and race state.
+type CellAsPlanned = (usize, Option<bool>);
 
 impl Unreplay {
     /// The staged experiments' cells of `plan` as they are: each cell's trial count and race
