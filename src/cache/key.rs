@@ -58,23 +58,35 @@ impl Key {
 
     /// Parse 64 hex characters.
     pub fn parse_hex(s: &str) -> Option<Self> {
-        fn nibble(c: u8) -> Option<u8> {
-            match c {
-                b'0'..=b'9' => Some(c - b'0'),
-                b'a'..=b'f' => Some(c - b'a' + 10),
-                b'A'..=b'F' => Some(c - b'A' + 10),
-                _ => None,
+        // Each byte's value as a hex digit, 0xff for any other byte (a table: every scan of the
+        // cache parses each stored key).
+        const DIGIT: [u8; 256] = {
+            let mut t = [0xff; 256];
+            let mut i = 0;
+            while i < 10 {
+                t[b'0' as usize + i] = i as u8;
+                i += 1;
             }
-        }
+            let mut i = 0;
+            while i < 6 {
+                t[b'a' as usize + i] = 10 + i as u8;
+                t[b'A' as usize + i] = 10 + i as u8;
+                i += 1;
+            }
+            t
+        };
         let s = s.as_bytes();
         if s.len() != 64 {
             return None;
         }
         let mut out = [0u8; 32];
+        let mut bad = 0u8;
         for (byte, pair) in out.iter_mut().zip(s.chunks_exact(2)) {
-            *byte = (nibble(pair[0])? << 4) | nibble(pair[1])?;
+            let (hi, lo) = (DIGIT[usize::from(pair[0])], DIGIT[usize::from(pair[1])]);
+            bad |= (hi | lo) & 0xf0;
+            *byte = (hi << 4) | lo;
         }
-        Some(Self(out))
+        (bad == 0).then_some(Self(out))
     }
 }
 
