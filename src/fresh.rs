@@ -14,7 +14,7 @@
 
 use crate::analysis::{best_cell, episodes_counted, mean, Candidate};
 use crate::cache::{Key, ENGINE_VERSION};
-use crate::plan::{Experiment, Plan, PlannedTrial, ReadOutcomes};
+use crate::plan::{Experiment, Plan, PlannedTrial, ReadOutcomes, StageOutcome};
 use crate::sim::{Algorithm, Outcome};
 use std::collections::{HashMap, HashSet};
 
@@ -31,7 +31,7 @@ seeds, biased low by the choice).";
 pub fn plan_fresh(
     plan: &mut Plan,
     cached: &HashSet<Key>,
-    known: &mut HashMap<Key, Outcome>,
+    known: &mut HashMap<Key, StageOutcome>,
     read: &mut ReadOutcomes,
 ) -> anyhow::Result<()> {
     let mut ready: Vec<(usize, Algorithm)> = Vec::new();
@@ -56,7 +56,9 @@ pub fn plan_fresh(
         .filter(|k| !known.contains_key(k))
         .collect();
     if !wanted.is_empty() {
-        known.extend(read(&wanted)?);
+        let got = read(&wanted)?;
+        known.reserve(got.len());
+        known.extend(got);
     }
     for (ei, a) in ready {
         let e = &mut plan.experiments[ei];
@@ -80,12 +82,13 @@ fn candidates(e: &Experiment, algorithm: Algorithm) -> impl Iterator<Item = usiz
 
 /// The best cell of `algorithm` by Table III's rule, from the outcomes of its candidates' trials
 /// (the report's choice: the same counting, the same mean, the same order).
-fn best_of(e: &Experiment, algorithm: Algorithm, known: &HashMap<Key, Outcome>) -> Option<usize> {
+fn best_of(e: &Experiment, algorithm: Algorithm, known: &HashMap<Key, StageOutcome>) -> Option<usize> {
     let cands: Vec<Candidate> = candidates(e, algorithm)
         .map(|i| {
             let cell = &e.cells[i];
             let limits = &cell.config.limits;
-            let outcomes: Vec<&Outcome> = cell.trials.iter().filter_map(|t| known.get(&t.key)).collect();
+            let outcomes: Vec<Outcome> =
+                cell.trials.iter().filter_map(|t| known.get(&t.key).map(StageOutcome::outcome)).collect();
             let values: Vec<f64> =
                 outcomes.iter().map(|o| f64::from(episodes_counted(o, limits, e.counting))).collect();
             Candidate {
@@ -139,8 +142,10 @@ mod tests {
         let mut stages = 0;
         loop {
             let cached: HashSet<Key> = store.keys().copied().collect();
-            let out =
-                replay(p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect())).unwrap();
+            let out = replay(p, &cached, &mut |w| {
+                Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+            })
+            .unwrap();
             let missing: Vec<(usize, u64, Key)> = out.plan.experiments[0]
                 .cells
                 .iter()
@@ -162,13 +167,13 @@ mod tests {
     fn fresh_seeds_go_to_the_best_cell_once_the_grid_is_stored() {
         let p = plan();
         // Nothing stored: nothing is decided, no fresh trial is planned.
-        let none = replay(&p, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let none = replay(&p, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
         assert!(none.plan.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
         // All but one trial stored: still undecided.
         let keys: Vec<Key> = p.trials().map(|(_, _, t)| t.key).collect();
         let almost: HashSet<Key> = keys[1..].iter().copied().collect();
-        let read = |w: &HashSet<Key>| -> anyhow::Result<HashMap<Key, Outcome>> {
-            Ok(w.iter().map(|k| (*k, outcome(20))).collect())
+        let read = |w: &HashSet<Key>| -> anyhow::Result<Vec<(Key, StageOutcome)>> {
+            Ok(w.iter().map(|k| (*k, StageOutcome::from(&outcome(20)))).collect())
         };
         let part = replay(&p, &almost, &mut |w| read(w)).unwrap();
         assert!(part.plan.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
@@ -197,10 +202,16 @@ mod tests {
         // the fresh trials.
         let cached: HashSet<Key> = store.keys().copied().collect();
         let again =
-            replay(&p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect())).unwrap();
+            replay(&p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect()))
+                .unwrap();
         assert!(again.plan.trials().all(|(_, _, t)| cached.contains(&t.key)));
         assert_eq!(again.plan.experiments[0].cells[best].fresh, cells[best].fresh);
         assert_eq!(done.trial_count(), 9 * 5 + 20);
+        // The replay taken back is the plan as planned: no fresh trials.
+        let back = crate::race::Unreplay::of(&p).expect("nothing to replace").undo(done.clone());
+        assert!(back.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
+        let trials = |q: &Plan| q.experiments[0].cells.iter().map(|c| c.trials.clone()).collect::<Vec<_>>();
+        assert_eq!(trials(&back), trials(&p));
     }
 
     #[test]

@@ -10,6 +10,7 @@ use crate::cache::Key;
 use crate::exec::shard::{assign, key_owner, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
 use crate::plan::Plan;
+use crate::race::{Replayed, Unreplay};
 use std::path::PathBuf;
 
 /// The cache's keys, after every damaged segment was moved to the quarantine folder.
@@ -101,48 +102,116 @@ pub fn run_trials(
     opts: &ExecOptions,
     reporter: &mut dyn crate::exec::Reporter,
 ) -> anyhow::Result<RunOutcome> {
+    Ok(run_trials_replayed(plan.clone(), store, scan, sel, opts, reporter)?.0)
+}
+
+/// The plan after [`run_trials_replayed`].
+#[derive(Debug)]
+pub enum AfterRun {
+    /// A staged plan of which nothing ran (its first round found every trial cached), as it
+    /// was replayed against the caller's scan: exactly what a report of that scan would replay.
+    Replayed(Replayed),
+    /// The plan as planned: it has no stages (its report reads it as it is), or something ran
+    /// (the cache changed since the caller's scan).
+    Planned(Plan),
+}
+
+/// [`run_trials`] of a plan the caller gives up, and the plan back ([`AfterRun`]): `qsweep run`
+/// hands a replayed plan on to its report instead of replaying it a second time. Each round
+/// replays the plan in place and takes the replay back ([`crate::race::Unreplay`]) when another
+/// round follows, so no second copy of its cells is made (under a shard, whose owners are
+/// decided on the plan as planned, a copy is replayed).
+pub fn run_trials_replayed(
+    plan: Plan,
+    store: &Store,
+    scan: &KeySet,
+    sel: Selection,
+    opts: &ExecOptions,
+    reporter: &mut dyn crate::exec::Reporter,
+) -> anyhow::Result<(RunOutcome, AfterRun)> {
     let flush = |batch: &[crate::cache::TrialRecord]| {
         store.write_segment(batch)?;
         Ok(())
     };
     if !plan.is_staged() {
-        let (unique, jobs) = select(plan, scan, sel);
+        let (unique, jobs) = select(&plan, scan, sel);
         if let Some(c) = &opts.claims {
             c.reset_view(scan, sel.force);
         }
         let exec = execute(&jobs, opts, flush, reporter)?;
-        return Ok(RunOutcome { exec, cached: unique.len() - jobs.len() });
+        let done = RunOutcome { exec, cached: unique.len() - jobs.len() };
+        drop((jobs, unique));
+        return Ok((done, AfterRun::Planned(plan)));
     }
     let mut total = ExecReport::default();
     let mut rescanned;
     let mut scan = scan;
     // `--force` recomputes each trial once, not once per round.
     let mut forced: std::collections::HashSet<crate::cache::Key> = std::collections::HashSet::new();
+    // Whether this round replays against the caller's `scan` (nothing run yet).
+    let mut first = true;
+    let mut plan = plan;
     loop {
-        let raced = crate::race::replay_cached(plan, store, scan)?;
+        let (raced, kept) = match Unreplay::of(&plan).filter(|_| sel.shard.is_none()) {
+            Some(undo) => (crate::race::replay_cached_owned(plan, store, scan)?, Kept::Undo(undo)),
+            None => (crate::race::replay_cached(&plan, store, scan)?, Kept::Planned(Box::new(plan))),
+        };
+        let as_planned = match &kept {
+            Kept::Planned(p) => p,
+            // Only without a shard, where the owners are not asked for.
+            Kept::Undo(_) => &raced.plan,
+        };
         // This round's trials, of this task's shard (owned by key: see shard_owners).
-        let unique = in_shard(plan, crate::exec::jobs(&raced.plan), sel.shard);
+        let unique = in_shard(as_planned, crate::exec::jobs(&raced.plan), sel.shard);
         let jobs: Vec<Job> = if sel.force {
             unique.iter().filter(|t| forced.insert(t.key)).copied().collect()
         } else {
             unique.iter().filter(|t| !scan.keys.contains(&t.key)).copied().collect()
         };
         if jobs.is_empty() {
-            return Ok(RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total });
+            let done = RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total };
+            drop((jobs, unique));
+            let after = if first {
+                AfterRun::Replayed(raced.into_replayed())
+            } else {
+                AfterRun::Planned(kept.back(raced))
+            };
+            return Ok((done, after));
         }
         if let Some(c) = &opts.claims {
             c.reset_view(scan, sel.force);
         }
         let exec = execute(&jobs, opts, flush, reporter)?;
+        let cached = unique.len() - jobs.len();
+        drop((jobs, unique));
         total.executed += exec.executed;
         total.elsewhere += exec.elsewhere;
         total.failed += exec.failed;
         total.interrupted |= exec.interrupted;
+        plan = kept.back(raced);
         if exec.interrupted || sel.shard.is_some() {
-            return Ok(RunOutcome { cached: unique.len() - jobs.len(), exec: total });
+            return Ok((RunOutcome { cached, exec: total }, AfterRun::Planned(plan)));
         }
         rescanned = store.keys()?;
         scan = &rescanned;
+        first = false;
+    }
+}
+
+/// How a round keeps the plan as planned: a note to take its in-place replay back, or the plan
+/// itself (its copy was replayed).
+enum Kept {
+    Undo(Unreplay),
+    Planned(Box<Plan>),
+}
+
+impl Kept {
+    /// The plan as planned, given the round's replay.
+    fn back(self, raced: crate::race::Raced) -> Plan {
+        match self {
+            Self::Undo(u) => u.undo(raced.plan),
+            Self::Planned(p) => *p,
+        }
     }
 }
 

@@ -93,23 +93,24 @@ impl std::fmt::Display for Reason {
 
 /// The status of `plan` against `store` (`None`: no cache yet, every trial missing); with
 /// `explain`, also why each missing cell is missing (this reads every cached row).
-pub fn status(plan: &Plan, store: Option<&Store>, explain: bool) -> anyhow::Result<Status> {
+pub fn status(plan: Plan, store: Option<&Store>, explain: bool) -> anyhow::Result<Status> {
     let scan = match store {
         Some(store) => store.keys()?,
         None => KeySet::default(),
     };
     let cached = &scan.keys;
     // A race's trials so far come from the cached outcomes of its earlier rounds.
-    // So do the fresh seeds of the best cells the grid has decided.
-    let raced = match store {
-        Some(store) if plan.is_staged() => Some(crate::race::replay_cached(plan, store, &scan)?),
-        _ if plan.is_staged() => Some(crate::race::replay(plan, cached, &mut |_| Ok(Default::default()))?),
-        _ => None,
-    };
-    let (plan, heats) = match raced {
-        Some(r) if plan.has_race() => (r.plan, Some(r.heats)),
-        Some(r) => (r.plan, None),
-        None => (plan.clone(), None),
+    // So do the fresh seeds of the best cells the grid has decided. The plan is replayed in
+    // place (no second copy of its cells).
+    let (plan, heats) = if plan.is_staged() {
+        let has_race = plan.has_race();
+        let r = match store {
+            Some(store) => crate::race::replay_cached_owned(plan, store, &scan)?,
+            None => crate::race::replay_owned(plan, cached, &mut |_| Ok(Vec::new()))?,
+        };
+        (r.plan, has_race.then_some(r.heats))
+    } else {
+        (plan, None)
     };
     let experiments = plan
         .experiments

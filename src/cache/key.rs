@@ -23,8 +23,17 @@ pub const ENGINE_VERSION: u32 = 2;
 pub const SEMANTICS_FINGERPRINT: (u32, &str) = (2, "1a055701a3123ccf");
 
 /// A trial's cache key (32 bytes of blake3).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub struct Key(pub [u8; 32]);
+
+/// A key is already a uniform hash: a hash map of keys (the cache's 100,000s) hashes its first
+/// 8 bytes, not all 32 with a length prefix. Equal keys hash equally, as `Eq` requires.
+impl std::hash::Hash for Key {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        let [a, b, c, d, e, f, g, h, ..] = self.0;
+        state.write_u64(u64::from_le_bytes([a, b, c, d, e, f, g, h]));
+    }
+}
 
 impl Key {
     /// The key of a resolved trial configuration and seed.
@@ -49,14 +58,35 @@ impl Key {
 
     /// Parse 64 hex characters.
     pub fn parse_hex(s: &str) -> Option<Self> {
-        if s.len() != 64 || !s.is_ascii() {
+        // Each byte's value as a hex digit, 0xff for any other byte (a table: every scan of the
+        // cache parses each stored key).
+        const DIGIT: [u8; 256] = {
+            let mut t = [0xff; 256];
+            let mut i = 0;
+            while i < 10 {
+                t[b'0' as usize + i] = i as u8;
+                i += 1;
+            }
+            let mut i = 0;
+            while i < 6 {
+                t[b'a' as usize + i] = 10 + i as u8;
+                t[b'A' as usize + i] = 10 + i as u8;
+                i += 1;
+            }
+            t
+        };
+        let s = s.as_bytes();
+        if s.len() != 64 {
             return None;
         }
         let mut out = [0u8; 32];
-        for (i, byte) in out.iter_mut().enumerate() {
-            *byte = u8::from_str_radix(&s[2 * i..2 * i + 2], 16).ok()?;
+        let mut bad = 0u8;
+        for (byte, pair) in out.iter_mut().zip(s.chunks_exact(2)) {
+            let (hi, lo) = (DIGIT[usize::from(pair[0])], DIGIT[usize::from(pair[1])]);
+            bad |= (hi | lo) & 0xf0;
+            *byte = (hi << 4) | lo;
         }
-        Some(Self(out))
+        (bad == 0).then_some(Self(out))
     }
 }
 
@@ -94,6 +124,11 @@ mod tests {
         let k = Key::of(&cfg(), 3);
         assert_eq!(Key::parse_hex(&k.hex()), Some(k));
         assert_eq!(Key::parse_hex("zz"), None);
+        assert_eq!(Key::parse_hex(&k.hex().to_uppercase()), Some(k));
+        for bad in ["+", "g", " ", "é"] {
+            let text = format!("{bad}{}", &k.hex()[bad.len()..]);
+            assert_eq!(Key::parse_hex(&text), None, "{text}");
+        }
     }
 
     #[test]

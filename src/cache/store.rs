@@ -122,6 +122,18 @@ impl Store {
         wanted: &HashSet<Key>,
         lengths: bool,
     ) -> anyhow::Result<std::collections::HashMap<Key, StoredOutcome>> {
+        Ok(self.read_outcomes_as(scan, wanted, lengths, |k, s| (k, s))?.into_iter().collect())
+    }
+
+    /// [`Store::read_outcomes`], each outcome mapped by `f` as its segment is decoded (a caller
+    /// that keeps a little of each holds no full outcome of every key at once), in segment order.
+    pub fn read_outcomes_as<T: Send>(
+        &self,
+        scan: &KeySet,
+        wanted: &HashSet<Key>,
+        lengths: bool,
+        f: impl Fn(Key, StoredOutcome) -> T + Sync,
+    ) -> anyhow::Result<Vec<T>> {
         use rayon::prelude::*;
         let mut taken = HashSet::new();
         let mut work: Vec<(&Path, Vec<usize>)> = Vec::new();
@@ -132,14 +144,19 @@ impl Store {
                 work.push((path, rows));
             }
         }
-        let parts: Vec<Vec<(Key, StoredOutcome)>> = work
+        let parts: Vec<Vec<T>> = work
             .par_iter()
             .map(|(path, rows)| {
                 read_outcome_rows(path, rows, lengths)
+                    .map(|got| got.into_iter().map(|(k, s)| f(k, s)).collect())
                     .map_err(|e| e.context(format!("cannot read cache segment {}", path.display())))
             })
             .collect::<anyhow::Result<_>>()?;
-        Ok(parts.into_iter().flatten().collect())
+        let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+        for p in parts {
+            out.extend(p);
+        }
+        Ok(out)
     }
 
     /// The stored records whose key is in `wanted`, one per key (duplicates dropped), in segment

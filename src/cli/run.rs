@@ -2,6 +2,7 @@
 
 use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
 use crate::exec::{ExecOptions, Reporter, INTERRUPTED};
+use crate::pipeline::AfterRun;
 use clap::Args;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -58,13 +59,15 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();
     let reporter: &mut dyn Reporter = if a.quiet || a.json { &mut () } else { &mut bar };
-    let done = crate::pipeline::run_trials(&plan, &store, &scan.stored, sel, &opts, reporter)?;
+    let (name, ropts) = (plan.name.clone(), a.report.options(&plan, false));
+    let (done, after) =
+        crate::pipeline::run_trials_replayed(plan, &store, &scan.stored, sel, &opts, reporter)?;
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
         let v = crate::formats::RunSummary {
             format_version: crate::formats::RunSummary::FORMAT_VERSION,
-            pipeline: plan.name.clone(),
+            pipeline: name,
             executed: report.executed,
             cached: done.cached,
             elsewhere: report.elsewhere,
@@ -93,16 +96,23 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     if !a.no_report {
         // The trials just stored are in new segments: scan again (the old scan's keys freed first);
         // when nothing was stored the scan stands (a no-op run reads the keys once).
-        let scan = if report.executed == 0 && report.failed == 0 {
-            scan
-        } else {
-            drop(scan);
-            let scan = crate::pipeline::scan(&store)?;
-            warn_quarantined(&scan);
-            scan
+        let (scan, plan) = match after {
+            // Nothing ran: the plan as the run replayed it against this scan is the report's.
+            AfterRun::Replayed(replayed) => (scan, replayed),
+            AfterRun::Planned(plan) => {
+                let scan = if report.executed == 0 && report.failed == 0 {
+                    scan
+                } else {
+                    drop(scan);
+                    let scan = crate::pipeline::scan(&store)?;
+                    warn_quarantined(&scan);
+                    scan
+                };
+                let plan = crate::race::Replayed::of(plan, &store, &scan.stored)?;
+                (scan, plan)
+            }
         };
-        let ropts = a.report.options(&plan, false);
-        let outcome = crate::report::write(plan, &store, &scan.stored, &ropts)?;
+        let outcome = crate::report::write_replayed(plan, &store, &scan.stored, &ropts)?;
         if !(a.quiet || a.json) {
             print_report(&outcome, &ropts);
         }

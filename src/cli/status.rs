@@ -29,7 +29,9 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     // A dry run before the first run stays useful: a missing cache means every trial is missing,
     // and status (read-only) does not create it.
     let store = a.pipeline.cache.existing_store()?;
-    let s = crate::status::status(&plan, store.as_ref(), a.explain)?;
+    // `--explain`'s report folders are judged from the plan as planned (replayed by the report).
+    let planned = (a.explain && !a.json && store.is_some()).then(|| plan.clone());
+    let s = crate::status::status(plan, store.as_ref(), a.explain)?;
     let v = StatusReport::of(&s);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -75,7 +77,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     if let Some(cells) = &s.explanation {
         print_explanation(&s.plan, cells);
     }
-    if let (true, false, Some(store)) = (a.explain, a.json, &store) {
+    if let (Some(plan), Some(store)) = (planned, &store) {
         let dir = crate::report::default_dir(&plan);
         let keys = store.keys()?;
         let formats = crate::report::formats::Formats::default();

@@ -1,7 +1,8 @@
 //! Expanding a typed pipeline into a [`Plan`]: layering settings, building each cell's
 //! `TrialConfig`, validating it, and keying its trials.
 
-use super::resolved::{Cell, Experiment, Plan, PlannedTrial, Variant};
+use super::keys::KeyMemo;
+use super::resolved::{Cell, Experiment, Plan, Variant};
 use crate::cache::Key;
 use crate::error::user_error;
 use crate::sim::config::{default_ranges, default_success, Success, TrialConfig};
@@ -214,8 +215,10 @@ pub fn plan_variants(
     let mut variants = Vec::new();
     let mut warnings = Vec::new();
     if chosen.is_empty() {
-        expand_all(spec, &origin, None, &mut experiments)?;
+        expand_all(spec, &origin, None, &mut experiments, &KeyMemo::default())?;
     } else {
+        // The readings share most of their cells: each distinct cell's keys are computed once.
+        let memo = KeyMemo::shared();
         // The pipeline as written, to tell which variants change nothing. A variant without a
         // `set` is exactly that, so it is planned first and its keys reused (no second plan).
         let mut chosen = chosen;
@@ -228,7 +231,7 @@ pub fn plan_variants(
         for v in &chosen {
             if v.set.is_empty() && written.is_none() {
                 let mut mine = Vec::new();
-                expand_all(&v.spec, &format!("{origin} (variant {})", v.id), Some(&v.id), &mut mine)?;
+                expand_all(&v.spec, &format!("{origin} (variant {})", v.id), Some(&v.id), &mut mine, &memo)?;
                 written = Some(keys_of(&mine));
                 let at = loaded.variants.iter().position(|x| x.id == v.id).unwrap_or(0);
                 by_variant.push((at, mine));
@@ -238,7 +241,7 @@ pub fn plan_variants(
             Some(w) => w,
             None => {
                 let mut as_written = Vec::new();
-                expand_all(spec, &origin, None, &mut as_written)?;
+                expand_all(spec, &origin, None, &mut as_written, &memo)?;
                 keys_of(&as_written)
             }
         };
@@ -250,7 +253,7 @@ pub fn plan_variants(
             if let Some(i) = by_variant.iter().position(|(a, _)| *a == at) {
                 experiments.extend(by_variant.swap_remove(i).1);
             } else {
-                expand_all(&v.spec, &origin, Some(&v.id), &mut experiments)?;
+                expand_all(&v.spec, &origin, Some(&v.id), &mut experiments, &memo)?;
             }
             let changed = experiments[first..]
                 .iter()
@@ -303,17 +306,18 @@ fn expand_all(
     origin: &str,
     variant: Option<&str>,
     out: &mut Vec<Experiment>,
+    memo: &KeyMemo,
 ) -> anyhow::Result<()> {
     let first = out.len();
     let s = &spec.systems;
     if let Some(sys) = &s.ball_beam {
-        expand(spec, sys, origin, out)?;
+        expand(spec, sys, origin, out, memo)?;
     }
     if let Some(sys) = &s.cart_pole {
-        expand(spec, sys, origin, out)?;
+        expand(spec, sys, origin, out, memo)?;
     }
     if let Some(sys) = &s.mountain_car {
-        expand(spec, sys, origin, out)?;
+        expand(spec, sys, origin, out, memo)?;
     }
     for e in &mut out[first..] {
         e.variant = variant.map(str::to_string);
@@ -379,6 +383,7 @@ fn expand<M: Resolve>(
     sys: &SystemSpec<M>,
     origin: &str,
     out: &mut Vec<Experiment>,
+    memo: &KeyMemo,
 ) -> anyhow::Result<()> {
     let system = M::SYSTEM;
     let mut ranges = default_ranges(system);
@@ -392,7 +397,7 @@ fn expand<M: Resolve>(
             ranges[*j] = *r;
         }
         let success = M::success(e.success.as_ref().or(sys.success.as_ref()));
-        out.push(expand_experiment(spec, sys, e, &env, &ranges, &success, origin, idx)?);
+        out.push(expand_experiment(spec, sys, e, &env, &ranges, &success, (origin, idx), memo)?);
     }
     Ok(())
 }
@@ -405,8 +410,8 @@ fn expand_experiment<M: Resolve>(
     env: &EnvParams,
     ranges: &[[f64; 2]],
     success: &Success,
-    origin: &str,
-    idx: usize,
+    (origin, idx): (&str, usize),
+    memo: &KeyMemo,
 ) -> anyhow::Result<Experiment> {
     let system = M::SYSTEM;
     let mut fixed = e.fixed.clone();
@@ -474,15 +479,7 @@ fn expand_experiment<M: Resolve>(
             c.validate().map_err(fail)?;
             // One canonical encoding per cell, hashed once per seed (planning many variants stays fast).
             let canonical = crate::cache::key::canonical_config(&c);
-            let trials = spec
-                .seeds
-                .0
-                .iter()
-                .map(|&seed| PlannedTrial {
-                    seed,
-                    key: Key::from_canonical(&canonical, seed, crate::cache::ENGINE_VERSION),
-                })
-                .collect();
+            let trials = memo.trials(&canonical, &spec.seeds.0);
             Ok(Cell { algorithm, coords, config: c, trials, contender: None, fresh: Vec::new() })
         })
         .collect();

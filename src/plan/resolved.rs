@@ -8,12 +8,55 @@ use crate::spec::{Axis, RaceSpec, Reference, Target};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-/// Fetches the stored outcomes of some trial keys (all of them present in the cache): how a
-/// plan's stages (a race's rounds, the fresh seeds) read what earlier stages produced.
-pub type ReadOutcomes<'a> = dyn FnMut(
-        &std::collections::HashSet<Key>,
-    ) -> anyhow::Result<std::collections::HashMap<Key, crate::sim::Outcome>>
-    + 'a;
+/// Fetches the stored outcomes of some trial keys (all of them present in the cache), one per
+/// key: how a plan's stages (a race's rounds, the fresh seeds) read what earlier stages produced.
+pub type ReadOutcomes<'a> =
+    dyn FnMut(&std::collections::HashSet<Key>) -> anyhow::Result<Vec<(Key, StageOutcome)>> + 'a;
+
+/// What a plan's stages read of a stored outcome: all of it but the episode lengths and a
+/// diverged trial's message, which no decision reads. 24 bytes, so a replay of the paper's 100,000
+/// trials holds them in a few MB.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StageOutcome {
+    /// Whether the learning goal was reached.
+    pub converged: bool,
+    /// Episodes up to and including the one that reached the goal.
+    pub episodes_to_goal: Option<u32>,
+    /// Episodes run.
+    pub episodes: u32,
+    /// Steps run, over all episodes.
+    pub total_steps: u64,
+    /// Why the trial stopped.
+    pub stop: crate::sim::StopReason,
+}
+
+impl From<&crate::sim::Outcome> for StageOutcome {
+    fn from(o: &crate::sim::Outcome) -> Self {
+        Self {
+            converged: o.converged,
+            episodes_to_goal: o.episodes_to_goal,
+            episodes: o.episodes,
+            total_steps: o.total_steps,
+            stop: o.stop,
+        }
+    }
+}
+
+impl StageOutcome {
+    /// As an outcome for the shared statistics ([`crate::analysis::episodes_counted`]), without
+    /// the episode lengths and failure message it does not keep (nothing allocated).
+    pub fn outcome(&self) -> crate::sim::Outcome {
+        crate::sim::Outcome {
+            converged: self.converged,
+            episodes_to_goal: self.episodes_to_goal,
+            episodes: self.episodes,
+            total_steps: self.total_steps,
+            stop: self.stop,
+            failure: None,
+            episode_lengths: Vec::new(),
+        }
+    }
+}
 
 /// A pipeline, expanded.
 #[derive(Debug, Clone)]
@@ -199,6 +242,14 @@ impl Plan {
                 .filter(|e| e.variant.as_deref() == Some(id))
                 .cloned()
                 .collect(),
+            ..self.variant_header(id)
+        }
+    }
+
+    /// [`Plan::only_variant`] without its experiments: the header a report of the variant shows,
+    /// without copying its cells.
+    pub fn variant_header(&self, id: &str) -> Plan {
+        Plan {
             variants: self.variants.iter().filter(|v| v.id == id).cloned().collect(),
             warnings: Vec::new(),
             seeds: self

@@ -29,7 +29,7 @@
 use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
 use crate::cache::store::{KeySet, Store};
 use crate::cache::{Key, ENGINE_VERSION};
-use crate::plan::{Plan, PlannedTrial};
+use crate::plan::{Plan, PlannedTrial, StageOutcome};
 use crate::sim::{Algorithm, Outcome};
 use std::collections::{HashMap, HashSet};
 
@@ -116,6 +116,80 @@ struct Heat {
     finished: bool,
 }
 
+/// A plan whose stages (races, fresh seeds) are replayed against one scan of the cache: what a
+/// report reads. Only [`Replayed::of`] and [`replay_cached_owned`]'s result make one, so a report
+/// handed one never replays it again (a no-op `qsweep run` replays its plan once, not twice).
+#[derive(Debug, Clone)]
+pub struct Replayed(Plan);
+
+impl Replayed {
+    /// `plan` replayed against what `store` holds of the trials `scan` lists; a plan without
+    /// stages comes back as it is (not copied).
+    pub fn of(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Self> {
+        if plan.is_staged() {
+            Ok(Self(replay_cached_owned(plan, store, scan)?.plan))
+        } else {
+            Ok(Self(plan))
+        }
+    }
+
+    /// The replayed plan.
+    pub fn plan(&self) -> &Plan {
+        &self.0
+    }
+
+    /// The replayed plan, given up.
+    pub fn into_plan(self) -> Plan {
+        self.0
+    }
+}
+
+impl Raced {
+    /// Its plan, as replayed against the scan it was replayed against.
+    pub fn into_replayed(self) -> Replayed {
+        Replayed(self.plan)
+    }
+}
+
+/// What a replay ([`replay_owned`]) changes in a plan, noted before it, so that the replayed plan
+/// can be taken back to the plan as planned instead of replaying a copy: a replay only appends
+/// trials to a raced cell, sets its `contender` and sets the fresh trials of a best cell.
+#[derive(Debug, Clone)]
+pub struct Unreplay(Vec<(usize, Vec<CellAsPlanned>)>);
+
+/// A staged cell as planned: its trial count and race state.
+type CellAsPlanned = (usize, Option<bool>);
+
+impl Unreplay {
+    /// The staged experiments' cells of `plan` as they are: each cell's trial count and race
+    /// state. `None` when a cell already has fresh trials (a replay replaces them: not undone).
+    pub fn of(plan: &Plan) -> Option<Self> {
+        let mut out = Vec::new();
+        for (ei, e) in plan.experiments.iter().enumerate() {
+            if e.race.is_none() && e.fresh.is_none() {
+                continue;
+            }
+            if e.cells.iter().any(|c| !c.fresh.is_empty()) {
+                return None;
+            }
+            out.push((ei, e.cells.iter().map(|c| (c.trials.len(), c.contender)).collect()));
+        }
+        Some(Self(out))
+    }
+
+    /// `replayed`, the plan this was noted of after a replay, as it was before.
+    pub fn undo(self, mut replayed: Plan) -> Plan {
+        for (ei, cells) in self.0 {
+            for (c, (n, contender)) in replayed.experiments[ei].cells.iter_mut().zip(cells) {
+                c.trials.truncate(n);
+                c.contender = contender;
+                c.fresh.clear();
+            }
+        }
+        replayed
+    }
+}
+
 /// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
 /// the trials `scan` lists (the plan itself, with no race).
 pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
@@ -126,7 +200,7 @@ pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Resul
 /// readings holds no second copy of its 37,000 cells).
 pub fn replay_cached_owned(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
     replay_owned(plan, &scan.keys, &mut |wanted| {
-        Ok(store.read_outcomes(scan, wanted, false)?.into_iter().map(|(k, s)| (k, s.outcome)).collect())
+        store.read_outcomes_as(scan, wanted, false, |k, s| (k, StageOutcome::from(&s.outcome)))
     })
 }
 
@@ -171,7 +245,7 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
         }
     }
     // Every heatmap advances as far as the cache allows; they share one read per pass.
-    let mut known: HashMap<Key, Outcome> = HashMap::new();
+    let mut known: HashMap<Key, StageOutcome> = HashMap::new();
     loop {
         let mut wanted = HashSet::new();
         for h in heats.iter().filter(|h| !h.finished) {
@@ -183,7 +257,9 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
             }
         }
         if !wanted.is_empty() {
-            known.extend(read(&wanted)?);
+            let got = read(&wanted)?;
+            known.reserve(got.len());
+            known.extend(got);
         }
         let mut advanced = false;
         for h in heats.iter_mut().filter(|h| !h.finished) {
@@ -199,7 +275,8 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
                 }
                 let cell = &e.cells[i];
                 let (limits, counting) = (&cell.config.limits, e.counting);
-                let outcomes: Option<Vec<&Outcome>> = cell.trials.iter().map(|t| known.get(&t.key)).collect();
+                let outcomes: Option<Vec<Outcome>> =
+                    cell.trials.iter().map(|t| known.get(&t.key).map(StageOutcome::outcome)).collect();
                 match outcomes {
                     Some(os) => samples.push(Some(Sample {
                         values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
@@ -370,9 +447,10 @@ mod tests {
         let mut per_round = Vec::new();
         loop {
             let cached: HashSet<Key> = store.keys().copied().collect();
-            let raced =
-                replay(plan, &cached, &mut |w| Ok(w.iter().map(|k| (*k, store[k].clone())).collect()))
-                    .unwrap();
+            let raced = replay(plan, &cached, &mut |w| {
+                Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+            })
+            .unwrap();
             let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
                 .cells
                 .iter()
@@ -411,6 +489,31 @@ mod tests {
         assert_eq!((h.trials, h.cached, h.without_race), (19, 19, 24));
     }
 
+    /// Each cell's trials, race state and fresh trials.
+    type CellState = (Vec<PlannedTrial>, Option<bool>, Vec<PlannedTrial>);
+
+    fn cells(p: &Plan) -> Vec<CellState> {
+        p.experiments
+            .iter()
+            .flat_map(|e| &e.cells)
+            .map(|c| (c.trials.clone(), c.contender, c.fresh.clone()))
+            .collect()
+    }
+
+    #[test]
+    fn an_undone_replay_is_the_plan_as_planned() {
+        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
+        let (raced, _) = race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
+        assert_ne!(cells(&raced.plan), cells(&p), "the replay added rounds and decided the race");
+        let undo = Unreplay::of(&p).expect("nothing to replace");
+        assert_eq!(cells(&undo.undo(raced.plan)), cells(&p));
+        // A plan whose cells already have fresh trials is not undone (a replay replaces them).
+        let mut with_fresh = p.clone();
+        with_fresh.experiments[0].fresh = Some(vec![100]);
+        with_fresh.experiments[0].cells[0].fresh = with_fresh.experiments[0].cells[1].trials.clone();
+        assert!(Unreplay::of(&with_fresh).is_none());
+    }
+
     #[test]
     fn raising_max_seeds_adds_rounds_and_keeps_the_earlier_ones() {
         let value = |i: usize, seed: u64| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 };
@@ -425,7 +528,7 @@ mod tests {
     #[test]
     fn a_race_stops_where_the_cache_stops_and_plans_the_next_round() {
         let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        let none = replay(&p, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let none = replay(&p, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
         let h = &none.heats[0];
         assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.cached), (0, false, 3, 9, 0));
         assert!(none.plan.experiments[0]
@@ -435,7 +538,7 @@ mod tests {
         // Without a race the plan comes back untouched.
         let mut plain = p.clone();
         plain.experiments[0].race = None;
-        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(HashMap::new())).unwrap();
+        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
         assert!(r.heats.is_empty() && r.plan.experiments[0].cells.iter().all(|c| c.contender.is_none()));
     }
 }

@@ -15,7 +15,7 @@
 
 use crate::cache::Key;
 use crate::error::user_error;
-use crate::plan::Plan;
+use crate::plan::{Experiment, Plan};
 use serde::{Deserialize, Serialize};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -63,15 +63,36 @@ pub struct Counts {
 impl Counts {
     /// The counts of `plan` given the keys present in the cache.
     pub fn of(plan: &Plan, cached: &HashSet<Key>) -> Self {
-        let mut keys: Vec<Key> = plan.trials().map(|(_, _, t)| t.key).collect();
-        keys.sort_unstable();
+        Self::of_experiments(&plan.experiments.iter().collect::<Vec<_>>(), cached)
+    }
+
+    /// The counts of the plan of one variant (`Some(id)`, as [`Plan::only_variant`] cuts it) or
+    /// of the whole plan (`None`), without copying its cells.
+    pub fn of_variant(plan: &Plan, variant: Option<&str>, cached: &HashSet<Key>) -> Self {
+        let exps: Vec<&Experiment> = match variant {
+            None => plan.experiments.iter().collect(),
+            Some(id) => plan.experiments.iter().filter(|e| e.variant.as_deref() == Some(id)).collect(),
+        };
+        Self::of_experiments(&exps, cached)
+    }
+
+    fn of_experiments(exps: &[&Experiment], cached: &HashSet<Key>) -> Self {
+        use rayon::slice::ParallelSliceMut;
+        let cells: Vec<_> = exps.iter().flat_map(|e| &e.cells).collect();
+        let mut keys: Vec<Key> =
+            cells.iter().flat_map(|c| c.trials.iter().chain(&c.fresh)).map(|t| t.key).collect();
+        keys.par_sort_unstable();
         keys.dedup();
         let mut h = blake3::Hasher::new();
         h.update(b"qsweep-plan\0");
-        for k in &keys {
-            h.update(&k.0);
+        // The keys in runs of 2,048, so blake3 hashes whole chunks at once (one update per key
+        // is several times slower; the digest is the same).
+        let mut buf = Vec::with_capacity(2048 * 32);
+        for run in keys.chunks(2048) {
+            buf.clear();
+            buf.extend(run.iter().flat_map(|k| k.0));
+            h.update(&buf);
         }
-        let cells: Vec<_> = plan.experiments.iter().flat_map(|e| &e.cells).collect();
         Self {
             plan_digest: h.finalize().to_hex().to_string(),
             trials_planned: keys.len(),

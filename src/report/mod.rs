@@ -39,5 +39,5 @@ pub mod trials;
 pub use crate::atomic::write_atomic;
 pub use folder::{existing_trials, write_folder, ReportSummary};
 pub use model::{Outcomes, ReportData};
-pub use stage::{default_dir, write, ReportOptions, ReportOutcome};
+pub use stage::{default_dir, write, write_replayed, ReportOptions, ReportOutcome};
 pub use stale::{staleness, Staleness};

@@ -28,6 +28,8 @@ use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
 use crate::error::user_error;
 use crate::plan::Plan;
+use crate::race::Replayed;
+use std::borrow::Cow;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -157,14 +159,20 @@ struct Target {
 }
 
 impl Target {
-    /// With `force`, a kept report that cannot be read is replaced like any other.
-    fn new(dir: PathBuf, plan: &Plan, cached: &HashSet<Key>, force: bool) -> anyhow::Result<Self> {
+    /// The folder of `variant` of `plan` (`None`: the whole plan). With `force`, a kept report
+    /// that cannot be read is replaced like any other.
+    fn new(
+        dir: PathBuf,
+        (plan, variant): (&Plan, Option<&str>),
+        cached: &HashSet<Key>,
+        force: bool,
+    ) -> anyhow::Result<Self> {
         let kept = match manifest::read(&dir) {
             Ok(k) => k,
             Err(_) if force => None,
             Err(e) => return Err(e),
         };
-        Ok(Self { counts: Counts::of(plan, cached), kept, before: Stamps::of(&dir), dir })
+        Ok(Self { counts: Counts::of_variant(plan, variant, cached), kept, before: Stamps::of(&dir), dir })
     }
 
     /// Refuse (unless `force`) to replace a kept report that holds more than this one would.
@@ -256,21 +264,39 @@ pub fn write(
     scan: &KeySet,
     opts: &ReportOptions,
 ) -> anyhow::Result<ReportOutcome> {
-    let dir = &opts.dir;
-    if dir.exists() && !dir.is_dir() {
-        return Err(user_error(format!(
-            "report directory {} is a file, not a directory; give another with --out DIR",
-            dir.display()
-        )));
+    if opts.dir.exists() && !opts.dir.is_dir() {
+        return Err(not_a_dir(&opts.dir));
     }
     // A raced plan is reported as far as its races have run: each cell with the seeds it got;
     // the best cells with the fresh seeds they got.
-    let plan =
-        if plan.is_staged() { crate::race::replay_cached_owned(plan, store, scan)?.plan } else { plan };
-    let plan = &plan;
+    write_replayed(Replayed::of(plan, store, scan)?, store, scan, opts)
+}
+
+fn not_a_dir(dir: &Path) -> anyhow::Error {
+    user_error(format!(
+        "report directory {} is a file, not a directory; give another with --out DIR",
+        dir.display()
+    ))
+}
+
+/// [`write`] of a plan already replayed against `scan` (what `qsweep run` hands on when it ran
+/// nothing): the same report, without replaying the plan again.
+pub fn write_replayed(
+    plan: Replayed,
+    store: &Store,
+    scan: &KeySet,
+    opts: &ReportOptions,
+) -> anyhow::Result<ReportOutcome> {
+    let dir = &opts.dir;
+    if dir.exists() && !dir.is_dir() {
+        return Err(not_a_dir(dir));
+    }
+    let plan = plan.plan();
     let formats = opts.formats;
-    let subs: Vec<(Option<VariantInfo>, Plan)> = if plan.variants.is_empty() {
-        vec![(None, plan.clone())]
+    // Each folder's plan: the whole plan, or one variant's header ([`Plan::variant_header`]),
+    // enough for the memos; a variant's cells are copied only once something is computed.
+    let subs: Vec<(Option<VariantInfo>, Cow<'_, Plan>)> = if plan.variants.is_empty() {
+        vec![(None, Cow::Borrowed(plan))]
     } else {
         plan.variants
             .iter()
@@ -281,7 +307,7 @@ pub fn write(
                         title: v.title.clone(),
                         exploratory: v.exploratory,
                     }),
-                    plan.only_variant(&v.id),
+                    Cow::Owned(plan.variant_header(&v.id)),
                 )
             })
             .collect()
@@ -310,6 +336,18 @@ pub fn write(
         }
     }
 
+    // Something is computed: each variant's plan in full (the comparison's digests borrow them).
+    let subs: Vec<(Option<VariantInfo>, Cow<'_, Plan>)> = subs
+        .into_iter()
+        .map(|(info, head)| {
+            let sub = match &info {
+                Some(v) => Cow::Owned(plan.only_variant(&v.id)),
+                None => head,
+            };
+            (info, sub)
+        })
+        .collect();
+
     // In a full report of a pipeline with a grid, only the chosen reading gets a folder, written
     // after the comparison has chosen it (compare::has_folder); an exploratory reading gets none;
     // `--variant` writes any on demand.
@@ -318,12 +356,17 @@ pub fn write(
     };
     // The guard first, over every folder this report replaces: nothing is written on a refusal.
     let mut targets = Vec::new();
-    for (info, sub) in &subs {
-        let d = info.as_ref().map_or_else(|| dir.clone(), |v| dir.join(&v.id));
-        targets.push(if deferred(info) { None } else { Some(Target::new(d, sub, &scan.keys, opts.force)?) });
+    for (info, _) in &subs {
+        let id = info.as_ref().map(|v| v.id.as_str());
+        let d = id.map_or_else(|| dir.clone(), |id| dir.join(id));
+        let target = || Target::new(d, (plan, id), &scan.keys, opts.force);
+        targets.push(if deferred(info) { None } else { Some(target()?) });
     }
-    let top =
-        if with_comparison { Some(Target::new(dir.clone(), plan, &scan.keys, opts.force)?) } else { None };
+    let top = if with_comparison {
+        Some(Target::new(dir.clone(), (plan, None), &scan.keys, opts.force)?)
+    } else {
+        None
+    };
     for t in targets.iter().flatten().chain(&top) {
         t.guard(opts.force, store.dir())?;
     }
@@ -445,7 +488,7 @@ pub fn write(
     {
         let id = &info.as_ref().expect("a deferred folder is a variant's").id;
         chosen_folder = Some(id.as_str());
-        let t = Target::new(dir.join(id), sub, &scan.keys, opts.force)?;
+        let t = Target::new(dir.join(id), (plan, Some(id.as_str())), &scan.keys, opts.force)?;
         if let Some(m) = intact(&t.dir, sub_hash) {
             keep_files(&m, Path::new(id), &mut out);
         } else {
@@ -516,7 +559,7 @@ fn keep_files(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
 /// of them is not.
 fn all_intact(
     plan: &Plan,
-    subs: &[(Option<VariantInfo>, Plan)],
+    subs: &[(Option<VariantInfo>, Cow<'_, Plan>)],
     sub_inputs: &[blake3::Hash],
     top: (&blake3::Hash, &Path),
     scan: &KeySet,

@@ -88,7 +88,7 @@ fn folders(plan: &Plan, scan: &KeySet, dir: &Path, formats: Formats) -> Vec<(Pat
         if deferred && chosen.as_deref() != Some(v.id.as_str()) {
             continue;
         }
-        let sub = plan.only_variant(&v.id);
+        let sub = plan.variant_header(&v.id);
         let h = inputs.of(&sub, Some(&v.id), formats, Role::Folder { own_trials: false });
         let d = dir.join(&v.id);
         out.push((d.clone(), memo::why_stale(&d, &h)));
