@@ -54,23 +54,9 @@ pub struct CellBench {
     pub share: f64,
 }
 
-/// A cell's name: where it is and what it computes.
+/// A cell's name: where it is and what it computes ([`Cell::name`]).
 pub fn cell_name(plan_variant: Option<&str>, cell: &Cell) -> String {
-    let c = &cell.config;
-    let res: Vec<String> = c.repr.resolution.iter().map(u32::to_string).collect();
-    let res =
-        if res.iter().all(|r| *r == res[0]) { format!("{}^{}", res[0], res.len()) } else { res.join("x") };
-    let name = format!(
-        "{}/{}/{}/{res}/{}a",
-        c.system().name(),
-        c.repr.kind.name(),
-        c.learner.algorithm.name(),
-        c.actions
-    );
-    match plan_variant {
-        Some(v) => format!("{v}:{name}"),
-        None => name,
-    }
+    cell.name(plan_variant)
 }
 
 /// Every distinct cell of `plan` with its cost, most expensive first (ties in plan order), and the

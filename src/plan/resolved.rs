@@ -162,6 +162,31 @@ pub struct Cell {
     pub fresh: Vec<PlannedTrial>,
 }
 
+impl Cell {
+    /// The cell's name: where it is and what it computes,
+    /// `[variant:]system/repr/algorithm/resolution/actions` (`cart-pole/fuzzy/q-lambda/6^4/10a`).
+    pub fn name(&self, variant: Option<&str>) -> String {
+        let c = &self.config;
+        let res: Vec<String> = c.repr.resolution.iter().map(u32::to_string).collect();
+        let res = if res.iter().all(|r| *r == res[0]) {
+            format!("{}^{}", res[0], res.len())
+        } else {
+            res.join("x")
+        };
+        let name = format!(
+            "{}/{}/{}/{res}/{}a",
+            c.system().name(),
+            c.repr.kind.name(),
+            c.learner.algorithm.name(),
+            c.actions
+        );
+        match variant {
+            Some(v) => format!("{v}:{name}"),
+            None => name,
+        }
+    }
+}
+
 /// A trial: a seed and its key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PlannedTrial {

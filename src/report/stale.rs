@@ -61,7 +61,7 @@ pub fn staleness(
                 intervals += 1;
                 let (values, seed) = interval_inputs(sample);
                 if !memo.has_ci(&values, BOOTSTRAP_RESAMPLES, seed) {
-                    let name = crate::bench::pipeline::cell_name(variant, c.cell);
+                    let name = c.cell.name(variant);
                     stale.push(if fresh { format!("{name} fresh") } else { name });
                 }
             }
