@@ -149,7 +149,10 @@ impl Inputs {
         h.update(&ANALYSIS_VERSION.to_le_bytes());
         h.update(formats.to_string().as_bytes());
         h.update(format!("\0{role:?}\0").as_bytes());
-        // The header as reported; warnings are printed, never written into a report.
+        // The header as reported; warnings are printed, never written into a report. How many
+        // readings the pipeline declares is the comparison's (what an exploratory search tried):
+        // a reading added leaves the other readings' folders as they are.
+        let readings = (role == Role::Comparison).then_some(sub.readings);
         let header = (
             &sub.name,
             &sub.description,
@@ -160,7 +163,7 @@ impl Inputs {
             sub.variant_subset,
             sub.raced,
             &sub.exploratory,
-            sub.readings,
+            readings,
         );
         let _ = write!(h, "{header:?}");
         for (v, d) in &self.exps {

@@ -29,6 +29,7 @@ use crate::cache::Key;
 use crate::error::user_error;
 use crate::plan::Plan;
 use crate::race::Replayed;
+use rayon::prelude::*;
 use std::borrow::Cow;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -419,7 +420,44 @@ pub fn write_replayed(
     } else {
         std::collections::HashMap::new()
     };
-    for ((((info, sub), target), sub_hash), need) in subs.iter().zip(&targets).zip(&sub_inputs).zip(needs) {
+    // The variants that draw nothing and encode no rows only summarize the shared outcomes for
+    // the comparison: done in parallel, each a pure function of its inputs.
+    let in_cells = |info: &Option<VariantInfo>| {
+        with_comparison && formats.has(Format::Cells) && !info.as_ref().is_some_and(|v| v.exploratory)
+    };
+    let light: Vec<Option<anyhow::Result<Light>>> = subs
+        .par_iter()
+        .zip(&needs)
+        .map(|((info, sub), need)| {
+            let v = info.as_ref().filter(|_| with_comparison && !need.draws && !need.lengths)?;
+            Some((|| {
+                let cells = in_cells(info);
+                let data = ReportData::build_as(sub, &shared, cells.then_some(&derived));
+                Ok(Light {
+                    counted: ReportSummary::of(&data, Vec::new()),
+                    cells: cells.then(|| datasets::cells_batch(&data)).transpose()?,
+                    digest: VariantDigest::of(v.clone(), sub, &data, &derived),
+                })
+            })())
+        })
+        .collect();
+    for (((((info, sub), target), sub_hash), need), light) in
+        subs.iter().zip(&targets).zip(&sub_inputs).zip(needs).zip(light)
+    {
+        if let Some(done) = light {
+            let done = done?;
+            if let (Some(parts), Some(d)) = (&mut trials, &need.part) {
+                parts.reuse(d);
+            }
+            if let (Some(m), Some(v)) = (&need.kept, info) {
+                keep_files(m, Path::new(&v.id), &mut out);
+            }
+            out.summary.add(&done.counted);
+            out.cells_recomputed += done.counted.cells;
+            cells.extend(done.cells);
+            digests.push(done.digest);
+            continue;
+        }
         // Without a comparison, a folder stands alone: an intact one is skipped by itself.
         if let (Some(m), false) = (&need.kept, with_comparison) {
             let prefix = info.as_ref().map_or_else(PathBuf::new, |v| PathBuf::from(&v.id));
@@ -427,7 +465,6 @@ pub fn write_replayed(
             skipped = true;
             continue;
         }
-        let exploratory = info.as_ref().is_some_and(|v| v.exploratory);
         let Need { kept, part, reuse_part, draws, .. } = need;
         let own;
         let outcomes = if need.lengths || !with_comparison {
@@ -438,7 +475,7 @@ pub fn write_replayed(
             &shared
         };
         // Intervals where a page or the combined cells.parquet shows them.
-        let in_cells = with_comparison && formats.has(Format::Cells) && !exploratory;
+        let in_cells = in_cells(info);
         let data = ReportData::build_as(sub, outcomes, (draws || in_cells).then_some(&derived));
         // The folder's files and this variant's rows of the combined trials.parquet at once.
         let (written, pushed) = rayon::join(
@@ -524,6 +561,13 @@ pub fn write_replayed(
         out.warnings.push(format!("the statistics' memo {} was not saved: {e:#}", memo_path.display()));
     }
     Ok(out)
+}
+
+/// What the comparison keeps of a variant that draws nothing and encodes no rows.
+struct Light<'p> {
+    counted: ReportSummary,
+    cells: Option<arrow::record_batch::RecordBatch>,
+    digest: VariantDigest<'p>,
 }
 
 /// What one folder of a report needs, decided before any trial is read.

@@ -114,7 +114,10 @@ fn the_incremental_report_equals_rebuild_after_each_kind_of_change() {
     // A variant added.
     let added = format!("{text}  - id: slow-crisp\n    set: {{ systems.mountain-car.crisp.alpha: 0.002 }}\n");
     std::fs::write(&p, &added).unwrap();
+    let kept = std::fs::read(inc.join("as-written/memo.json")).unwrap();
     same_as_rebuild(&sb, &p, &inc, &[], "a variant added");
+    // The other readings' folders stand as they were: their memos still match.
+    assert_eq!(std::fs::read(inc.join("as-written/memo.json")).unwrap(), kept, "a variant added");
     // A variant's set changed.
     std::fs::write(&p, added.replace("alpha: 0.002", "alpha: 0.003")).unwrap();
     same_as_rebuild(&sb, &p, &inc, &[], "a variant's set changed");
