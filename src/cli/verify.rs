@@ -61,6 +61,12 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     }
     println!("statistics' memos: {} intact ({} entries), {} damaged", d.intact, d.entries, d.damaged.len());
     ok &= d.damaged.is_empty();
+    let (parts, broken) = crate::report::trials::check(store.dir());
+    for p in &broken {
+        println!("damaged trial part: {} (the next report encodes it again)", p.display());
+    }
+    println!("trial parts: {parts} whole, {} damaged", broken.len());
+    ok &= broken.is_empty();
     let reports = a.reports.clone().unwrap_or_else(|| std::path::PathBuf::from("reports"));
     if reports.is_dir() {
         let m = crate::report::memo::check_tree(&reports);

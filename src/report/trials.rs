@@ -9,8 +9,9 @@
 //! changed encodes that reading's rows and copies the others'. `--rebuild` encodes every part
 //! again; either way the combined file is the same concatenation, so it is byte-identical.
 //!
-//! A part is written atomically (temporary file, then rename) and checked before it is reused
-//! (its footer parses and it holds the rows the reading has); anything else is encoded again.
+//! A part is written atomically (temporary file, then rename) with its blake3 beside it
+//! (`<digest>.b3`), and checked before it is reused (its bytes are those written, and it holds the
+//! rows the reading has); anything else is encoded again. `qsweep verify` checks every part.
 //! A full report removes the parts it did not use. The parts are not committed: a fresh clone
 //! encodes them on its first recomputed report.
 
@@ -81,10 +82,13 @@ impl TrialParts {
         self.dir.join(format!("{}.parquet", &digest.to_hex()[..32]))
     }
 
-    /// Whether the part `digest` is there to reuse, holding `rows` rows (never with `rebuild`).
+    /// Whether the part `digest` is there to reuse: its bytes as written (its `.b3` sidecar), and
+    /// holding `rows` rows (never with `rebuild`).
     pub fn have(&self, digest: &blake3::Hash, rows: usize) -> bool {
+        let path = self.path(digest);
         !self.rebuild
-            && footer(&self.path(digest))
+            && whole(&path)
+            && footer(&path)
                 .is_some_and(|m| m.row_groups().iter().map(|g| g.num_rows() as usize).sum::<usize>() == rows)
     }
 
@@ -102,6 +106,9 @@ impl TrialParts {
         sink.push(data)?;
         // A reading without experiments has no rows and no part.
         if sink.finish()? {
+            let sum = crate::report::memo::file_digest(&path)
+                .ok_or_else(|| anyhow::anyhow!("cannot read {} back", path.display()))?;
+            crate::atomic::write_atomic(&sidecar(&path), sum.to_hex().as_bytes())?;
             self.used.push(path);
         }
         Ok(())
@@ -133,12 +140,53 @@ impl TrialParts {
                 for p in entries.flatten().map(|e| e.path()) {
                     if p.extension().is_some_and(|x| x == "parquet") && !self.used.contains(&p) {
                         let _ = std::fs::remove_file(&p);
+                        let _ = std::fs::remove_file(sidecar(&p));
                     }
                 }
             }
         }
         Ok(wrote)
     }
+}
+
+/// The file holding the blake3 (hex) of the part at `path`, written with it.
+fn sidecar(part: &Path) -> PathBuf {
+    part.with_extension("b3")
+}
+
+/// Whether the part at `path` holds the bytes it was written with (its sidecar's blake3).
+fn whole(path: &Path) -> bool {
+    let (Ok(want), Some(got)) =
+        (std::fs::read_to_string(sidecar(path)), crate::report::memo::file_digest(path))
+    else {
+        return false;
+    };
+    want == got.to_hex().as_str()
+}
+
+/// What `qsweep verify` found of a cache's trial parts: `(whole, damaged)`; a damaged part (its
+/// bytes not those written, or no sidecar) is encoded again by the next report that needs it.
+pub fn check(cache: &Path) -> (usize, Vec<PathBuf>) {
+    let (mut ok, mut bad) = (0, Vec::new());
+    let Ok(dirs) = std::fs::read_dir(cache.join(crate::analysis::derived::DERIVED_DIR)) else {
+        return (0, bad);
+    };
+    let mut parts: Vec<PathBuf> = dirs
+        .flatten()
+        .map(|d| d.path())
+        .filter(|d| d.is_dir() && d.extension().is_some_and(|x| x == "trials"))
+        .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "parquet"))
+        .collect();
+    parts.sort();
+    for p in parts {
+        if whole(&p) {
+            ok += 1;
+        } else {
+            bad.push(p);
+        }
+    }
+    (ok, bad)
 }
 
 /// The footer of the Parquet file at `path`, page indexes included; `None` if it cannot be read.

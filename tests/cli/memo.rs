@@ -364,7 +364,12 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
     let inc = sb.path("rep");
     same_as_rebuild(&sb, &p, &inc, &[], "first report");
     let parts_dir = sb.cache().join("_derived/variants.trials");
-    let parts = || -> BTreeMap<PathBuf, SystemTime> { mtimes(&parts_dir) };
+    let parts = || -> BTreeMap<PathBuf, SystemTime> {
+        mtimes(&parts_dir)
+            .into_iter()
+            .filter(|(p, _)| p.extension().is_some_and(|x| x == "parquet"))
+            .collect()
+    };
     let before = parts();
     assert_eq!(before.len(), 3, "one part per declared reading: {before:?}");
     // The comparison recomputed: every part is reused as it is.
@@ -384,8 +389,24 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
     let part = parts_dir.join(name);
     let bytes = std::fs::read(&part).unwrap();
     std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
+    let v = sb
+        .qsweep(&["verify", "--reports", inc.to_str().unwrap()])
+        .assert()
+        .code(1)
+        .get_output()
+        .stdout
+        .clone();
+    let v = String::from_utf8(v).unwrap();
+    assert!(v.contains("damaged trial part: ") && v.contains("trial parts: 2 whole, 1 damaged"), "{v}");
     std::fs::remove_file(inc.join("memo.json")).unwrap();
     same_as_rebuild(&sb, &p, &inc, &[], "a damaged part");
+    // A part whose bytes changed in place (its footer intact) is encoded again too.
+    let mut flipped = bytes.clone();
+    flipped[100] ^= 0xff;
+    std::fs::write(&part, &flipped).unwrap();
+    std::fs::remove_file(inc.join("memo.json")).unwrap();
+    same_as_rebuild(&sb, &p, &inc, &[], "a part changed in place");
+    assert_eq!(std::fs::read(&part).unwrap(), bytes);
     assert_eq!(std::fs::read(&part).unwrap(), bytes, "the part encoded again is the same");
     // A reading changed: its part is replaced, the others stay.
     same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
