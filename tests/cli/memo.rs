@@ -412,3 +412,35 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
     same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
     assert_eq!(parts().len(), 3, "a full report keeps only the parts it used");
 }
+
+#[test]
+fn memos_of_an_older_analysis_version_are_recomputed() {
+    use qsweep::report::memo::{Memo, ANALYSIS_VERSION};
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    same_as_rebuild(&sb, &p, &inc, &[], "first report");
+    // Every memo as an older build would have written it: sealed, of the version before.
+    for dir in ["", "as-written", "fast-crisp", "short-episodes"] {
+        let path = inc.join(dir).join("memo.json");
+        let mut m: Memo = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+        m.analysis_version = ANALYSIS_VERSION - 1;
+        m.seal = String::new();
+        m.seal = blake3::hash(&serde_json::to_vec(&m).unwrap()).to_hex().to_string();
+        std::fs::write(&path, serde_json::to_string_pretty(&m).unwrap() + "\n").unwrap();
+    }
+    // The statistics' memo too: its header names the version, and so does every entry's id.
+    let stats = sb.cache().join("_derived/variants.bin");
+    let mut bytes = std::fs::read(&stats).unwrap();
+    bytes[12..16].copy_from_slice(&(ANALYSIS_VERSION - 1).to_le_bytes());
+    let n = bytes.len() - 32;
+    let sum = *blake3::hash(&bytes[..n]).as_bytes();
+    bytes[n..].copy_from_slice(&sum);
+    std::fs::write(&stats, &bytes).unwrap();
+    let said = same_as_rebuild(&sb, &p, &inc, &[], "an older ANALYSIS_VERSION");
+    assert!(
+        said.contains("cells: 36 recomputed, 0 reused; intervals: ")
+            && !said.contains("intervals: 0 computed"),
+        "{said}"
+    );
+}
