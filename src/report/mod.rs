@@ -29,11 +29,13 @@ pub mod manifest;
 pub mod markdown;
 pub mod memo;
 pub mod model;
+mod outcome;
 pub mod stage;
 pub mod stale;
 pub mod svg;
 pub mod svg_grid;
 pub mod table;
+mod target;
 pub mod trials;
 
 pub use crate::atomic::write_atomic;

@@ -1,28 +1,33 @@
-//! The report stage of a pipeline, streaming: one variant at a time, read only that variant's
-//! outcome columns for only its rows, compute every cell's statistics once, write its folder,
-//! keep a small digest ([`VariantDigest`]) for the comparison and the rows for the combined
-//! `trials.parquet`, and drop its trials before the next variant. Memory is one variant's.
+//! The report stage of a pipeline: for a pipeline without variants one folder, with variants
+//! each variant's folder and the comparison of all of them.
 //!
-//! Before anything is written, the overwrite guard ([`manifest::guard`]) reads the manifest of
-//! every folder the report would replace: it refuses (exit 1, nothing written) only when the new
-//! report's plan lacks trials and the kept report holds more. A complete report of a changed
-//! plan replaces the old one, and [`ReportOutcome::replaced`] says what changed.
+//! Before anything is written, the overwrite guard ([`super::manifest::guard`], through
+//! [`Target`]) reads the manifest of every folder the report would replace: it refuses (exit 1,
+//! nothing written) only when the new report's plan lacks trials and the kept report holds more.
+//! A complete report of a changed plan replaces the old one, and [`ReportOutcome::replaced`] says
+//! what changed.
 //!
-//! Each folder's memo ([`memo`]) lets a rerun skip what has not changed: a folder whose inputs
-//! digest matches its memo and whose files are intact is neither recomputed nor rewritten. With a
-//! comparison of variants, which needs every variant's numbers, the whole report is skipped when
-//! every folder is intact, and otherwise recomputed (each file still written only when its bytes
-//! change). `--rebuild` ([`ReportOptions::rebuild`]) ignores the memos.
+//! Only what changed is recomputed. Each folder's memo ([`memo`]) says whether its inputs changed:
+//! an intact folder is neither recomputed nor rewritten; with a comparison, the whole report is
+//! skipped when every folder is intact, and otherwise the variants whose folders are intact keep
+//! their files and are only summarized for the comparison (in parallel, from one shared read
+//! without episode lengths), while the others are drawn one at a time (memory: one variant's
+//! episode lengths). Every bootstrap interval and claim set comes from the statistics' memo
+//! ([`Derived`]) when its inputs are unchanged; the combined `trials.parquet` is spliced from one
+//! part per reading ([`TrialParts`]), encoding only the changed ones; every file is written only
+//! when its bytes change. `--rebuild` ([`ReportOptions::rebuild`]) ignores every memo.
 
 use super::compare::{self, VariantDigest, VariantInfo};
 use super::datasets;
 use super::folder::{write_folder, ReportSummary};
-use super::formats::{Format, Formats};
-use super::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
+use super::formats::Format;
+use super::manifest::Counts;
 use super::memo::{self, Counted, Inputs, Memo, Role};
 use super::model::ReportData;
+pub use super::outcome::{ReportOptions, ReportOutcome};
+use super::target::Target;
 use super::trials::TrialParts;
-use crate::analysis::derived::{Derived, DerivedCounts};
+use crate::analysis::derived::Derived;
 use crate::atomic::write_if_changed;
 use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
@@ -34,226 +39,9 @@ use std::borrow::Cow;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-/// How to write a pipeline's report.
-#[derive(Debug, Clone)]
-pub struct ReportOptions {
-    /// The report directory (`reports/<name>` unless `--out`).
-    pub dir: PathBuf,
-    /// Which files to write.
-    pub formats: Formats,
-    /// Replace a kept report even when the new one holds fewer trials.
-    pub force: bool,
-    /// Ignore the folders' memos: recompute every folder (`--rebuild`).
-    pub rebuild: bool,
-}
-
 /// Where a pipeline's report goes unless `--out` says otherwise: `reports/<name>`.
 pub fn default_dir(plan: &Plan) -> PathBuf {
     Path::new("reports").join(&plan.name)
-}
-
-/// What the stage wrote.
-#[derive(Debug, Clone)]
-pub struct ReportOutcome {
-    /// Counts over the whole plan and every file written (relative to the directory).
-    pub summary: ReportSummary,
-    /// The whole plan's distinct-trial counts.
-    pub counts: Counts,
-    /// One line per replaced folder whose contents changed: `DIR: 216 trials, 24 cells → 144
-    /// trials, 16 cells`.
-    pub replaced: Vec<String>,
-    /// Files of the kept reports that this one no longer writes, removed.
-    pub removed: Vec<PathBuf>,
-    /// Files (manifests included) whose bytes changed or that were new: written.
-    pub files_written: usize,
-    /// Files whose bytes would not change: left alone, their mtimes kept.
-    pub files_unchanged: usize,
-    /// Cells whose statistics were computed (those of every folder or variant not skipped).
-    pub cells_recomputed: usize,
-    /// Cells of the folders skipped as their memos say (nothing read, nothing computed).
-    pub cells_reused: usize,
-    /// Bootstrap intervals and claim sets computed, and taken from the statistics' memo
-    /// ([`Derived`]), by the folders recomputed.
-    pub statistics: DerivedCounts,
-    /// What went wrong without failing the report (the statistics' memo could not be saved).
-    pub warnings: Vec<String>,
-}
-
-impl ReportOutcome {
-    /// Nothing written yet, of a plan with these counts.
-    fn empty(counts: Counts) -> Self {
-        Self {
-            summary: ReportSummary::default(),
-            counts,
-            replaced: Vec::new(),
-            removed: Vec::new(),
-            files_written: 0,
-            files_unchanged: 0,
-            cells_recomputed: 0,
-            cells_reused: 0,
-            statistics: DerivedCounts::default(),
-            warnings: Vec::new(),
-        }
-    }
-}
-
-/// When each file of a report folder (and of its `figures/`) was last written, and its size: taken
-/// before the folder is written, compared after, to tell rewritten files from unchanged ones
-/// (every write is a rename of a new file, so a rewritten file has a new mtime).
-#[derive(Debug, Default)]
-struct Stamps(std::collections::HashMap<String, (std::time::SystemTime, u64)>);
-
-impl Stamps {
-    fn of(dir: &Path) -> Self {
-        let mut out = std::collections::HashMap::new();
-        for (sub, prefix) in [(dir.to_path_buf(), ""), (dir.join("figures"), "figures/")] {
-            let Ok(entries) = std::fs::read_dir(&sub) else { continue };
-            for e in entries.flatten() {
-                if let Some(st) = stamp(&e.path()) {
-                    out.insert(format!("{prefix}{}", e.file_name().to_string_lossy()), st);
-                }
-            }
-        }
-        Self(out)
-    }
-
-    /// Whether `name` (relative to the folder) is as it was when the stamps were taken.
-    fn unchanged(&self, dir: &Path, name: &str) -> bool {
-        self.0.get(name).is_some_and(|before| stamp(&dir.join(name)).as_ref() == Some(before))
-    }
-}
-
-fn stamp(path: &Path) -> Option<(std::time::SystemTime, u64)> {
-    let m = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;
-    Some((m.modified().ok()?, m.len()))
-}
-
-/// The files an earlier qsweep wrote into a report folder without a manifest, as far as they are
-/// there: they are replaced or, when no longer written, removed.
-fn legacy_files(dir: &Path) -> Vec<String> {
-    let mut out = Vec::new();
-    for name in ["table3.md", "table3.csv", "table3.tex", "cells.parquet", "trials.parquet", "index.html"] {
-        if dir.join(name).is_file() {
-            out.push(name.to_string());
-        }
-    }
-    if let Ok(entries) = std::fs::read_dir(dir.join("figures")) {
-        let mut figs: Vec<String> = entries
-            .flatten()
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .filter(|n| n.ends_with(".svg") || n.ends_with(".png"))
-            .map(|n| format!("figures/{n}"))
-            .collect();
-        figs.sort();
-        out.extend(figs);
-    }
-    out
-}
-
-/// One folder the report writes: where, its plan's counts, and what is there now.
-struct Target {
-    dir: PathBuf,
-    counts: Counts,
-    kept: Option<Kept>,
-    /// The folder's files before this report wrote them.
-    before: Stamps,
-}
-
-impl Target {
-    /// The folder of `variant` of `plan` (`None`: the whole plan). With `force`, a kept report
-    /// that cannot be read is replaced like any other.
-    fn new(
-        dir: PathBuf,
-        (plan, variant): (&Plan, Option<&str>),
-        cached: &HashSet<Key>,
-        force: bool,
-    ) -> anyhow::Result<Self> {
-        let kept = match manifest::read(&dir) {
-            Ok(k) => k,
-            Err(_) if force => None,
-            Err(e) => return Err(e),
-        };
-        Ok(Self { counts: Counts::of_variant(plan, variant, cached), kept, before: Stamps::of(&dir), dir })
-    }
-
-    /// Refuse (unless `force`) to replace a kept report that holds more than this one would.
-    fn guard(&self, force: bool, cache: &Path) -> anyhow::Result<()> {
-        match (&self.kept, force) {
-            (Some(kept), false) => {
-                manifest::guard(&self.dir, kept, &self.counts, cache).map_err(|e| anyhow::anyhow!(e))
-            }
-            _ => Ok(()),
-        }
-    }
-
-    /// Write the manifest and the memo (from `inputs`, with the folder's `counted` summary and the
-    /// comparison's `chosen` reading), remove the kept report's files that were not written again,
-    /// say what changed, and list the folder's files (under the variant's id) in the outcome's
-    /// summary.
-    #[allow(clippy::too_many_arguments)]
-    fn finish(
-        &self,
-        plan: &Plan,
-        variant: Option<&str>,
-        formats: Formats,
-        files: Vec<PathBuf>,
-        memo: (&blake3::Hash, Counted, Option<&str>),
-        out: &mut ReportOutcome,
-    ) -> anyhow::Result<()> {
-        let names: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
-        let m = Manifest {
-            format_version: MANIFEST_VERSION,
-            pipeline: plan.name.clone(),
-            variant: variant.map(str::to_owned),
-            counts: self.counts.clone(),
-            formats: formats.to_string(),
-            files: names.clone(),
-        };
-        manifest::write(&self.dir, &m)?;
-        let mut listed = names.clone();
-        listed.push(manifest::MANIFEST.to_string());
-        memo::write(&self.dir, memo.0, memo.1, memo.2, &listed)?;
-        for name in names.iter().map(String::as_str).chain([manifest::MANIFEST, memo::MEMO]) {
-            if self.before.unchanged(&self.dir, name) {
-                out.files_unchanged += 1;
-            } else {
-                out.files_written += 1;
-            }
-        }
-        let prefix = variant.map_or_else(PathBuf::new, PathBuf::from);
-        out.summary.files.extend(files.into_iter().map(|f| prefix.join(f)));
-        out.summary.files.push(prefix.join(manifest::MANIFEST));
-        out.summary.files.push(prefix.join(memo::MEMO));
-        let Some(kept) = &self.kept else { return Ok(()) };
-        // What the kept report wrote: its manifest says; an earlier layout's are known by name.
-        let stale: Vec<String> = match kept {
-            Kept::Manifest(k) => k.files.clone(),
-            Kept::Legacy { .. } => legacy_files(&self.dir),
-        };
-        for f in stale.iter().filter(|f| !names.contains(f)) {
-            let p = self.dir.join(f);
-            // Only plain files inside the folder, named by our own manifest or layout.
-            if !f.contains("..") && p.is_file() {
-                std::fs::remove_file(&p)
-                    .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
-                out.removed.push(p);
-            }
-        }
-        let same = match kept {
-            Kept::Manifest(k) => k.counts == self.counts,
-            Kept::Legacy { .. } => false,
-        };
-        if !same {
-            out.replaced.push(format!(
-                "{}: {} → {} trials, {} cells",
-                self.dir.display(),
-                kept.describe(),
-                self.counts.trials_cached,
-                self.counts.cells_with_trials
-            ));
-        }
-        Ok(())
-    }
 }
 
 /// Write the report of `plan` from the cache: for a pipeline without variants, one folder; with
