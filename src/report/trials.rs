@@ -164,12 +164,22 @@ fn whole(path: &Path) -> bool {
     want == got.to_hex().as_str()
 }
 
-/// What `qsweep verify` found of a cache's trial parts: `(whole, damaged)`; a damaged part (its
-/// bytes not those written, or no sidecar) is encoded again by the next report that needs it.
-pub fn check(cache: &Path) -> (usize, Vec<PathBuf>) {
-    let (mut ok, mut bad) = (0, Vec::new());
+/// What `qsweep verify` found of a cache's trial parts.
+#[derive(Debug, Default, Clone, PartialEq, Eq)]
+pub struct PartCheck {
+    /// Parts holding the bytes their `.b3` records.
+    pub whole: usize,
+    /// Parts without a `.b3` (written by an older build): encoded again when next used.
+    pub unrecorded: usize,
+    /// Parts whose bytes are not those recorded: encoded again by the next report that needs them.
+    pub damaged: Vec<PathBuf>,
+}
+
+/// Check every trial part of the cache at `cache` against its recorded blake3.
+pub fn check(cache: &Path) -> PartCheck {
+    let mut out = PartCheck::default();
     let Ok(dirs) = std::fs::read_dir(cache.join(crate::analysis::derived::DERIVED_DIR)) else {
-        return (0, bad);
+        return out;
     };
     let mut parts: Vec<PathBuf> = dirs
         .flatten()
@@ -180,13 +190,15 @@ pub fn check(cache: &Path) -> (usize, Vec<PathBuf>) {
         .collect();
     parts.sort();
     for p in parts {
-        if whole(&p) {
-            ok += 1;
+        if !sidecar(&p).is_file() {
+            out.unrecorded += 1;
+        } else if whole(&p) {
+            out.whole += 1;
         } else {
-            bad.push(p);
+            out.damaged.push(p);
         }
     }
-    (ok, bad)
+    out
 }
 
 /// The footer of the Parquet file at `path`, page indexes included; `None` if it cannot be read.

@@ -397,7 +397,10 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
         .stdout
         .clone();
     let v = String::from_utf8(v).unwrap();
-    assert!(v.contains("damaged trial part: ") && v.contains("trial parts: 2 whole, 1 damaged"), "{v}");
+    assert!(
+        v.contains("damaged trial part: ") && v.contains("trial parts: 2 whole, 1 damaged, 0 without"),
+        "{v}"
+    );
     std::fs::remove_file(inc.join("memo.json")).unwrap();
     same_as_rebuild(&sb, &p, &inc, &[], "a damaged part");
     // A part whose bytes changed in place (its footer intact) is encoded again too.
