@@ -171,9 +171,17 @@ pub fn write_replayed(
     let mut cells = Vec::new();
     // The combined trials.parquet, from one part per declared reading (report::trials).
     let mut trials = (with_comparison && formats.has(Format::Trials))
-        .then(|| TrialParts::new(store.dir(), &plan.name, scan, opts.rebuild));
-    if trials.is_some() {
-        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+        .then(|| {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+            anyhow::Ok(TrialParts::new(store.dir(), &plan.name, dir, scan, opts.rebuild))
+        })
+        .transpose()?;
+    if trials.as_ref().is_some_and(|p| !p.kept()) {
+        out.warnings.push(format!(
+            "the cache {} cannot keep trial parts: every reading's rows were encoded for this report",
+            store.dir().display()
+        ));
     }
     // What each folder needs, decided before any trial is read (see Need).
     let needs: Vec<Need> = subs

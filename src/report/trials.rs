@@ -36,6 +36,8 @@ const TRIALS_ROW_GROUP: usize = 1024;
 pub struct TrialParts {
     dir: PathBuf,
     rebuild: bool,
+    /// The parts live in the report directory for this report only (the cache is not writable).
+    transient: bool,
     /// Where each stored key is read from ([`super::memo::where_stored`]).
     found: HashMap<Key, u64>,
     /// The parts of this report, in order.
@@ -44,10 +46,28 @@ pub struct TrialParts {
 
 impl TrialParts {
     /// The parts of pipeline `pipeline` in the cache at `cache`, against the cache scan `scan`;
-    /// with `rebuild`, none is reused.
-    pub fn new(cache: &Path, pipeline: &str, scan: &KeySet, rebuild: bool) -> Self {
-        let dir = cache.join(crate::analysis::derived::DERIVED_DIR).join(format!("{pipeline}.trials"));
-        Self { dir, rebuild, found: super::memo::where_stored(scan), used: Vec::new() }
+    /// with `rebuild`, none is reused. When the cache cannot take them (read-only, or its
+    /// `_derived` is not a folder), the parts are encoded into a hidden folder in the report
+    /// directory `out`, spliced and removed: the report is the same, nothing is kept.
+    pub fn new(cache: &Path, pipeline: &str, out: &Path, scan: &KeySet, rebuild: bool) -> Self {
+        let kept = cache.join(crate::analysis::derived::DERIVED_DIR).join(format!("{pipeline}.trials"));
+        let (dir, transient) = if writable(&kept) {
+            (kept, false)
+        } else {
+            (out.join(format!("{}parts.{}", crate::atomic::TEMP_PREFIX, std::process::id())), true)
+        };
+        Self {
+            dir,
+            rebuild: rebuild || transient,
+            transient,
+            found: super::memo::where_stored(scan),
+            used: Vec::new(),
+        }
+    }
+
+    /// Whether the parts are kept in the cache (`false`: encoded for this report only).
+    pub fn kept(&self) -> bool {
+        !self.transient
     }
 
     /// The digest of the rows of `sub` (one reading of the plan, as reported).
@@ -135,7 +155,9 @@ impl TrialParts {
             done?;
             true
         };
-        if prune {
+        if self.transient {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        } else if prune {
             if let Ok(entries) = std::fs::read_dir(&self.dir) {
                 for p in entries.flatten().map(|e| e.path()) {
                     if p.extension().is_some_and(|x| x == "parquet") && !self.used.contains(&p) {
@@ -147,6 +169,17 @@ impl TrialParts {
         }
         Ok(wrote)
     }
+}
+
+/// Whether `dir` is (or can be made) a folder this process can write a file into.
+fn writable(dir: &Path) -> bool {
+    if std::fs::create_dir_all(dir).is_err() {
+        return false;
+    }
+    let probe = crate::atomic::temp_beside(&dir.join("probe"));
+    let ok = std::fs::File::create(&probe).is_ok();
+    let _ = std::fs::remove_file(&probe);
+    ok
 }
 
 /// The file holding the blake3 (hex) of the part at `path`, written with it.

@@ -447,3 +447,25 @@ fn memos_of_an_older_analysis_version_are_recomputed() {
         "{said}"
     );
 }
+
+#[test]
+fn a_cache_that_cannot_keep_trial_parts_still_gets_the_same_report() {
+    let sb = Sandbox::new();
+    let p = sb.fixture("variants.yaml");
+    let inc = sb.path("rep");
+    sb.qsweep(&["run", p.to_str().unwrap(), "--quiet", "--no-report"]).assert().success();
+    // Where the parts would go is a file: the cache cannot keep them.
+    std::fs::create_dir_all(sb.cache().join("_derived")).unwrap();
+    std::fs::write(sb.cache().join("_derived/variants.trials"), "not a folder").unwrap();
+    let out = sb
+        .qsweep(&["report", p.to_str().unwrap(), "--out", inc.to_str().unwrap()])
+        .assert()
+        .success()
+        .get_output()
+        .clone();
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("cannot keep trial parts"), "{err}");
+    same_as_rebuild(&sb, &p, &inc, &[], "parts not kept");
+    let left: Vec<_> = std::fs::read_dir(&inc).unwrap().flatten().map(|e| e.file_name()).collect();
+    assert!(left.iter().all(|n| !n.to_string_lossy().starts_with(".tmp-")), "{left:?}");
+}
