@@ -351,10 +351,14 @@ pub fn write_replayed(
         top.finish(plan, None, formats, files, (&top_inputs, counted, chosen_folder), &mut out)?;
     }
     out.statistics = derived.counts();
-    // A full report keeps exactly the statistics it used; a partial one adds to the memo. A cache
-    // this run cannot write to costs only the next report's recomputation.
-    if let Err(e) = derived.save(&memo_path, !plan.variant_subset && !skipped) {
-        out.warnings.push(format!("the statistics' memo {} was not saved: {e:#}", memo_path.display()));
+    // The memo is saved only when something was computed, so a report that reused everything
+    // (another `--out`, fewer `--formats`) leaves it as it is. Then a full report keeps exactly
+    // the statistics it used; a partial one adds to the memo. A cache this run cannot write to
+    // costs only the next report's recomputation.
+    if out.statistics.computed > 0 {
+        if let Err(e) = derived.save(&memo_path, !plan.variant_subset && !skipped) {
+            out.warnings.push(format!("the statistics' memo {} was not saved: {e:#}", memo_path.display()));
+        }
     }
     Ok(out)
 }

@@ -84,9 +84,12 @@ fn same_as_rebuild(sb: &Sandbox, pipeline: &Path, inc: &Path, extra: &[&str], wh
     let mut args = vec!["report", p, "--rebuild", "--out", fresh.to_str().unwrap()];
     args.extend(extra);
     crate::helpers::stdout(&mut sb.qsweep(&args));
-    // The statistics' memo holds what --rebuild computes, bit for bit (a report of some variants
-    // adds to it; a skipped folder leaves it as it was).
-    if !extra.contains(&"--variant") && said.contains("intervals: ") && !said.contains(" 0 recomputed") {
+    // The statistics' memo holds what --rebuild computes, bit for bit, once the report computed
+    // something (a report of some variants adds to it; one that computed nothing leaves it).
+    if !extra.contains(&"--variant")
+        && said.contains("intervals: ")
+        && !said.contains("intervals: 0 computed")
+    {
         assert!(derived == derived_files(sb), "{what}: the statistics' memo differs from --rebuild's");
     }
     let (a, b) = (tree(inc), tree(&fresh));
@@ -321,11 +324,18 @@ fn the_statistics_memo_recomputes_only_the_intervals_whose_trials_changed() {
     let memo = sb.cache().join("_derived/variants.bin");
     assert!(memo.is_file());
 
-    // The report recomputed (its memo.json gone): every interval is taken from the memo.
+    // The report recomputed (its memo.json gone): every interval is taken from the memo, and
+    // the memo, nothing computed, is left as it was (so is one for fewer formats elsewhere).
+    let kept = std::fs::read(&memo).unwrap();
     std::fs::remove_file(out.join("memo.json")).unwrap();
     let again = json();
     assert_eq!(counts(&again), (0, all));
     assert_eq!(again["files_written"], 1, "only memo.json, written again");
+    let elsewhere = sb.path("csv-only");
+    sb.qsweep(&["report", ps, "--out", elsewhere.to_str().unwrap(), "--formats", "csv,cells", "--quiet"])
+        .assert()
+        .success();
+    assert_eq!(std::fs::read(&memo).unwrap(), kept, "a report that computed nothing keeps the memo");
 
     // A variant added: its own intervals and differences are computed, the others' reused (and
     // its cells whose trials are the base's too).
