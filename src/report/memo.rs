@@ -212,15 +212,6 @@ fn experiment(e: &Experiment, found: &HashMap<Key, u64>) -> blake3::Hash {
     let _ = write!(h, "{head:?}");
     // Each cell into one buffer, hashed at once (many small updates are slow).
     let mut buf: Vec<u8> = Vec::new();
-    let trials = |buf: &mut Vec<u8>, ts: &[PlannedTrial]| {
-        buf.extend_from_slice(&(ts.len() as u64).to_le_bytes());
-        for t in ts {
-            buf.extend_from_slice(&t.seed.to_le_bytes());
-            buf.extend_from_slice(&t.key.0);
-            // 0: not cached (an id of 0 is as good as impossible and would only cost a recompute).
-            buf.extend_from_slice(&found.get(&t.key).copied().unwrap_or(0).to_le_bytes());
-        }
-    };
     for c in &e.cells {
         buf.clear();
         let _ = write!(buf, "\0{:?} {:?} {:?}", c.algorithm, c.coords, c.contender);
@@ -230,11 +221,23 @@ fn experiment(e: &Experiment, found: &HashMap<Key, u64>) -> blake3::Hash {
         if c.trials.is_empty() && c.fresh.is_empty() {
             let _ = write!(buf, " {:?}", c.config);
         }
-        trials(&mut buf, &c.trials);
-        trials(&mut buf, &c.fresh);
+        put_trials(&mut buf, &c.trials, found);
+        put_trials(&mut buf, &c.fresh, found);
         h.update(&buf);
     }
     h.finalize()
+}
+
+/// Append to `buf` what a digest needs of trials `ts`: their count, then each one's seed, key and
+/// the id of the segment it is read from (`found`, [`where_stored`]; 0: not cached, an id of 0 is
+/// as good as impossible and would only cost a recompute).
+pub(crate) fn put_trials(buf: &mut Vec<u8>, ts: &[PlannedTrial], found: &HashMap<Key, u64>) {
+    buf.extend_from_slice(&(ts.len() as u64).to_le_bytes());
+    for t in ts {
+        buf.extend_from_slice(&t.seed.to_le_bytes());
+        buf.extend_from_slice(&t.key.0);
+        buf.extend_from_slice(&found.get(&t.key).copied().unwrap_or(0).to_le_bytes());
+    }
 }
 
 /// The memo kept in `dir`, if there is one this build reads; anything else is `None`.

@@ -226,15 +226,9 @@ pub fn write_replayed(
         .zip(&needs)
         .map(|((info, sub), need)| {
             let v = info.as_ref().filter(|_| with_comparison && !need.draws && !need.lengths)?;
-            Some((|| {
-                let cells = in_cells(info);
-                let data = ReportData::build_as(sub, &shared, cells.then_some(&derived));
-                Ok(Light {
-                    counted: ReportSummary::of(&data, Vec::new()),
-                    cells: cells.then(|| datasets::cells_batch(&data)).transpose()?,
-                    digest: VariantDigest::of(v.clone(), sub, &data, &derived),
-                })
-            })())
+            let cells = in_cells(info);
+            let data = ReportData::build_as(sub, &shared, cells.then_some(&derived));
+            Some(Light::of(v, sub, &data, cells, &derived))
         })
         .collect();
     for (((((info, sub), target), sub_hash), need), light) in
@@ -303,11 +297,9 @@ pub fn write_replayed(
         out.summary.add(&counted);
         out.cells_recomputed += counted.cells;
         if let (Some(v), true) = (info, with_comparison) {
-            // An exploratory reading's cells are written with its folder, on demand.
-            if in_cells {
-                cells.push(datasets::cells_batch(&data)?);
-            }
-            digests.push(VariantDigest::of(v.clone(), sub, &data, &derived));
+            let done = Light::of(v, sub, &data, in_cells, &derived)?;
+            cells.extend(done.cells);
+            digests.push(done.digest);
         }
     }
 
@@ -363,11 +355,31 @@ pub fn write_replayed(
     Ok(out)
 }
 
-/// What the comparison keeps of a variant that draws nothing and encodes no rows.
+/// What the report keeps of a variant's data once its folder is written or kept: its counts, its
+/// rows of the combined `cells.parquet` and its digest for the comparison. A variant that draws
+/// nothing and encodes no rows is reduced to this at once (in parallel).
 struct Light<'p> {
     counted: ReportSummary,
     cells: Option<arrow::record_batch::RecordBatch>,
     digest: VariantDigest<'p>,
+}
+
+impl<'p> Light<'p> {
+    /// What is kept of `data`, the report data of variant `v` (`sub`), with its `cells.parquet`
+    /// rows when `cells` (an exploratory reading's cells are written with its folder, on demand).
+    fn of(
+        v: &VariantInfo,
+        sub: &'p Plan,
+        data: &ReportData,
+        cells: bool,
+        derived: &Derived,
+    ) -> anyhow::Result<Self> {
+        Ok(Self {
+            counted: ReportSummary::of(data, Vec::new()),
+            cells: cells.then(|| datasets::cells_batch(data)).transpose()?,
+            digest: VariantDigest::of(v.clone(), sub, data, derived),
+        })
+    }
 }
 
 /// What one folder of a report needs, decided before any trial is read.

@@ -84,14 +84,8 @@ impl TrialParts {
             for c in &e.cells {
                 buf.clear();
                 let _ = write!(buf, "\0{:?} {:?}", c.algorithm, c.coords);
-                for ts in [&c.trials, &c.fresh] {
-                    buf.extend_from_slice(&(ts.len() as u64).to_le_bytes());
-                    for t in ts.iter() {
-                        buf.extend_from_slice(&t.seed.to_le_bytes());
-                        buf.extend_from_slice(&t.key.0);
-                        buf.extend_from_slice(&self.found.get(&t.key).copied().unwrap_or(0).to_le_bytes());
-                    }
-                }
+                super::memo::put_trials(&mut buf, &c.trials, &self.found);
+                super::memo::put_trials(&mut buf, &c.fresh, &self.found);
                 h.update(&buf);
             }
         }
