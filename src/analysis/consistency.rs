@@ -5,10 +5,11 @@
 //! configuration is a cell of row B's grid (the same system, representation and algorithm, the
 //! same bins or sets per variable and the same action count, hence the same action set A_n of
 //! eq. 22), B's minimum cannot exceed A's value; where the two configurations coincide the means
-//! must agree. The two published means (10 runs each) are compared by a two-sided Welch test at
-//! [`ALPHA`]; a pair is contradictory when the test rejects in a direction the grids forbid.
+//! must agree. The two published means (an assumed n_paper runs each: the paper never states it)
+//! are compared by a two-sided Welch test at [`ALPHA`]; a pair is contradictory when the test
+//! rejects in a direction the grids forbid, and then costs one row: the one whose published
+//! minimum is undercut by a cell of its own grid ([`Pair::designated`]).
 
-use super::verdict::REFERENCE_N;
 use super::welch::student_t_sf;
 use crate::sim::env::SystemKind;
 use crate::sim::repr::ReprKind;
@@ -22,8 +23,10 @@ pub const CONSISTENCY_RULE: &str = "Comparable pair: two Table III rows of the s
 representation and algorithm where one row's published configuration (bins or sets per variable \
 and action count) is a cell of the other row's grid, so the other's published minimum cannot exceed \
 it (the means must agree where the configurations coincide). Welch's t-test of the two published \
-means (10 runs each), two-sided, α = 0.05; contradictory: significant in a direction the grids \
-forbid. A contradictory pair's two rows cannot both be matched by any reading.";
+means (an assumed 10 runs each; verdicts_by_n.csv: 3, 5, 10), two-sided, α = 0.05; \
+contradictory: significant in a direction the grids forbid. Marked: the row a contradictory pair \
+costs, the one whose published minimum a cell of its own grid undercuts (where the configurations \
+coincide, the later experiment's).";
 
 /// A configuration: bins or sets per state variable, and the action count.
 pub type Config = (Vec<u32>, u32);
@@ -115,8 +118,21 @@ pub struct Pair {
     pub contradictory: bool,
 }
 
-/// Every comparable pair of `rows`, in row order.
-pub fn pairs(rows: &[Published]) -> Vec<Pair> {
+impl Pair {
+    /// The row a contradictory pair costs (`None` for a consistent pair): the one whose published
+    /// value is the minimum of a grid containing the other's configuration, undercut by it; where
+    /// each lies in the other's grid, the later experiment's (`b`).
+    pub fn designated(&self) -> Option<usize> {
+        self.contradictory.then_some(match self.implied {
+            Implied::AAtMostB => self.a,
+            Implied::BAtMostA | Implied::Equal => self.b,
+        })
+    }
+}
+
+/// Every comparable pair of `rows`, in row order, each published mean taken over `paper_n` runs.
+pub fn pairs(rows: &[Published], paper_n: usize) -> Vec<Pair> {
+    let n = paper_n as f64;
     let mut out = Vec::new();
     for (i, a) in rows.iter().enumerate() {
         for (j, b) in rows.iter().enumerate().skip(i + 1) {
@@ -131,7 +147,7 @@ pub fn pairs(rows: &[Published]) -> Vec<Pair> {
                 (false, true) => Implied::AAtMostB,
                 (false, false) => continue,
             };
-            let (t, df, p) = welch_summary((a.mean, a.std, REFERENCE_N), (b.mean, b.std, REFERENCE_N));
+            let (t, df, p) = welch_summary((a.mean, a.std, n), (b.mean, b.std, n));
             let forbidden = match implied {
                 Implied::Equal => true,
                 Implied::BAtMostA => b.mean > a.mean,
@@ -144,8 +160,13 @@ pub fn pairs(rows: &[Published]) -> Vec<Pair> {
 }
 
 /// Whether row `i` belongs to a contradictory pair.
-pub fn inconsistent(pairs: &[Pair], i: usize) -> bool {
+pub fn in_contradiction(pairs: &[Pair], i: usize) -> bool {
     pairs.iter().any(|p| p.contradictory && (p.a == i || p.b == i))
+}
+
+/// Whether a contradictory pair designates row `i` ([`Pair::designated`]).
+pub fn designated(pairs: &[Pair], i: usize) -> bool {
+    pairs.iter().any(|p| p.designated() == Some(i))
 }
 
 #[cfg(test)]
@@ -177,7 +198,7 @@ mod tests {
             row("1", 90.5, 25.8, (vec![5, 3], 3), full),
             row("2", 43.2, 20.4, (vec![3, 3], 3), (2..=10).flat_map(square).collect()),
         ];
-        let p = pairs(&rows);
+        let p = pairs(&rows, 10);
         assert_eq!(p.len(), 1);
         let p = p[0];
         assert_eq!((p.a, p.b, p.implied), (0, 1, Implied::AAtMostB));
@@ -186,7 +207,16 @@ mod tests {
         assert!((p.p - 2.816e-4).abs() < 0.001e-4, "p = {}", p.p);
         assert!(p.contradictory);
         let all = [p];
-        assert!(inconsistent(&all, 0) && inconsistent(&all, 1));
+        assert!(in_contradiction(&all, 0) && in_contradiction(&all, 1));
+        // It costs one row: Exp. 1's minimum, undercut by a cell of its own grid.
+        assert_eq!(p.designated(), Some(0));
+        assert!(designated(&all, 0) && !designated(&all, 1));
+        // With fewer paper runs the pair is no longer shown contradictory: SciPy gives
+        // p = 0.01328 at n = 5 (still below α) and 0.07081 at n = 3.
+        let at = |n| pairs(&rows, n)[0];
+        assert!((at(5).p - 0.013_28).abs() < 1e-5 && at(5).contradictory, "{:?}", at(5));
+        assert!((at(3).p - 0.070_81).abs() < 1e-5 && !at(3).contradictory, "{:?}", at(3));
+        assert_eq!(at(3).designated(), None);
     }
 
     #[test]
@@ -198,19 +228,24 @@ mod tests {
             row("3", 125.9, 11.2, (vec![4, 4], 3), vec![(vec![4, 4], 3)]),
             row("4", 116.6, 2.9, (vec![4, 4], 2), g.clone()),
         ];
-        let p = pairs(&rows)[0];
+        let p = pairs(&rows, 10)[0];
         assert_eq!(p.implied, Implied::BAtMostA);
         assert!(p.p < ALPHA && !p.contradictory);
         // The same configuration and the same numbers: a = b, p = 1.
         let rows =
             [row("1", 42.4, 13.8, (vec![2, 2], 3), g.clone()), row("2", 42.4, 13.8, (vec![2, 2], 3), g)];
-        let p = pairs(&rows)[0];
+        let p = pairs(&rows, 10)[0];
         assert_eq!((p.implied, p.t, p.p, p.contradictory), (Implied::Equal, 0.0, 1.0, false));
+        // Coinciding configurations with different means: the later experiment's row is marked.
+        let mut later = rows[1].clone();
+        later.mean = 80.0;
+        let p = pairs(&[rows[0].clone(), later], 10)[0];
+        assert!(p.contradictory && p.designated() == Some(1), "{p:?}");
         // Different experiments only; another algorithm never pairs.
         let mut other = rows[1].clone();
         other.algorithm = Algorithm::QLambda;
-        assert!(pairs(&[rows[0].clone(), other]).is_empty());
-        assert!(pairs(&[rows[0].clone(), rows[0].clone()]).is_empty());
+        assert!(pairs(&[rows[0].clone(), other], 10).is_empty());
+        assert!(pairs(&[rows[0].clone(), rows[0].clone()], 10).is_empty());
     }
 
     #[test]

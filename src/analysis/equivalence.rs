@@ -10,6 +10,9 @@ use super::welch::student_t_sf;
 /// (FDA 2001), symmetric on the log scale.
 pub const MARGIN: (f64, f64) = (0.80, 1.25);
 
+/// The margin of "within 2×" on ours / paper (`docs/preregistration.md`, the verdict scale).
+pub const MARGIN_2X: (f64, f64) = (0.5, 2.0);
+
 /// Level of each one-sided test.
 pub const ALPHA: f64 = 0.05;
 
@@ -45,13 +48,18 @@ pub struct Tost {
 /// [`MARGIN`] on ours / paper. `None` when it cannot be decided: ours has a single trial (no
 /// std), the paper's mean is not positive, or a sample is too small for degrees of freedom.
 pub fn tost(ours: Moments, paper: Moments) -> Option<Tost> {
+    tost_within(ours, paper, MARGIN)
+}
+
+/// [`tost`] with another margin `(lo, hi)` on ours / paper (e.g. [`MARGIN_2X`]).
+pub fn tost_within(ours: Moments, paper: Moments, margin: (f64, f64)) -> Option<Tost> {
     let s_ours = ours.std?;
     let s_paper = paper.std?;
     if paper.mean <= 0.0 || ours.n < 2 || paper.n < 2 {
         return None;
     }
-    let lo = (MARGIN.0 - 1.0) * paper.mean;
-    let hi = (MARGIN.1 - 1.0) * paper.mean;
+    let lo = (margin.0 - 1.0) * paper.mean;
+    let hi = (margin.1 - 1.0) * paper.mean;
     let d = ours.mean - paper.mean;
     let v1 = s_ours * s_ours / ours.n as f64;
     let v2 = s_paper * s_paper / paper.n as f64;
@@ -132,6 +140,22 @@ mod tests {
         // Without spread, a value on the edge is outside: the margin's bounds are strict.
         assert!(!tost(m(62.5, 0.0, 10), m(50.0, 0.0, 10)).unwrap().equivalent);
         assert!(!tost(m(40.0, 0.0, 10), m(50.0, 0.0, 10)).unwrap().equivalent);
+    }
+
+    #[test]
+    fn the_twofold_margin_matches_two_scipy_welch_tests() {
+        // SciPy 1.17.1, ttest_ind_from_stats(34.85, 95.1, 20, 4.54·b, S, 10, equal_var=False)
+        // against the bounds 4.54·0.5 (alternative="greater") and 4.54·2 ("less"), S = 1.0:
+        // p = 0.0869 and 0.9173 (the upper bound's p is the larger: not shown within 2×).
+        let t = tost_within(m(34.85, 95.1, 20), m(4.54, 1.0, 10), MARGIN_2X).unwrap();
+        assert!(!t.equivalent && t.p > 0.9, "{t:?}");
+        // 95 ± 20 (n 20) against 90.5 ± 25.8 (n 10) is well within 2×.
+        let t = tost_within(m(95.0, 20.0, 20), m(90.5, 25.8, 10), MARGIN_2X).unwrap();
+        assert!(t.equivalent && t.p < 1e-6, "{t:?}");
+        // The bounds are strict without spread.
+        assert!(!tost_within(m(2.0, 0.0, 10), m(1.0, 0.0, 10), MARGIN_2X).unwrap().equivalent);
+        assert!(tost_within(m(1.99, 0.0, 10), m(1.0, 0.0, 10), MARGIN_2X).unwrap().equivalent);
+        assert!(!tost_within(m(0.5, 0.0, 10), m(1.0, 0.0, 10), MARGIN_2X).unwrap().equivalent);
     }
 
     #[test]

@@ -40,7 +40,7 @@ use std::path::Path;
 /// instead of keeping files an older definition wrote. The golden test
 /// (`tests/cli/memo.rs::analysis_golden_*`) fails when the outputs of a fixed input change while
 /// this does not.
-pub const ANALYSIS_VERSION: u32 = 3;
+pub const ANALYSIS_VERSION: u32 = 4;
 
 /// The memo's file name in a report folder.
 pub const MEMO: &str = "memo.json";

@@ -25,6 +25,7 @@ mod folder;
 pub mod formats;
 pub mod glyphs;
 pub mod html;
+pub mod judgement;
 pub mod manifest;
 pub mod markdown;
 pub mod memo;

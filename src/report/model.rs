@@ -328,19 +328,23 @@ impl<'a> ReportData<'a> {
         out
     }
 
-    /// Table III's rows that belong to a pair the paper's own numbers contradict
-    /// ([`crate::analysis::consistency`]): (experiment index, algorithm).
-    pub fn inconsistent_rows(&self) -> Vec<(usize, Algorithm)> {
-        let mut out = Vec::new();
+    /// Table III's rows that belong to a pair the paper's own numbers contradict, and the rows
+    /// those pairs designate ([`crate::analysis::consistency`]), each published mean taken over
+    /// `paper_n` runs.
+    pub fn contradictions(&self, paper_n: usize) -> Contradictions {
+        use crate::analysis::consistency::{designated, in_contradiction, pairs};
+        let mut out = Contradictions::default();
         for rows in published_rows(self.plan) {
             let published: Vec<Published> = rows.iter().map(|r| r.2.clone()).collect();
-            let pairs = crate::analysis::consistency::pairs(&published);
-            out.extend(
-                rows.iter()
-                    .enumerate()
-                    .filter(|(i, _)| crate::analysis::consistency::inconsistent(&pairs, *i))
-                    .map(|(_, r)| (r.0, r.1)),
-            );
+            let pairs = pairs(&published, paper_n);
+            for (i, r) in rows.iter().enumerate() {
+                if in_contradiction(&pairs, i) {
+                    out.in_pair.push((r.0, r.1));
+                }
+                if designated(&pairs, i) {
+                    out.designated.push((r.0, r.1));
+                }
+            }
         }
         out
     }
@@ -349,6 +353,16 @@ impl<'a> ReportData<'a> {
     pub fn has_reference(&self) -> bool {
         self.experiments.iter().any(|e| !e.exp.reference.is_empty())
     }
+}
+
+/// Table III rows (experiment index, algorithm) in contradictory pairs, and those the pairs
+/// designate ([`ReportData::contradictions`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Contradictions {
+    /// Rows that belong to a contradictory pair.
+    pub in_pair: Vec<(usize, Algorithm)>,
+    /// Rows a contradictory pair designates (one per pair).
+    pub designated: Vec<(usize, Algorithm)>,
 }
 
 /// A published Table III row with its experiment's index and its algorithm.

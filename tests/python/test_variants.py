@@ -3,7 +3,9 @@
 The binary runs the fixture into a temporary cache and report folder. Checks: the combined
 cells.parquet / trials.parquet carry a `variant` column that pandas, polars and DuckDB read alike;
 each variant's rows equal that variant's own report; a trial shared by two variants appears under
-both; variants.csv is recomputed from each variant's table3.csv with the documented rules.
+both; variants.csv is recomputed from each variant's table3.csv with the documented rules (the old
+rule's counts `within_2se` and `ratio_within_2x` recomputed from the means, those of the verdict
+scale of issue #46 counted from table3.csv's `verdict`, which tests/python/test_verdicts.py checks).
 """
 
 from __future__ import annotations
@@ -79,7 +81,11 @@ def test_shared_trials_appear_under_each_variant_that_plans_them(report: Path) -
     assert trials.drop_duplicates("key").shape[0] == 24 + 16 + 24
 
 
+SCALE = ["equivalent", "within-2x", "consistent-but-wide", "differs"]
+
+
 def _verdict(r: pd.Series) -> str:
+    """The old rule (table3.csv's `verdict_2se`)."""
     se = math.sqrt(r["paper_std"] ** 2 / 10 + r["std"] ** 2 / r["n"])
     if abs(r["mean"] - r["paper_mean"]) <= 2 * se:
         return "replicates"
@@ -97,6 +103,11 @@ def test_variants_csv_is_recomputed_from_each_variants_table3(report: Path) -> N
         t3 = pd.read_csv(report / v / "table3.csv", dtype={"experiment": str})
         rows = t3[t3["paper_mean"].notna() & t3["mean"].notna()]
         verdicts = [_verdict(r) for _, r in rows.iterrows()]
+        assert rows["verdict_2se"].tolist() == [{"within 2x": "within-2x"}.get(x, x) for x in verdicts], v
+        scale = rows["verdict"].value_counts()
+        scale = {k: int(scale.get(k, 0)) for k in SCALE}
+        assert set(rows["verdict"]) <= set(SCALE) | {"undecided"}, v
+        eq100 = int((rows["equivalent_n100"] == "yes").sum())
         config = 0
         for _, r in rows.iterrows():
             ours = [int(r[c]) for c in res_cols if pd.notna(r[c])] + [int(r["actions"])]
@@ -110,16 +121,25 @@ def test_variants_csv_is_recomputed_from_each_variants_table3(report: Path) -> N
                 by_paper = same.sort_values("paper_mean", kind="stable")["algorithm"].tolist()
                 order += by_ours == by_paper
         geo = math.exp(sum(math.log(m / p) for m, p in zip(rows["mean"], rows["paper_mean"])) / len(rows))
-        expected[v] = (len(rows), verdicts.count("replicates"), verdicts.count("within 2x"), config, order, ordered, geo)
+        expected[v] = (len(rows), verdicts.count("replicates"), verdicts.count("within 2x"), config, order, ordered, geo, scale, eq100)
+    assert got.columns.tolist()[:19] == [
+        "rank", "variant", "title", "rows", "replicating_n10", "equivalent_n10", "within_2x_n10",
+        "consistent_but_wide_n10", "differs_n10", "replicating_n5", "replicating_n3", "within_2se",
+        "ratio_within_2x", "config_match", "order_match", "order_experiments", "geo_mean_ratio",
+        "equivalent_n100", "exploratory",
+    ]
     for _, r in got.iterrows():
-        n, rep, w2, config, order, ordered, geo = expected[r["variant"]]
-        assert (r["rows"], r["replicating"], r["within_2x"], r["config_match"]) == (n, rep, w2, config), r["variant"]
+        n, se2, w2, config, order, ordered, geo, scale, eq100 = expected[r["variant"]]
+        assert (r["rows"], r["within_2se"], r["ratio_within_2x"], r["config_match"]) == (n, se2, w2, config), r["variant"]
+        assert [r[f"{k.replace('-', '_')}_n10"] for k in SCALE] == [scale[k] for k in SCALE], r["variant"]
+        assert r["replicating_n10"] == scale["equivalent"] + scale["within-2x"], r["variant"]
+        assert r["equivalent_n100"] == eq100, r["variant"]
         assert (r["order_match"], r["order_experiments"]) == (order, ordered), r["variant"]
         assert r["geo_mean_ratio"] == pytest.approx(geo, rel=1e-9), r["variant"]
     # Rows are in the stated fit order, ranked 1, 2, 3.
     assert got["rank"].tolist() == [1, 2, 3]
     keys = [
-        (-r["replicating"], -r["within_2x"], -r["config_match"], abs(math.log(r["geo_mean_ratio"])))
+        (-r["within_2se"], -r["ratio_within_2x"], -r["config_match"], abs(math.log(r["geo_mean_ratio"])))
         for _, r in got.iterrows()
     ]
     assert keys == sorted(keys)
@@ -163,7 +183,11 @@ def test_python_and_rust_verdicts_agree_when_a_row_has_one_trial(qsweep_bin: Pat
         t3 = pd.read_csv(out / v / "table3.csv", dtype={"experiment": str})
         assert (t3["n"] == 1).all() and t3["std"].isna().all()
         t = replication_summary.tally(t3)
-        assert (t["rows"], t["replicating"], t["within_2x"]) == tuple(got.loc[v, ["rows", "replicating", "within_2x"]]), v
+        cols = ["rows", "within_2se", "ratio_within_2x"]
+        assert (t["rows"], t["within_2se"], t["ratio_within_2x"]) == tuple(got.loc[v, cols]), v
+        # Without a std the verdict scale cannot decide: no row replicates.
+        assert (t3[t3["paper_mean"].notna()]["verdict"] == "undecided").all(), v
+        assert (got.loc[v, "replicating_n10"], got.loc[v, "replicating_n5"], got.loc[v, "replicating_n3"]) == (0, 0, 0), v
     row = pd.Series({"mean": 6.0, "std": float("nan"), "n": 1, "paper_mean": 6.0, "paper_std": 3.0})
-    assert replication_summary.verdict(row) == "within 2×", "no std: cannot replicate, but within 2x"
+    assert replication_summary.verdict(row) == "within 2×", "no std: not within 2 SE, but within 2x"
     assert replication_summary.verdict(pd.Series({**row, "mean": 13.0})) == "does not replicate"

@@ -1,10 +1,13 @@
 //! The opening sentences of a comparison with reference values: the answer with its uncertainty,
 //! counted over the rows the forest plot ([`super::forest`]) draws, for the best declared reading
-//! and the text as written, then the figure with its caption.
+//! and the text as written — replicating rows on the verdict scale, how they move with the paper's
+//! unstated n, what choosing the reading is worth ([`super::selection`]), the spreads — then the
+//! figure with its caption.
 
 use super::digest::VariantDigest;
 use super::forest::{Series, STEM, TWO_X};
-use crate::analysis::equivalence::MARGIN;
+use super::selection::Selection;
+use crate::analysis::equivalence::{MARGIN, MARGIN_2X};
 use crate::plan::Plan;
 use crate::report::formats::Formats;
 use crate::report::table::html::escape_html;
@@ -18,7 +21,13 @@ pub fn series<'a>(plan: &Plan, variants: &'a [VariantDigest]) -> Vec<Series<'a>>
         .or(variants.first());
     let best =
         super::explore::chosen(plan, variants).and_then(|c| variants.iter().find(|v| v.info.id == c.id));
-    let of = |v: &'a VariantDigest, role| Series { info: &v.info, role, rows: &v.forest, fit: v.fit };
+    let of = |v: &'a VariantDigest, role| Series {
+        info: &v.info,
+        role,
+        rows: &v.forest,
+        scored: &v.rows,
+        fit: v.fit,
+    };
     let best_role = if plan.exploratory.is_some() { "chosen by the search" } else { "best declared" };
     let out = match (written, best) {
         (Some(w), Some(b)) if w.info.id == b.info.id => vec![of(w, "as written and best declared")],
@@ -43,16 +52,30 @@ pub struct Tally {
     pub within_2x: usize,
     /// Rows whose whole 95 % interval is within [`TWO_X`].
     pub whole_interval: usize,
-    /// Rows that replicate ([`super::VERDICT_RULE`]).
-    pub replicating: usize,
+    /// Rows that replicate on the verdict scale (equivalent or within-2x) at the paper's n taken
+    /// as 3, 5 and 10.
+    pub replicating: [usize; 3],
+    /// Rows per verdict at n = 10, in [`super::fit::Verdict::ALL`]'s order.
+    pub scale: [usize; 5],
+    /// Rows within two standard errors (the old rule).
+    pub within_2se: usize,
     /// Rows equivalent at paper n = 10 and n = 100.
     pub equivalent: [usize; 2],
+    /// Rows whose spread differs from the paper's: (ours wider, ours narrower).
+    pub spread: (usize, usize),
 }
 
 impl Tally {
     /// The tally of a series.
     pub fn of(s: &Series) -> Self {
         let inside = |x: f64| (TWO_X.0..=TWO_X.1).contains(&x);
+        let differs = |wider: bool| {
+            s.scored
+                .iter()
+                .filter_map(|r| r.spread)
+                .filter(|sp| sp.differs() && (sp.lo > 1.0) == wider)
+                .count()
+        };
         Self {
             rows: s.rows.len(),
             within_2x: s.rows.iter().filter(|r| inside(r.ratio)).count(),
@@ -61,30 +84,56 @@ impl Tally {
                 .iter()
                 .filter(|r| r.ci.is_some_and(|(a, b)| inside(a) && inside(b)))
                 .count(),
-            replicating: s.fit.replicating,
+            replicating: s.fit.replicating_by_n,
+            scale: s.fit.scale,
+            within_2se: s.fit.within_2se,
             equivalent: s.fit.equivalent,
+            spread: (differs(true), differs(false)),
         }
     }
 }
 
-/// "none is", "1 is", "3 are".
-fn are(n: usize) -> String {
-    match n {
-        0 => "none is".into(),
-        1 => "1 is".into(),
-        n => format!("{n} are"),
+/// The sentences on choosing the reading: leave-one-row-out and the yardstick.
+fn chosen_sentences(s: &Selection) -> String {
+    let (cv, cv_eq, cv_se) = s.cross_validated();
+    let mut out = format!(
+        "Chosen without the row it judges (leave-one-row-out over the {} declared readings), {cv} of \
+         {} rows replicate ({cv_eq} equivalent; {cv_se} within two standard errors), against {} ({}; {}) \
+         for `{}` in sample.",
+        s.readings,
+        s.held_out.len(),
+        s.in_sample.0,
+        s.in_sample.1,
+        s.in_sample.2,
+        s.best
+    );
+    if let Some(y) = s.yardstick_2se {
+        out.push_str(&format!(
+            " The best of {} readings has {} rows within two standard errors; were all readings equally \
+             good, the best would reach a median {} (95th percentile {}, p = {:.3}).",
+            s.readings, y.observed, y.median, y.p95, y.p
+        ));
     }
+    if let Some(y) = s.yardstick_scale {
+        out.push_str(&format!(
+            " For replicating rows: {} against a median {} (95th percentile {}, p = {:.3}).",
+            y.observed, y.median, y.p95, y.p
+        ));
+    }
+    out
 }
 
 /// The opening: a few sentences stating the answer with its uncertainty (the best declared
 /// reading first, then the text as written for contrast), in plain text (the pages escape or
 /// format it).
-pub fn opening(series: &[Series]) -> String {
+pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
     let mut out = Vec::new();
     for (k, s) in series.iter().rev().enumerate() {
         let t = Tally::of(s);
         let geo =
             s.fit.geo_mean.map(|g| format!("; geometric mean of ours ÷ paper {g:.2}")).unwrap_or_default();
+        let [rep3, rep5, rep10] = t.replicating;
+        let [eq, w2, wide, differs, undecided] = t.scale;
         if k == 0 {
             let who = match s.role {
                 "as written" => format!("As written ({})", s.info.id),
@@ -95,29 +144,41 @@ pub fn opening(series: &[Series]) -> String {
                 _ => format!("As written ({}), also the best-ranked declared reading", s.info.id),
             };
             out.push(format!(
-                "{who}, {} of {} Table III rows are within 2× of the paper ({} with their whole 95 % \
-                 interval), {} replicate (within two standard errors) and {} equivalent by TOST (margin \
-                 {:.2}–{:.2}, the paper's runs taken as 10; {} at 100){geo}.",
-                t.within_2x,
+                "{who}, {rep10} of {} Table III rows replicate, taking the paper's means to average 10 \
+                 runs: {eq} equivalent (TOST, ours ÷ paper within {:.2}–{:.2}) and {w2} shown within 2× \
+                 (the same test within {}–{}). {wide} more {} within two standard errors but not shown \
+                 within 2× (consistent but wide), {differs} differ{}. With 5 runs behind each published \
+                 mean {rep5} rows replicate, with 3 runs {rep3}; {} equivalent at 100 runs. By ratio \
+                 alone, {} rows are within 2× ({} with their whole 95 % interval){geo}.",
                 t.rows,
-                t.whole_interval,
-                t.replicating,
-                are(t.equivalent[0]),
                 MARGIN.0,
                 MARGIN.1,
+                MARGIN_2X.0,
+                MARGIN_2X.1,
+                if wide == 1 { "is" } else { "are" },
+                if undecided > 0 { format!(", {undecided} undecided") } else { String::new() },
                 t.equivalent[1],
+                t.within_2x,
+                t.whole_interval,
             ));
+            if let Some(sel) = selection {
+                out.push(chosen_sentences(sel));
+            }
+            if t.spread.0 + t.spread.1 > 0 {
+                out.push(format!(
+                    "Our spread differs from the paper's in {} rows ({} wider, {} narrower; 95 % F \
+                     interval of the std ratio).",
+                    t.spread.0 + t.spread.1,
+                    t.spread.0,
+                    t.spread.1
+                ));
+            }
         } else {
             out.push(format!(
-                "As written ({}): {} of {} within 2× ({} whole-interval), {} replicate, {} equivalent \
-                 ({} at 100){geo}.",
-                s.info.id,
-                t.within_2x,
-                t.rows,
-                t.whole_interval,
-                t.replicating,
-                t.equivalent[0],
-                t.equivalent[1],
+                "As written ({}): {rep10} of {} replicate ({eq} equivalent, {w2} within 2×), {wide} \
+                 consistent but wide, {differs} differ; {rep5} at 5 runs, {rep3} at 3; by ratio {} \
+                 within 2× ({} whole-interval){geo}.",
+                s.info.id, t.rows, t.within_2x, t.whole_interval,
             ));
         }
     }
@@ -128,8 +189,11 @@ pub fn opening(series: &[Series]) -> String {
 pub fn caption(series: &[Series]) -> String {
     let fresh = series.iter().any(|s| s.rows.iter().any(|r| r.fresh));
     format!(
-        "Every Table III row: ours ÷ paper (dot) with its 95 % interval (bar){}; green: the equivalence \
-         margin {:.2}–{:.2}; grey: within 2×.",
+        "Every Table III row: ours ÷ paper (dot) with the 95 % bootstrap interval of our mean (bar){}; \
+         green: the equivalence margin {:.2}–{:.2}; grey: within 2×. The bars leave out the paper's own \
+         uncertainty (its std over its unstated number of runs), so a bar inside a band is not a verdict: \
+         a row replicates only when the TOST, which includes it, shows it equivalent or within 2× \
+         (table3.csv's verdict).",
         if fresh { ", on fresh seeds where the best cell was re-run" } else { "" },
         MARGIN.0,
         MARGIN.1
@@ -143,10 +207,13 @@ pub struct Answer<'a> {
     pub series: &'a [Series<'a>],
     /// The figure's pixel size, when drawn.
     pub figure: Option<(u32, u32)>,
+    /// What choosing the reading is worth (a comparison of declared readings).
+    pub selection: Option<&'a Selection>,
 }
 
 /// The forest plot's alt text.
-pub const ALT: &str = "Forest plot: ours ÷ paper per Table III row on a log axis, with 95 % intervals";
+pub const ALT: &str =
+    "Forest plot: ours ÷ paper per Table III row on a log axis, with the 95 % intervals of our means";
 
 impl Answer<'_> {
     /// The opening as HTML: the sentences, then the figure (the SVG when written, else the PNG).
@@ -154,7 +221,8 @@ impl Answer<'_> {
         if self.series.is_empty() {
             return String::new();
         }
-        let mut h = format!("<div id=\"answer\">\n<p>{}</p>\n", escape_html(&opening(self.series)));
+        let mut h =
+            format!("<div id=\"answer\">\n<p>{}</p>\n", escape_html(&opening(self.series, self.selection)));
         if let (Some((w, ht)), Some(ext)) = (self.figure, formats.figure_ext()) {
             h.push_str(&format!(
                 "<figure><img src=\"{STEM}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{ALT}\">\n\
@@ -172,7 +240,7 @@ impl Answer<'_> {
         if self.series.is_empty() {
             return m;
         }
-        m.push_str(&format!("{}\n\n", opening(self.series)));
+        m.push_str(&format!("{}\n\n", opening(self.series, self.selection)));
         if let (Some(_), Some(ext)) = (self.figure, formats.figure_ext()) {
             m.push_str(&format!("![{ALT}]({STEM}.{ext})\n\n{}\n\n", caption(self.series)));
         }

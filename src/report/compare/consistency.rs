@@ -5,7 +5,7 @@
 
 use super::super::model::published_rows;
 use super::super::table::{Align, Column, Row, Table, Value};
-use super::fit::{fit_order, Cause, Fit};
+use super::fit::{fit_order, Cause, Fit, HEADLINE_N};
 use super::VariantDigest;
 use crate::analysis::consistency::{pairs, Config, Pair, ALPHA, CONSISTENCY_RULE};
 use crate::analysis::verdict::CAUSE_RULE;
@@ -25,7 +25,8 @@ fn config_text(c: &Option<Config>) -> Value {
 /// values).
 pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
     let rows: Vec<_> = published_rows(plan).into_iter().next()?.into_iter().map(|r| r.2).collect();
-    let found = pairs(&rows);
+    let found = pairs(&rows, HEADLINE_N);
+    let fewer = [5, 3].map(|n| pairs(&rows, n));
     let columns = vec![
         Column::new("System", "system", Align::Left),
         Column::new("Representation", "representation", Align::Left),
@@ -41,6 +42,9 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
         Column::new("df", "df", Align::Right),
         Column::new("p (two-sided)", "p", Align::Right),
         Column::new("Contradictory", "contradictory", Align::Left),
+        Column::new("Marked", "marked", Align::Left),
+        Column::new("Contradictory (n=5)", "contradictory_n5", Align::Left),
+        Column::new("Contradictory (n=3)", "contradictory_n3", Align::Left),
     ];
     let num = |value: f64, decimals: usize| {
         if value.is_finite() {
@@ -49,9 +53,11 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
             Value::Missing
         }
     };
+    let yes_no = |b: bool| Value::Text(if b { "yes" } else { "no" }.into());
     let table_rows = found
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(k, p)| {
             let (a, b) = (&rows[p.a], &rows[p.b]);
             let ms =
                 |mean: f64, std: f64| Value::MeanStd { mean, std: Some(std), decimals: 2, marked: false };
@@ -70,7 +76,14 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
                     num(p.t, 3),
                     num(p.df, 2),
                     Value::Num { value: p.p, decimals: 6, signed: false },
-                    Value::Text(if p.contradictory { "yes" } else { "no" }.into()),
+                    yes_no(p.contradictory),
+                    match p.designated() {
+                        Some(i) if i == p.a => Value::Text("a".into()),
+                        Some(_) => Value::Text("b".into()),
+                        None => Value::Missing,
+                    },
+                    yes_no(fewer[0][k].contradictory),
+                    yes_no(fewer[1][k].contradictory),
                 ],
                 highlight: p.contradictory,
             }
@@ -81,7 +94,8 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
         "Where the paper's grids overlap: {} comparable pair{} of Table III rows, {bad} contradictory \
          (α = {ALPHA}). {CONSISTENCY_RULE} Config: the published configuration's bins or sets per \
          variable, then the action count. Grids imply: what the published minima must satisfy \
-         (b ≤ a: row a's configuration is a cell of row b's grid).",
+         (b ≤ a: row a's configuration is a cell of row b's grid). Marked: the row the pair costs (a or \
+         b). Contradictory (n=5, n=3): the same test with the paper's means taken over 5 or 3 runs.",
         found.len(),
         if found.len() == 1 { "" } else { "s" }
     );
@@ -105,7 +119,7 @@ pub fn cause_tally(plan: &Plan, variants: &[VariantDigest]) -> Option<String> {
     }
     let counts: Vec<String> = Cause::ALL
         .iter()
-        .map(|c| format!("{} {}", v.rows.iter().filter(|r| r.cause == *c).count(), c.label()))
+        .map(|c| format!("{} {}", v.rows.iter().filter(|r| r.headline().cause == *c).count(), c.label()))
         .collect();
     Some(format!(
         "Why each Table III row does or does not replicate, under {which} `{}` ({} rows): {}. \

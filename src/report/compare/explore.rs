@@ -4,7 +4,7 @@
 //! without a `set`), and the number of readings tried is stated.
 
 use super::digest::{VariantDigest, VariantInfo};
-use super::fit::{fit_order, Fit, RowFit, Verdict, FIT_ORDER, VERDICT_RULE};
+use super::fit::{fit_order, Fit, FitVerdict, RowFit, FIT_ORDER, VERDICT_RULE};
 use crate::plan::Plan;
 use crate::report::table::{Align, Column, Row, Table, Value};
 use crate::spec::explore::Exploratory;
@@ -69,8 +69,8 @@ pub fn search_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) ->
         let int = |n: usize| Value::Int(n as u64);
         [
             int(f.rows),
-            int(f.replicating),
-            int(f.within_2x),
+            int(f.within_2se),
+            int(f.ratio_within_2x),
             int(f.config_match),
             f.geo_mean.map_or(Value::Missing, |value| Value::Num { value, decimals: 3, signed: false }),
         ]
@@ -144,7 +144,7 @@ pub fn held_out_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) 
                 ms(r.ref_mean, Some(r.ref_std)),
                 ms(r.mean, r.std),
                 Value::Int(r.n as u64),
-                Value::Text(verdict_name(r.verdict).into()),
+                Value::Text(verdict_name(r.fit_verdict).into()),
             ];
             if let Some(w) = written {
                 match w.rows.iter().find(|o| {
@@ -153,7 +153,7 @@ pub fn held_out_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) 
                     Some(o) => values.extend([
                         ms(o.mean, o.std),
                         Value::Int(o.n as u64),
-                        Value::Text(verdict_name(o.verdict).into()),
+                        Value::Text(verdict_name(o.fit_verdict).into()),
                     ]),
                     None => values.extend([Value::Missing, Value::Missing, Value::Missing]),
                 }
@@ -174,10 +174,10 @@ pub fn held_out_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) 
 }
 
 /// A verdict as written in tables.
-pub fn verdict_name(v: Verdict) -> &'static str {
+pub fn verdict_name(v: FitVerdict) -> &'static str {
     match v {
-        Verdict::Replicates => "replicates",
-        Verdict::Within2x => "within 2×",
-        Verdict::DoesNotReplicate => "does not replicate",
+        FitVerdict::Replicates => "replicates",
+        FitVerdict::Within2x => "within 2×",
+        FitVerdict::DoesNotReplicate => "does not replicate",
     }
 }

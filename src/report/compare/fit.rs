@@ -1,19 +1,24 @@
-//! How well one variant's Table III reproduces the pipeline's `reference:` values: the verdict
-//! of each row ([`verdict`], defined once in [`crate::analysis::verdict`], the rule that
-//! `scripts/replication_summary.py` recomputes independently), the per-variant tally ([`Fit`]) and the order of the comparison
-//! table ([`FIT_ORDER`]).
+//! How well one variant's Table III reproduces the pipeline's `reference:` values: each row judged
+//! ([`RowFit`]: the verdict scale at every assumed paper n, the old rule, the cause; rules defined
+//! once in [`crate::analysis::verdict`]), the per-variant tally ([`Fit`]) and the order of the
+//! comparison table ([`FIT_ORDER`], the pre-registered fit measure on the old rule).
 
 use super::super::model::{resolution_columns, ReportData};
 use super::super::table::{Align, Column, Row, Table, Value};
 use super::info::VariantInfo;
-use crate::analysis::equivalence::{against_paper, Tost, EQUIVALENCE_RULE};
-pub use crate::analysis::verdict::{cause, verdict, Cause, Verdict, REFERENCE_N, VERDICT_RULE};
+use crate::analysis::equivalence::{against_paper, Moments, Tost, EQUIVALENCE_RULE};
+pub use crate::analysis::verdict::{
+    cause, cause_2se, fit_verdict, judge, spread, Cause, FitVerdict, Judged, Spread, Verdict, HEADLINE_N,
+    PAPER_N_SET, REFERENCE_N, SCALE_RULE, VERDICT_RULE,
+};
+pub use crate::report::judgement::{judge_row, moments, RowJudgement};
 use crate::sim::env::SystemKind;
+use crate::sim::repr::ReprKind;
 use crate::sim::Algorithm;
 
 /// How the rows are ordered, as stated in the caption.
 pub const FIT_ORDER: &str = "Rows are ordered by fit (the measure pre-registered in \
-docs/preregistration.md): most replicating rows first, then most rows within 2×, then most matching \
+docs/preregistration.md, kept as declared): most rows within 2 SE first, then most rows within 2×, then most matching \
 best configurations, then the geometric mean of ours/reference closest to 1 (smallest |ln|), then \
 pipeline order.";
 
@@ -22,10 +27,16 @@ pipeline order.";
 pub struct Fit {
     /// Table III rows with a reference value and a best cell.
     pub rows: usize,
-    /// Of those, rows that replicate ([`VERDICT_RULE`]).
-    pub replicating: usize,
-    /// Rows that do not replicate but are within a factor 2.
-    pub within_2x: usize,
+    /// Of those, rows within two standard errors (the old rule, [`VERDICT_RULE`]; the fit
+    /// measure's first key).
+    pub within_2se: usize,
+    /// Rows not within 2 SE but whose ratio is within a factor 2 (the old rule).
+    pub ratio_within_2x: usize,
+    /// Rows that replicate on the scale (`equivalent` or `within-2x`) at each n of
+    /// [`PAPER_N_SET`].
+    pub replicating_by_n: [usize; 3],
+    /// Rows per verdict of the scale at the headline n, in [`Verdict::ALL`]'s order.
+    pub scale: [usize; 5],
     /// Rows whose best cell has the reference's resolution and action count.
     pub config_match: usize,
     /// Experiments whose algorithms rank by mean as in the reference.
@@ -52,6 +63,8 @@ pub struct RowFit {
     pub experiment: String,
     /// The algorithm.
     pub algorithm: Algorithm,
+    /// The representation (crisp or fuzzy).
+    pub repr: ReprKind,
     /// Our best cell's mean (the fresh-seed estimate where there is one).
     pub mean: f64,
     /// Its std (none for a single trial).
@@ -62,8 +75,8 @@ pub struct RowFit {
     pub ref_mean: f64,
     /// The reference std.
     pub ref_std: f64,
-    /// The row's verdict ([`verdict`]).
-    pub verdict: Verdict,
+    /// The row's verdict under the old rule ([`fit_verdict`]).
+    pub fit_verdict: FitVerdict,
     /// Our best cell has the reference's bins or sets per variable and action count.
     pub config_match: bool,
     /// Algorithms of the row's experiment (the order measure needs all of them).
@@ -76,29 +89,42 @@ pub struct RowFit {
     pub fresh: bool,
     /// The selection estimate: the best cell's mean over the grid's seeds that chose it.
     pub selection_mean: f64,
-    /// The verdict of our cell at the paper's configuration (its fresh-seed estimate where it has
-    /// one; `None`: no such cell with trials).
-    pub paper_cell: Option<Verdict>,
-    /// The row is in a pair of rows the paper's own numbers contradict.
-    pub inconsistent: bool,
-    /// The row's cause ([`cause`]).
-    pub cause: Cause,
+    /// Our cell at the paper's configuration (its fresh-seed estimate where it has one; `None`: no
+    /// such cell with trials).
+    pub paper_cell: Option<Moments>,
+    /// The row judged at each n of [`PAPER_N_SET`].
+    pub by_n: [RowJudgement; 3],
+    /// The old rule's cause ([`cause_2se`], at n = 10).
+    pub cause_2se: &'static str,
+    /// Our std against the paper's ([`spread`]).
+    pub spread: Option<Spread>,
+}
+
+impl RowFit {
+    /// The row judged at the headline n ([`HEADLINE_N`]).
+    pub fn headline(&self) -> &RowJudgement {
+        &self.by_n[PAPER_N_SET.len() - 1]
+    }
+
+    /// Ours ÷ the paper.
+    pub fn ratio(&self) -> f64 {
+        self.mean / self.ref_mean
+    }
 }
 
 /// Every Table III row of `data` that has a reference value and a best cell, in report order.
 pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
     let mut out = Vec::new();
-    let inconsistent = data.inconsistent_rows();
+    let contradictions = PAPER_N_SET.map(|n| data.contradictions(n));
     for (ei, e) in data.experiments.iter().enumerate() {
         let system = e.exp.system;
         for &alg in &e.exp.algorithms {
             let Some(r) = e.exp.reference.get(&alg) else { continue };
             let Some(c) = e.best_of(alg).map(|b| &e.cells[b.cell]) else { continue };
             // Judged on the fresh-seed estimate where the row has one (the winner's curse).
-            let est = c.estimate();
-            let Some(mean) = est.summary.mean else { continue };
+            let Some(best) = moments(c) else { continue };
             let Some(selection_mean) = c.summary.mean else { continue };
-            let (std, n) = (est.summary.std, est.n());
+            let Moments { mean, std, n } = best;
             let cfg = &c.cell.config;
             let ours: Vec<u32> = resolution_columns(system, &cfg.repr.resolution)
                 .into_iter()
@@ -113,30 +139,33 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
                 .flatten()
                 .chain(r.actions)
                 .collect();
-            let paper_cell = e.reference_cell(alg).and_then(|i| {
-                let est = e.cells[i].estimate();
-                Some(verdict(est.summary.mean?, est.summary.std, est.n(), r.mean, r.std))
+            let paper_cell = e.reference_cell(alg).and_then(|i| moments(&e.cells[i]));
+            let row_verdict = fit_verdict(mean, std, n, r.mean, r.std);
+            let at_2se = paper_cell.map(|m| fit_verdict(m.mean, m.std, m.n, r.mean, r.std));
+            let in_pair = contradictions[PAPER_N_SET.len() - 1].in_pair.contains(&(ei, alg));
+            let by_n = std::array::from_fn(|k| {
+                judge_row(best, paper_cell, r, &contradictions[k], (ei, alg), PAPER_N_SET[k])
             });
-            let row_verdict = verdict(mean, std, n, r.mean, r.std);
-            let bad = inconsistent.contains(&(ei, alg));
             out.push(RowFit {
                 system,
                 experiment: e.exp.id.clone(),
                 algorithm: alg,
+                repr: e.exp.repr,
                 mean,
                 std,
                 n,
                 ref_mean: r.mean,
                 ref_std: r.std,
-                verdict: row_verdict,
+                fit_verdict: row_verdict,
                 config_match: ours == theirs,
                 exp_algorithms: e.exp.algorithms.len(),
                 tost: against_paper(mean, std, n, r.mean, r.std),
-                fresh: est.fresh,
+                fresh: c.estimate().fresh,
                 selection_mean,
                 paper_cell,
-                inconsistent: bad,
-                cause: cause(row_verdict, bad, paper_cell),
+                by_n,
+                cause_2se: cause_2se(row_verdict, in_pair, at_2se),
+                spread: spread(std, n, r.std, HEADLINE_N),
             });
         }
     }
@@ -156,11 +185,16 @@ impl Fit {
                 curse.push((r.mean / r.selection_mean).ln());
             }
             f.rows += 1;
-            match r.verdict {
-                Verdict::Replicates => f.replicating += 1,
-                Verdict::Within2x => f.within_2x += 1,
-                Verdict::DoesNotReplicate => {}
+            match r.fit_verdict {
+                FitVerdict::Replicates => f.within_2se += 1,
+                FitVerdict::Within2x => f.ratio_within_2x += 1,
+                FitVerdict::DoesNotReplicate => {}
             }
+            for (k, j) in r.by_n.iter().enumerate() {
+                f.replicating_by_n[k] += usize::from(j.best.verdict.replicates());
+            }
+            let v = r.headline().best.verdict;
+            f.scale[Verdict::ALL.iter().position(|&a| a == v).expect("every verdict is listed")] += 1;
             f.config_match += usize::from(r.config_match);
             for (k, t) in r.tost.iter().enumerate() {
                 f.equivalent[k] += usize::from(t.is_some_and(|t| t.equivalent));
@@ -198,9 +232,9 @@ pub fn fit_order(fits: &[Fit]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..fits.len()).collect();
     idx.sort_by(|&i, &j| {
         let (a, b) = (&fits[i], &fits[j]);
-        b.replicating
-            .cmp(&a.replicating)
-            .then(b.within_2x.cmp(&a.within_2x))
+        b.within_2se
+            .cmp(&a.within_2se)
+            .then(b.ratio_within_2x.cmp(&a.ratio_within_2x))
             .then(b.config_match.cmp(&a.config_match))
             .then(off(a).total_cmp(&off(b)))
     });
@@ -216,13 +250,19 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
         Column::new("Variant", "variant", Align::Left),
         Column::new("Title", "title", Align::Left),
         Column::new("Rows with reference", "rows", Align::Right),
-        Column::new("Replicate", "replicating", Align::Right),
-        Column::new("Within 2×", "within_2x", Align::Right),
+        Column::new("Replicate (n=10)", "replicating_n10", Align::Right),
+        Column::new("Equivalent", "equivalent_n10", Align::Right),
+        Column::new("Within 2× (TOST)", "within_2x_n10", Align::Right),
+        Column::new("Consistent but wide", "consistent_but_wide_n10", Align::Right),
+        Column::new("Differs", "differs_n10", Align::Right),
+        Column::new("Replicate (n=5)", "replicating_n5", Align::Right),
+        Column::new("Replicate (n=3)", "replicating_n3", Align::Right),
+        Column::new("Within 2 SE (old rule)", "within_2se", Align::Right),
+        Column::new("Ratio within 2× (old rule)", "ratio_within_2x", Align::Right),
         Column::new("Config matches", "config_match", Align::Right),
         Column::new("Order matches", "order_match", Align::Right),
         Column::new("Experiments ordered", "order_experiments", Align::Right),
         Column::new("Geo. mean ours/ref.", "geo_mean_ratio", Align::Right),
-        Column::new("Equiv. n=10", "equivalent_n10", Align::Right),
         Column::new("Equiv. n=100", "equivalent_n100", Align::Right),
         Column::new("Exploratory", "exploratory", Align::Left),
     ];
@@ -250,13 +290,19 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
                 Value::Text(v.id.clone()),
                 v.title.clone().map_or(Value::Missing, Value::Text),
                 int(f.rows),
-                int(f.replicating),
-                int(f.within_2x),
+                int(f.replicating_by_n[2]),
+                int(f.scale[0]),
+                int(f.scale[1]),
+                int(f.scale[2]),
+                int(f.scale[3]),
+                int(f.replicating_by_n[1]),
+                int(f.replicating_by_n[0]),
+                int(f.within_2se),
+                int(f.ratio_within_2x),
                 int(f.config_match),
                 int(f.order_match),
                 int(f.order_experiments),
                 ratio(f.geo_mean),
-                int(f.equivalent[0]),
                 int(f.equivalent[1]),
                 Value::Text(if v.exploratory { "yes" } else { "no" }.into()),
             ];
@@ -268,7 +314,8 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
         .collect();
     let caption = format!(
         "How well each variant reproduces the reference values (one row per variant; counts over its \
-         Table III rows that have a reference value and a best cell). {VERDICT_RULE} Config matches: the \
+         Table III rows that have a reference value and a best cell). {SCALE_RULE} Replicate: equivalent \
+         or within-2x, at the paper's n taken as 10, 5 or 3. {VERDICT_RULE} Config matches: the \
          best cell has the reference's bins or sets per variable and action count. Order matches: of the \
          experiments where every algorithm has a reference, those whose algorithms (Q(0), Q(λ)) rank by \
          mean as in the reference. Geo. mean: exp of the mean of ln(ours/reference) over the rows. {FIT_ORDER} \

@@ -6,6 +6,10 @@
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
 //! - `consistency.md`, `consistency.csv` (pipelines with reference values): every pair of Table III
 //!   rows whose grids overlap, with the Welch test of their published means ([`consistency`]);
+//! - `verdicts_by_n.csv` (with reference values): every reading's rows judged with the paper's n
+//!   taken as 3, 5 and 10, each with the closest reading ([`verdicts`]); `cross_validation.csv`
+//!   (two or more declared readings): each row judged under the reading chosen on the others
+//!   ([`selection`]);
 //! - `figures/forest.svg` (and `.png`), where the pipeline has reference values: every Table III
 //!   row's ours ÷ reference with its interval, as written and under the best declared reading
 //!   ([`forest`]);
@@ -24,12 +28,15 @@ pub mod explore;
 pub mod fit;
 pub mod forest;
 mod info;
+pub mod selection;
+pub mod verdicts;
 
 pub use digest::{CellDigest, ExpDigest, VariantDigest, VariantInfo};
 
 pub use diff::{all_diffs, diff_figure, diff_label, diff_seed, diverging, matching, CellDiff, DIFF_RULE};
 pub use fit::{
-    comparison_table, fit_order, rows_of, verdict, Fit, RowFit, Verdict, FIT_ORDER, REFERENCE_N, VERDICT_RULE,
+    comparison_table, fit_order, fit_verdict, rows_of, Fit, FitVerdict, RowFit, Verdict, FIT_ORDER,
+    REFERENCE_N, VERDICT_RULE,
 };
 
 use super::formats::{Format, Formats};
@@ -72,6 +79,15 @@ pub fn write_comparison(
         if formats.has(Format::Csv) {
             put("conclusions.csv", render(&t, &Csv).as_bytes())?;
         }
+    }
+    if let Some(t) = verdicts::verdicts_by_n_table(variants) {
+        if formats.has(Format::Csv) {
+            put("verdicts_by_n.csv", render(&t, &Csv).as_bytes())?;
+        }
+    }
+    let selection = selection::selection(plan.exploratory.is_some(), variants);
+    if let (Some(s), true) = (&selection, formats.has(Format::Csv)) {
+        put("cross_validation.csv", render(&selection::table(s), &Csv).as_bytes())?;
     }
     let consistency = consistency::consistency_table(plan).map(|c| c.1);
     if let Some(t) = &consistency {
@@ -122,7 +138,7 @@ pub fn write_comparison(
         matrix: matrix.as_ref(),
         consistency: consistency.as_ref(),
     };
-    let answer = answer::Answer { series: &series, figure: forest_size };
+    let answer = answer::Answer { series: &series, figure: forest_size, selection: selection.as_ref() };
     if formats.has(Format::Html) {
         put("index.html", page(plan, variants, &tables, &answer, &figs, formats, notes).as_bytes())?;
     }
@@ -226,6 +242,8 @@ fn page(
     .into_iter()
     .chain(tables.matrix.map(|_| (Format::Csv, "<a href=\"conclusions.csv\">conclusions.csv</a>")))
     .chain(tables.consistency.map(|_| (Format::Csv, "<a href=\"consistency.csv\">consistency.csv</a>")))
+    .chain(answer.series.first().map(|_| (Format::Csv, "<a href=\"verdicts_by_n.csv\">verdicts_by_n.csv</a>")))
+    .chain(answer.selection.map(|_| (Format::Csv, "<a href=\"cross_validation.csv\">cross_validation.csv</a>")))
     .filter(|(f, _)| formats.has(*f))
     .map(|(_, l)| l)
     .collect();

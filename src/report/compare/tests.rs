@@ -107,12 +107,17 @@ fn by_hand(d: &ReportData) -> (usize, usize, usize, usize, usize, usize, f64) {
 #[test]
 fn verdicts_follow_the_replication_rule() {
     // se = √(3²/10 + 2²/4) = √1.9 ≈ 1.378; 2·se ≈ 2.757.
-    assert_eq!(verdict(8.7, Some(2.0), 4, 6.0, 3.0), Verdict::Replicates);
-    assert_eq!(verdict(8.8, Some(2.0), 4, 6.0, 3.0), Verdict::Within2x);
-    assert_eq!(verdict(12.0, Some(2.0), 4, 6.0, 3.0), Verdict::Within2x);
-    assert_eq!(verdict(12.1, Some(2.0), 4, 6.0, 3.0), Verdict::DoesNotReplicate);
-    assert_eq!(verdict(6.0, None, 1, 6.0, 3.0), Verdict::Within2x, "no std: cannot replicate");
-    let f = |replicating, within_2x, geo_mean| Fit { replicating, within_2x, geo_mean, ..Fit::default() };
+    assert_eq!(fit_verdict(8.7, Some(2.0), 4, 6.0, 3.0), FitVerdict::Replicates);
+    assert_eq!(fit_verdict(8.8, Some(2.0), 4, 6.0, 3.0), FitVerdict::Within2x);
+    assert_eq!(fit_verdict(12.0, Some(2.0), 4, 6.0, 3.0), FitVerdict::Within2x);
+    assert_eq!(fit_verdict(12.1, Some(2.0), 4, 6.0, 3.0), FitVerdict::DoesNotReplicate);
+    assert_eq!(fit_verdict(6.0, None, 1, 6.0, 3.0), FitVerdict::Within2x, "no std: not within 2 SE");
+    let f = |within_2se, ratio_within_2x, geo_mean| Fit {
+        within_2se,
+        ratio_within_2x,
+        geo_mean,
+        ..Fit::default()
+    };
     let fits = [f(1, 3, Some(1.1)), f(2, 0, None), f(1, 3, Some(0.95)), f(1, 3, None), f(1, 4, Some(3.0))];
     assert_eq!(fit_order(&fits), vec![1, 4, 2, 0, 3]);
     assert_eq!(diff_label(-12.345), "−12.3");
@@ -189,28 +194,48 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
             "variant",
             "title",
             "rows",
-            "replicating",
-            "within_2x",
+            "replicating_n10",
+            "equivalent_n10",
+            "within_2x_n10",
+            "consistent_but_wide_n10",
+            "differs_n10",
+            "replicating_n5",
+            "replicating_n3",
+            "within_2se",
+            "ratio_within_2x",
             "config_match",
             "order_match",
             "order_experiments",
             "geo_mean_ratio",
-            "equivalent_n10",
             "equivalent_n100",
             "exploratory"
         ]
     );
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 2);
     let fits: Vec<_> = data.iter().map(by_hand).collect();
     for (v, d) in variants.iter().map(|v| &v.info).zip(&data) {
         let row = rows.iter().find(|r| r[1] == v.id).unwrap();
         let (n, rep, w2, cfg, ord, ord_n, geo) = by_hand(d);
-        let ints: Vec<usize> = row[3..9].iter().map(|s| s.parse().unwrap()).collect();
+        let ints: Vec<usize> =
+            ["rows", "within_2se", "ratio_within_2x", "config_match", "order_match", "order_experiments"]
+                .iter()
+                .map(|c| row[col(c)].parse().unwrap())
+                .collect();
         assert_eq!(ints, [n, rep, w2, cfg, ord, ord_n], "{}", v.id);
         assert_eq!(n, 3);
         assert_eq!(ord_n, 1);
-        let g: f64 = row[9].parse().unwrap();
+        let scale: usize = ["equivalent_n10", "within_2x_n10", "consistent_but_wide_n10", "differs_n10"]
+            .iter()
+            .map(|c| row[col(c)].parse::<usize>().unwrap())
+            .sum();
+        assert!(scale <= n, "every row has one verdict (undecided not listed)");
+        let replicating: usize = row[col("replicating_n10")].parse().unwrap();
+        let strict: usize =
+            ["equivalent_n10", "within_2x_n10"].iter().map(|c| row[col(c)].parse::<usize>().unwrap()).sum();
+        assert_eq!(replicating, strict);
+        let g: f64 = row[col("geo_mean_ratio")].parse().unwrap();
         assert!((g - geo).abs() < 1e-12, "{g} vs {geo}");
         assert_eq!(row[2], v.title.as_deref().unwrap_or(""));
     }
@@ -224,7 +249,7 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
     assert_eq!((rows[0][0], rows[0][1]), ("1", first));
     let md = String::from_utf8(out["variants.md"].clone()).unwrap();
     assert!(md.starts_with("**Variants.** How well each variant"));
-    assert!(md.contains("most replicating rows first"));
+    assert!(md.contains("most rows within 2 SE first"));
 
     // Markers exactly where the difference's interval excludes 0.
     let (b, o) = (&variants[0], &variants[1]);

@@ -6,8 +6,11 @@ use super::model::{Align, Column, Row, Table, Value};
 use crate::analysis::consistency::CONSISTENCY_RULE;
 use crate::analysis::equivalence::{against_paper, EQUIVALENCE_RULE};
 use crate::analysis::survival::SURVIVAL_RULE;
-use crate::analysis::verdict::{cause, verdict, Verdict, CAUSE_RULE, VERDICT_RULE};
+use crate::analysis::verdict::{
+    cause_2se, fit_verdict, FitVerdict, CAUSE_RULE, HEADLINE_N, SCALE_RULE, SPREAD_RULE, VERDICT_RULE,
+};
 use crate::analysis::{BEST_RULE, CENSORING, RACE_RULE};
+use crate::report::judgement::{judge_row, moments};
 use crate::report::model::{resolution_columns, CellData, ExpData, ReportData};
 use crate::spec::Reference;
 
@@ -131,10 +134,10 @@ fn estimate_values(
     values
 }
 
-/// The replication verdict of `cell`'s estimate (fresh where present) against `r`.
-fn cell_verdict(cell: Option<&CellData>, r: &Reference) -> Option<Verdict> {
-    let est = cell?.estimate();
-    Some(verdict(est.summary.mean?, est.summary.std, est.n(), r.mean, r.std))
+/// The old rule's verdict of `cell`'s estimate (fresh where present) against `r`.
+fn cell_verdict_2se(cell: Option<&CellData>, r: &Reference) -> Option<FitVerdict> {
+    let m = moments(cell?)?;
+    Some(fit_verdict(m.mean, m.std, m.n, r.mean, r.std))
 }
 
 /// Table III with the caption of its first part, and the index of the first column and the caption
@@ -185,12 +188,24 @@ fn table3_built(data: &ReportData) -> (Table, Vec<(Vec<usize>, String)>) {
     }
     let cause_split = columns.len();
     if reference {
+        columns.push(Column::new("Within 2 SE (best)", "verdict_2se", Align::Left));
+        columns.push(Column::new("Within 2 SE (paper config)", "paper_cell_verdict_2se", Align::Left));
+        columns.push(Column::new("Cause (old rule)", "cause_2se", Align::Left));
+        columns.push(Column::new("Contradictory pair", "contradictory_pair", Align::Left));
+        columns.push(Column::new("Paper inconsistent", "paper_inconsistent", Align::Left));
+        columns.push(Column::new("TOST 2× p", "tost2x_p_n10", Align::Right));
+        columns.push(Column::new("TOST 2× p (paper config)", "paper_cell_tost2x_p_n10", Align::Right));
         columns.push(Column::new("Verdict (best)", "verdict", Align::Left));
         columns.push(Column::new("Verdict (paper config)", "paper_cell_verdict", Align::Left));
-        columns.push(Column::new("Paper inconsistent", "paper_inconsistent", Align::Left));
         columns.push(Column::new("Cause", "cause", Align::Left));
+        columns.push(Column::new("Std ratio", "std_ratio", Align::Right));
+        columns.push(
+            Column::new("Std ratio 95% CI", "std_ratio_lo", Align::Right)
+                .fields(&["std_ratio_lo", "std_ratio_hi"]),
+        );
+        columns.push(Column::new("Spread differs", "spread_differs", Align::Left));
     }
-    let inconsistent = if reference { data.inconsistent_rows() } else { Vec::new() };
+    let contradictions = if reference { data.contradictions(HEADLINE_N) } else { Default::default() };
     let mut rows = Vec::new();
     for (ei, e) in data.experiments.iter().enumerate() {
         let exp = e.exp;
@@ -267,16 +282,40 @@ fn table3_built(data: &ReportData) -> (Table, Vec<(Vec<usize>, String)>) {
                 values.push(Value::Int(at.map_or(0, |c| c.successes as u64)));
                 values.extend(estimate_values(at, fresh, true, r));
                 let text = |s: &str| Value::Text(s.into());
-                match r {
-                    Some(r) => {
-                        let (best_v, at_v) = (cell_verdict(cell, r), cell_verdict(at, r));
-                        let bad = inconsistent.contains(&(ei, alg));
+                let yes_no = |b: bool| text(if b { "yes" } else { "no" });
+                let p = |v: Option<f64>| num(v, 4);
+                match (r, cell.and_then(moments)) {
+                    (Some(r), Some(best_m)) => {
+                        let (best_v, at_v) = (cell_verdict_2se(cell, r), cell_verdict_2se(at, r));
+                        let in_pair = contradictions.in_pair.contains(&(ei, alg));
+                        let j = judge_row(
+                            best_m,
+                            at.and_then(moments),
+                            r,
+                            &contradictions,
+                            (ei, alg),
+                            HEADLINE_N,
+                        );
                         values.push(best_v.map_or(Value::Missing, |v| text(v.label())));
                         values.push(at_v.map_or(Value::Missing, |v| text(v.label())));
-                        values.push(text(if bad { "yes" } else { "no" }));
-                        values.push(best_v.map_or(Value::Missing, |v| text(cause(v, bad, at_v).label())));
+                        values.push(best_v.map_or(Value::Missing, |v| text(cause_2se(v, in_pair, at_v))));
+                        values.push(yes_no(j.in_pair));
+                        values.push(yes_no(j.designated));
+                        values.push(p(j.best.tost2x_p));
+                        values.push(p(j.paper_cell.and_then(|a| a.tost2x_p)));
+                        values.push(text(j.best.verdict.label()));
+                        values.push(j.paper_cell.map_or(Value::Missing, |a| text(a.verdict.label())));
+                        values.push(text(j.cause.label()));
+                        match crate::analysis::verdict::spread(best_m.std, best_m.n, r.std, HEADLINE_N) {
+                            Some(sp) => values.extend([
+                                num(Some(sp.ratio), 3),
+                                Value::Range { lo: sp.lo, hi: sp.hi, decimals: 3 },
+                                yes_no(sp.differs()),
+                            ]),
+                            None => values.extend(std::iter::repeat_n(Value::Missing, 3)),
+                        }
                     }
-                    None => values.extend(std::iter::repeat_n(Value::Missing, 4)),
+                    _ => values.extend(std::iter::repeat_n(Value::Missing, 13)),
                 }
             }
             rows.push(Row { values, highlight: false });
@@ -341,7 +380,9 @@ fn table3_built(data: &ReportData) -> (Table, Vec<(Vec<usize>, String)>) {
             (cause_split..columns.len()).collect(),
             format!(
                 "Verdicts of the best cell and of the paper's cell, on their fresh-seed estimate where \
-                 present: {VERDICT_RULE} Paper inconsistent: {CONSISTENCY_RULE} {CAUSE_RULE}"
+                 present. {SCALE_RULE} TOST 2× p: the within-2× test's p. The old rule, for comparison: \
+                 {VERDICT_RULE} Contradictory pair, paper inconsistent: {CONSISTENCY_RULE} {CAUSE_RULE} \
+                 {SPREAD_RULE}"
             ),
         ));
     }
