@@ -174,7 +174,7 @@ def main(old_dir, new_dir, caches=None):
     w("## Verdict counts, before and after (`variants.csv`)\n")
     va = pl.read_csv(old_dir / "variants.csv")
     vb = pl.read_csv(new_dir / "variants.csv")
-    cols = ["replicating", "within_2x", "config_match", "order_match"]
+    cols = ["replicating_n10", "within_2se", "ratio_within_2x", "config_match", "order_match"]
     w("| reading | " + " | ".join(f"{c} (1 → 2)" for c in cols) + " |")
     w("|---|" + "---:|" * len(cols))
     for r1 in va.iter_rows(named=True):

@@ -5,9 +5,11 @@ Usage: .venv/bin/python scripts/replication_opening.py [reports/paper]
 
 Prints Markdown: the claims x readings matrix of the declared readings (conclusions.csv), then
 Table III of the best-fitting declared reading (variants.csv, rank 1) with every row's fresh-seed
-estimate and its interval, the paper's value, ours/paper with its interval, the within-2-SE /
-within-2x verdict and the equivalence verdicts (table3.csv). Analysis only; the numbers are
-qsweep's, this only lays them out (the verdicts are recomputed by scripts/replication_summary.py).
+estimate and its interval, the paper's value, ours/paper with its interval, the verdict on the
+pre-registered scale and the cause (table3.csv's `verdict`, `cause`: issue #46), the old rule's
+within-2-SE / within-2x verdict and the equivalence verdicts (table3.csv). Analysis only; the
+numbers are qsweep's, this only lays them out (the old rule's verdicts are recomputed by
+scripts/replication_summary.py, the scale's by tests/python/test_verdicts.py).
 """
 
 from __future__ import annotations
@@ -43,14 +45,18 @@ def claims(d: Path, declared: list[str]) -> None:
 def table3(d: Path, v: str) -> None:
     t = pd.read_csv(d / v / "table3.csv", dtype={"experiment": str})
     j = judged(t)
-    print("| system | exp. | algorithm | selection (n = 10) | fresh mean ± std [95 % CI] (n) | paper | ours/paper [95 % CI] | verdict | equivalent n=10 / n=100 | censored |")
-    print("|---|---|---|---:|---:|---:|---:|---|---|---:|")
+    text = lambda x: "" if pd.isna(x) else str(x)  # noqa: E731
+    print(
+        "| system | exp. | algorithm | selection (n = 10) | fresh mean ± std [95 % CI] (n) | paper | ours/paper [95 % CI] "
+        "| verdict | cause | within 2 SE (old rule) | equivalent n=10 / n=100 | censored |"
+    )
+    print("|---|---|---|---:|---:|---:|---:|---|---|---|---|---:|")
     for (_, r), (_, rj) in zip(t.iterrows(), j.iterrows()):
         print(
             f"| {r.system} | {r.experiment} | {r.algorithm} | {r['mean']:.2f} | "
             f"{r.fresh_mean:.2f} ± {r.fresh_std:.2f} [{r.fresh_ci_lo:.2f}, {r.fresh_ci_hi:.2f}] ({int(r.fresh_n)}) | "
             f"{r.paper_mean:g} ± {r.paper_std:g} | {r.ratio:.2f} [{r.ratio_lo:.2f}, {r.ratio_hi:.2f}] | "
-            f"{verdict(rj)} | {r.equivalent_n10} / {r.equivalent_n100} | {r.censored:.2f} |"
+            f"{text(r.verdict)} | {text(r.cause)} | {verdict(rj)} | {r.equivalent_n10} / {r.equivalent_n100} | {r.censored:.2f} |"
         )
 
 

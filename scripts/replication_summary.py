@@ -9,6 +9,13 @@ against variants.csv), the ranking by the pre-registered fit measure (docs/prere
 Table III under `as-written` and under the best-fitting variant side by side, then the paper's
 conclusions re-checked under both. For a report without variants, the last part for that report.
 Analysis only; qsweep itself is Rust. Every figure here can be recomputed with any tool.
+
+Two rules are in play (docs/preregistration.md). The old one, two standard errors then within 2×
+(`verdict` and `causes` here, table3.csv's `verdict_2se` and `cause_2se`), is recomputed here from
+the means and stds. The verdict scale of issue #46 (table3.csv's `verdict`, `paper_cell_verdict`,
+`cause`: equivalent / within-2x / consistent-but-wide / differs / undecided, a TOST at the paper's
+n taken as 10) is read from table3.csv and tallied; tests/python/test_verdicts.py recomputes it.
+Only `equivalent` and `within-2x` count as replicating.
 """
 
 from __future__ import annotations
@@ -28,12 +35,27 @@ def best(cells: pd.DataFrame) -> pd.DataFrame:
 
 
 RES_COLS = ["x", "x_dot", "theta", "theta_dot"]
+# The verdict scale (table3.csv's `verdict`) in variants.csv's order, with its column there.
+SCALE = {
+    "equivalent": "equivalent_n10",
+    "within-2x": "within_2x_n10",
+    "consistent-but-wide": "consistent_but_wide_n10",
+    "differs": "differs_n10",
+}
+REPLICATING = ("equivalent", "within-2x")
+# The causes on the verdict scale (table3.csv's `cause`), in the order the comparison page tallies them.
+CAUSES = ["replicates", "argmin", "paper-inconsistent", "differs-at-paper-config", "unexplained"]
+# The old cause rule's labels (`cause_2se`).
+CAUSES_2SE = ["replicates", "argmin", "paper-inconsistent", "learner", "unexplained"]
+# The old rule's verdicts as this script words them, and as table3.csv's `verdict_2se` does.
+WORD_2SE = {"replicates": "replicates", "within 2×": "within-2x", "does not replicate": "no"}
 
 
 def verdict(r: pd.Series) -> str:
-    """The REPLICATION.md rule, recomputed independently of qsweep's (src/report/compare/fit.rs):
-    two standard errors, else within 2x, else not. A row without std (one trial) cannot
-    replicate but can be within 2x."""
+    """The old rule (table3.csv's `verdict_2se`), recomputed independently of qsweep's
+    (src/analysis/verdict.rs): two standard errors, else within 2x, else not. A row without std
+    (one trial) cannot be within 2 SE but can be within 2x. "replicates" here means within 2 SE,
+    which no longer counts as replicating in a headline (the verdict scale decides that)."""
     if pd.isna(r["mean"]):
         return "does not replicate"
     if pd.notna(r["std"]):
@@ -65,10 +87,13 @@ def judged(t3: pd.DataFrame) -> pd.DataFrame:
 
 
 def tally(t3: pd.DataFrame) -> dict:
-    """One variant's fit, from its table3.csv, as variants.csv states it."""
+    """One variant's fit, from its table3.csv, as variants.csv states it: the old rule's counts
+    (`within_2se`, `ratio_within_2x`) recomputed, the verdict scale's counted from the `verdict`
+    column (`replicating_n10`: equivalent or within-2x), the TOST at 100 runs from `equivalent_n100`."""
     t3 = judged(t3)
     rows = t3[t3["paper_mean"].notna() & t3["mean"].notna()]
     v = [verdict(r) for _, r in rows.iterrows()]
+    scale = rows["verdict"].value_counts()
     config = sum(configs(r)[0] == configs(r)[1] for _, r in rows.iterrows())
     order = ordered = 0
     for _, same in rows.groupby(["system", "experiment"]):
@@ -80,18 +105,22 @@ def tally(t3: pd.DataFrame) -> dict:
     geo = math.exp(sum(math.log(r["mean"] / r["paper_mean"]) for _, r in rows.iterrows()) / len(rows))
     return {
         "rows": len(rows),
-        "replicating": v.count("replicates"),
-        "within_2x": v.count("within 2×"),
+        "replicating_n10": int(sum(scale.get(k, 0) for k in REPLICATING)),
+        **{col: int(scale.get(k, 0)) for k, col in SCALE.items()},
+        "within_2se": v.count("replicates"),
+        "ratio_within_2x": v.count("within 2×"),
         "config_match": config,
         "order_match": order,
         "order_experiments": ordered,
         "geo_mean_ratio": geo,
+        "equivalent_n100": int((rows["equivalent_n100"] == "yes").sum()),
     }
 
 
 def fit_key(t: dict) -> tuple:
-    """The pre-registered order: replicating, within 2x, matching configurations, |ln g|."""
-    return (-t["replicating"], -t["within_2x"], -t["config_match"], abs(math.log(t["geo_mean_ratio"])))
+    """The pre-registered order (unchanged by issue #46): rows within 2 SE, ratio within 2x (both
+    the old rule), matching configurations, |ln g|."""
+    return (-t["within_2se"], -t["ratio_within_2x"], -t["config_match"], abs(math.log(t["geo_mean_ratio"])))
 
 
 def paper_cell(cells: pd.DataFrame, t3: pd.DataFrame) -> pd.DataFrame:
@@ -115,11 +144,14 @@ def paper_cell(cells: pd.DataFrame, t3: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out, index=t3.index)
 
 
-def consistency(t3: pd.DataFrame, cells: pd.DataFrame) -> list[dict]:
+def consistency(t3: pd.DataFrame, cells: pd.DataFrame, n: int = 10) -> list[dict]:
     """Every pair of Table III rows (same system, representation, algorithm; different experiments)
     where one row's published configuration is a cell of the other's grid, with the two-sided Welch
-    test of the published means (10 runs each); contradictory when p < 0.05 and the difference goes
-    the way the grids forbid (the grid's minimum above the contained row's value)."""
+    test of the published means (`n` runs each: the paper never states it); contradictory when
+    p < 0.05 and the difference goes the way the grids forbid (the grid's minimum above the
+    contained row's value). `marked` ("a", "b"; "" for a consistent pair): the row a contradictory
+    pair costs, the one whose published minimum is undercut by a cell of its own grid; where each
+    configuration lies in the other's grid, the later experiment's (b)."""
     from scipy import stats
 
     def cfg(r: pd.Series) -> tuple | None:
@@ -142,16 +174,19 @@ def consistency(t3: pd.DataFrame, cells: pd.DataFrame) -> list[dict]:
             a_in_b, b_in_a = cfg(a) in grids[j], cfg(b) in grids[i]
             if not (a_in_b or b_in_a):
                 continue
-            t, p = stats.ttest_ind_from_stats(b.paper_mean, b.paper_std, 10, a.paper_mean, a.paper_std, 10, equal_var=False)
+            t, p = stats.ttest_ind_from_stats(b.paper_mean, b.paper_std, n, a.paper_mean, a.paper_std, n, equal_var=False)
             forbidden = (a_in_b and b.paper_mean > a.paper_mean) or (b_in_a and a.paper_mean > b.paper_mean)
-            out.append({"a": i, "b": j, "row_a": a, "row_b": b, "t": float(t), "p": float(p), "contradictory": bool(p < 0.05 and forbidden)})
+            bad = bool(p < 0.05 and forbidden)
+            # Only a's grid holds b's configuration: a's published minimum is the one undercut.
+            marked = ("a" if b_in_a and not a_in_b else "b") if bad else ""
+            out.append({"a": i, "b": j, "row_a": a, "row_b": b, "t": float(t), "p": float(p), "contradictory": bad, "marked": marked})
     return out
 
 
 def causes(t3: pd.DataFrame, cells: pd.DataFrame) -> list[str]:
-    """Each Table III row's cause by the rule pre-registered in docs/preregistration.md (issue #40),
-    recomputed from cells.parquet and the paper's values: replicates, paper-inconsistent, argmin,
-    learner, unexplained."""
+    """Each Table III row's cause by the old rule (issue #40; table3.csv's `cause_2se`), recomputed
+    from cells.parquet and the paper's values: replicates (within 2 SE), paper-inconsistent (both
+    rows of a contradictory pair at 10 runs), argmin, learner, unexplained."""
     j = judged(t3)
     at = paper_cell(cells, t3)
     rows = [i for i, r in t3.iterrows() if pd.notna(r["paper_mean"])]
@@ -177,13 +212,16 @@ def causes(t3: pd.DataFrame, cells: pd.DataFrame) -> list[str]:
 
 
 def cause_table(d: Path, v: str) -> None:
-    """The per-row cause table of REPLICATION.md for reading `v`, and its tally."""
+    """The per-row cause table of REPLICATION.md for reading `v`, and its tallies: the verdicts and
+    causes of the verdict scale (table3.csv's `verdict`, `paper_cell_verdict`, `cause`) beside the
+    old rule's (within 2 SE, recomputed; equal to `verdict_2se`, `paper_cell_verdict_2se`,
+    `cause_2se`)."""
     cells = pd.read_parquet(d / "cells.parquet")
     cells = cells[cells.variant == v]
     t3 = pd.read_csv(d / v / "table3.csv", dtype={"experiment": str})
     j = judged(t3)
     at = paper_cell(cells, t3)
-    why = causes(t3, cells)
+    why_2se = causes(t3, cells)
     # The declared reading whose best cell (judged estimate) comes closest to the paper, per row.
     listed = pd.read_csv(d / "variants.csv")
     others = {
@@ -191,28 +229,43 @@ def cause_table(d: Path, v: str) -> None:
         for o, x in zip(listed["variant"], listed["exploratory"].astype(str))
         if x == "no" and (d / o / "table3.csv").is_file()
     }
+    text = lambda x: "" if pd.isna(x) else str(x)  # noqa: E731
     print(f"### Why each row does or does not replicate, under `{v}`\n")
-    print("| system | exp. | algorithm | paper | ours, best cell | verdict | ours at paper's config | verdict | cause | closest reading (ours/paper) |")
-    print("|---|---|---|---:|---:|---|---:|---|---|---|")
-    for (i, r), c in zip(j.iterrows(), why):
+    print(
+        "| system | exp. | algorithm | paper | ours, best cell | verdict | within 2 SE (old rule) "
+        "| ours at paper's config | verdict | within 2 SE (old rule) | cause | cause (old rule) "
+        "| closest reading (ours/paper) |"
+    )
+    print("|---|---|---|---:|---:|---|---|---:|---|---|---|---|---|")
+    for (i, r), c in zip(j.iterrows(), why_2se):
         pc = pd.Series({**r.to_dict(), "mean": at.loc[i, "mean"], "std": at.loc[i, "std"], "n": at.loc[i, "n"]})
         near = min(others, key=lambda o: (abs(math.log(others[o].loc[i, "mean"] / r.paper_mean)), o))
         ratio = others[near].loc[i, "mean"] / r.paper_mean
         print(
             f"| {r.system} | {r.experiment} | {r.algorithm} | {r.paper_mean:g} ± {r.paper_std:g} "
-            f"| {r['mean']:.1f} ± {r['std']:.1f} | {verdict(r)} | {pc['mean']:.1f} ± {pc['std']:.1f} | {verdict(pc)} | {c} "
-            f"| `{near}` ({ratio:.2f}) |"
+            f"| {r['mean']:.1f} ± {r['std']:.1f} | {text(t3.loc[i, 'verdict'])} | {verdict(r)} "
+            f"| {pc['mean']:.1f} ± {pc['std']:.1f} | {text(t3.loc[i, 'paper_cell_verdict'])} | {verdict(pc)} "
+            f"| {text(t3.loc[i, 'cause'])} | {c} | `{near}` ({ratio:.2f}) |"
         )
-    tallied = {c: why.count(c) for c in ["replicates", "argmin", "paper-inconsistent", "learner", "unexplained"]}
-    print("\nTally: " + ", ".join(f"{n} {c}" for c, n in tallied.items()) + ".\n")
+    tallied = {c: int((t3["cause"] == c).sum()) for c in CAUSES}
+    print("\nTally: " + ", ".join(f"{n} {c}" for c, n in tallied.items()) + ".")
+    tallied = {c: why_2se.count(c) for c in CAUSES_2SE}
+    print("Old rule (within 2 SE; both rows of a contradictory pair paper-inconsistent): " + ", ".join(f"{n} {c}" for c, n in tallied.items()) + ".\n")
     print("### The paper against itself (pairs of Table III rows whose grids overlap)\n")
-    print("| system | algorithm | exp. a | paper a | exp. b | paper b | Welch t (b − a) | p | contradictory |")
-    print("|---|---|---|---:|---|---:|---:|---:|---|")
-    for p in consistency(t3, cells):
+    print(
+        "Contradictory: the paper's means taken over 10 runs each (over 5 and 3 in the last two columns); "
+        "marked: the row the pair costs (a or b).\n"
+    )
+    print("| system | algorithm | exp. a | paper a | exp. b | paper b | Welch t (b − a) | p | contradictory | marked | n = 5 | n = 3 |")
+    print("|---|---|---|---:|---|---:|---:|---:|---|---|---|---|")
+    yes = lambda b: "yes" if b else "no"  # noqa: E731
+    by_n = {n: consistency(t3, cells, n) for n in (10, 5, 3)}
+    for p, p5, p3 in zip(by_n[10], by_n[5], by_n[3]):
         a, b = p["row_a"], p["row_b"]
         print(
             f"| {a.system} | {a.algorithm} | {a.experiment} | {a.paper_mean:g} ± {a.paper_std:g} | {b.experiment} "
-            f"| {b.paper_mean:g} ± {b.paper_std:g} | {p['t']:.2f} | {p['p']:.2g} | {'yes' if p['contradictory'] else 'no'} |"
+            f"| {b.paper_mean:g} ± {b.paper_std:g} | {p['t']:.2f} | {p['p']:.2g} | {yes(p['contradictory'])} "
+            f"| {p['marked']} | {yes(p5['contradictory'])} | {yes(p3['contradictory'])} |"
         )
     print()
 
@@ -235,14 +288,24 @@ def study(d: Path) -> str:
     ranked = sorted(ids, key=lambda v: (explo[v], fit_key(tallies[v]), ids.index(v)))
     assert ranked == ids, f"variants.csv order {ids} differs from the recomputed ranking {ranked}"
     print("### Every variant's fit (variants.csv, recomputed from each variant's table3.csv)\n")
-    print("| rank | variant | replicate | within 2× | do not | configs match | Q(0)/Q(λ) order | geo. mean ours/paper |")
-    print("|---:|---|---:|---:|---:|---:|---:|---:|")
+    print(
+        "Replicate: equivalent or within 2× by TOST, the paper's means taken over 10 runs (the verdict "
+        "scale). The ranking keeps the pre-registered fit measure: rows within 2 SE, then ratio within 2× "
+        "(the old rule), configurations matching, |ln geo. mean|.\n"
+    )
+    print(
+        "| rank | variant | replicate | equivalent | within 2× (TOST) | consistent but wide | differs "
+        "| within 2 SE (old rule) | ratio within 2× (old rule) | neither (old rule) | configs match "
+        "| Q(0)/Q(λ) order | geo. mean ours/paper |"
+    )
+    print("|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for i, v in enumerate(ranked, 1):
         t = tallies[v]
-        rest = t["rows"] - t["replicating"] - t["within_2x"]
+        rest = t["rows"] - t["within_2se"] - t["ratio_within_2x"]
         print(
-            f"| {i} | `{v}` | {t['replicating']} | {t['within_2x']} | {rest} | {t['config_match']} "
-            f"| {t['order_match']}/{t['order_experiments']} | {t['geo_mean_ratio']:.2f} |"
+            f"| {i} | `{v}` | {t['replicating_n10']} | {t['equivalent_n10']} | {t['within_2x_n10']} "
+            f"| {t['consistent_but_wide_n10']} | {t['differs_n10']} | {t['within_2se']} | {t['ratio_within_2x']} "
+            f"| {rest} | {t['config_match']} | {t['order_match']}/{t['order_experiments']} | {t['geo_mean_ratio']:.2f} |"
         )
     best = next(v for v in ranked if not explo[v])
     print(f"\nBest fit under the pre-registered measure: `{best}`.\n")
@@ -252,19 +315,28 @@ def study(d: Path) -> str:
     return best
 
 
+def scale_word(r: pd.Series) -> str:
+    """A row's verdict on the scale of issue #46, as table3.csv's `verdict` states it ("" without)."""
+    v = r.get("verdict")
+    return "" if v is None or pd.isna(v) else str(v)
+
+
 def side_by_side(d: Path, a: str, b: str) -> None:
     ta = pd.read_csv(d / a / "table3.csv", dtype={"experiment": str})
     tb = pd.read_csv(d / b / "table3.csv", dtype={"experiment": str})
     print(f"### Table III: paper, `{a}` and `{b}`\n")
-    print(f"| system | exp. | algorithm | paper | paper config | `{a}` | verdict | `{b}` | config | successes | verdict |")
-    print("|---|---|---|---:|---|---:|---|---:|---|---:|---|")
+    print(
+        f"| system | exp. | algorithm | paper | paper config | `{a}` | verdict | within 2 SE (old rule) "
+        f"| `{b}` | config | successes | verdict | within 2 SE (old rule) |"
+    )
+    print("|---|---|---|---:|---|---:|---|---|---:|---|---:|---|---|")
     for (_, x), (_, y) in zip(ta.iterrows(), tb.iterrows()):
         assert (x.system, x.experiment, x.algorithm) == (y.system, y.experiment, y.algorithm)
         ours_b, paper_cfg = configs(y)
         print(
             f"| {x.system} | {x.experiment} | {x.algorithm} | {x.paper_mean:g} ± {x.paper_std:g} | {paper_cfg} "
-            f"| {x['mean']:.1f} ± {x['std']:.1f} | {verdict(x)} | {y['mean']:.1f} ± {y['std']:.1f} | {ours_b} "
-            f"| {int(y.successes)}/{int(y.n)} | {verdict(y)} |"
+            f"| {x['mean']:.1f} ± {x['std']:.1f} | {scale_word(x)} | {verdict(x)} | {y['mean']:.1f} ± {y['std']:.1f} "
+            f"| {ours_b} | {int(y.successes)}/{int(y.n)} | {scale_word(y)} | {verdict(y)} |"
         )
     print()
 
@@ -288,14 +360,19 @@ def conclusions(d: Path) -> None:
     )
 
     print("### Table III side by side\n")
-    print("Verdict: *replicates* when the difference of the means is within two standard errors")
-    print("(√(s₁²/n₁ + s₂²/n₂), both n = 10: an approximate two-sample test at the 5% level);")
-    print("*within 2×* when it is not, but our mean is between half and twice the paper's;")
-    print("*does not replicate* otherwise. *Order* says whether Q(0) and Q(λ) of the same experiment")
-    print("rank as in the paper. Configurations are compared separately.\n")
+    print("Verdict: table3.csv's, on the pre-registered scale (docs/preregistration.md, issue #46):")
+    print("*equivalent* or *within-2x* by TOST (the paper's means taken over 10 runs) replicate;")
+    print("*consistent-but-wide*, *differs*, *undecided* do not. Within 2 SE (old rule): *replicates*")
+    print("when the difference of the means is within two standard errors (√(s₁²/n₁ + s₂²/n₂), the")
+    print("paper's n = 10); *within 2×* when it is not, but our mean is between half and twice the")
+    print("paper's; *does not replicate* otherwise. *Order* says whether Q(0) and Q(λ) of the same")
+    print("experiment rank as in the paper. Configurations are compared separately.\n")
     t3 = pd.read_csv(d / "table3.csv", dtype={"experiment": str})
-    print("| system | exp. | algorithm | paper | paper config | qsweep | qsweep config | successes | verdict | order | config |")
-    print("|---|---|---|---:|---|---:|---|---:|---|---|---|")
+    print(
+        "| system | exp. | algorithm | paper | paper config | qsweep | qsweep config | successes | verdict "
+        "| within 2 SE (old rule) | order | config |"
+    )
+    print("|---|---|---|---:|---|---:|---|---:|---|---|---|---|")
     res_cols = ["x", "x_dot", "theta", "theta_dot"]
     for _, r in t3.iterrows():
         ours = [int(r[c]) for c in res_cols if pd.notna(r[c])] + [int(r["actions"])]
@@ -305,7 +382,7 @@ def conclusions(d: Path) -> None:
         order = same.sort_values("mean")["algorithm"].tolist() == same.sort_values("paper_mean")["algorithm"].tolist()
         print(
             f"| {r.system} | {r.experiment} | {r.algorithm} | {r.paper_mean:g} ± {r.paper_std:g} | {paper_cfg} "
-            f"| {r['mean']:.1f} ± {r['std']:.1f} | {ours} | {int(r.successes)}/{int(r.n)} | {verdict_} "
+            f"| {r['mean']:.1f} ± {r['std']:.1f} | {ours} | {int(r.successes)}/{int(r.n)} | {scale_word(r)} | {verdict_} "
             f"| {'same' if order else 'reversed'} | {'same' if ours == paper_cfg else 'differs'} |"
         )
     print()
