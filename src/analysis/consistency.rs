@@ -20,13 +20,10 @@ pub const ALPHA: f64 = 0.05;
 
 /// The rule, as stated in captions.
 pub const CONSISTENCY_RULE: &str = "Comparable pair: two Table III rows of the same system, \
-representation and algorithm where one row's published configuration (bins or sets per variable \
-and action count) is a cell of the other row's grid, so the other's published minimum cannot exceed \
-it (the means must agree where the configurations coincide). Welch's t-test of the two published \
-means (an assumed 10 runs each; verdicts_by_n.csv: 3, 5, 10), two-sided, α = 0.05; \
-contradictory: significant in a direction the grids forbid. Marked: the row a contradictory pair \
-costs, the one whose published minimum a cell of its own grid undercuts (where the configurations \
-coincide, the later experiment's).";
+representation and algorithm where one row's published configuration is a cell of the other row's \
+grid, so the other's published minimum cannot exceed it. Welch's t-test of the two published means \
+(10 runs each assumed), two-sided, α = 0.05; contradictory: significant in a direction the grids \
+forbid. The pair costs one row: the minimum undercut by a cell of its own grid.";
 
 /// A configuration: bins or sets per state variable, and the action count.
 pub type Config = (Vec<u32>, u32);

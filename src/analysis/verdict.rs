@@ -185,12 +185,10 @@ impl Cause {
 }
 
 /// The cause rule, as stated in captions.
-pub const CAUSE_RULE: &str = "Cause (pre-registered in docs/preregistration.md), the first that \
-applies: replicates (the best cell is equivalent or within-2x); paper-inconsistent (the row the \
-rule designates in a pair of Table III rows the paper's own numbers contradict: the published \
-minimum undercut by a cell of its own grid); argmin (ours at the paper's configuration replicates, \
-the best cell does not: our grid picks another configuration); differs-at-paper-config (ours at the \
-paper's configuration is not shown within 2×: the learner or the protocol differs there); \
+pub const CAUSE_RULE: &str = "Cause (docs/preregistration.md), the first that applies: replicates \
+(the best cell is equivalent or within-2x); paper-inconsistent (the row a contradictory pair costs); \
+argmin (ours at the paper's configuration replicates: our grid picks another configuration); \
+differs-at-paper-config (ours there is not shown within 2×: the learner or the protocol differs); \
 unexplained (no trials at the paper's configuration).";
 
 /// The cause of a row from the best cell's verdict, whether the contradiction rule designates the
@@ -237,9 +235,8 @@ impl Spread {
 }
 
 /// The spread rule, as stated in captions.
-pub const SPREAD_RULE: &str = "Std ratio: our std ÷ the paper's, with its 95 % interval from the F \
-distribution (n − 1 and 10 − 1 degrees of freedom; approximate for skewed counts); spread differs \
-when the interval excludes 1.";
+pub const SPREAD_RULE: &str = "Std ratio: our std ÷ the paper's; spread differs when its 95 % F \
+interval (in table3.csv) excludes 1.";
 
 /// Our std over `n` trials against the paper's over `paper_n` runs: `None` when n < 2 or the
 /// paper's std is not positive.

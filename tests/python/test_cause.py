@@ -144,6 +144,9 @@ def test_consistency_lists_every_comparable_pair(cells: pd.DataFrame) -> None:
     # (p = 0.013), over 3 it does not (p = 0.071). Only that pair is marked.
     assert bad.marked == "a"
     assert (bad.contradictory_n5, bad.contradictory_n3) == ("yes", "no")
+    for n, col in [(5, "p_n5"), (3, "p_n3")]:
+        _, p = stats.ttest_ind_from_stats(43.2, 20.4, n, 90.5, 25.8, n, equal_var=False)
+        assert math.isclose(bad[col], p, abs_tol=1e-6), (n, bad[col], p)
     assert int(got["marked"].notna().sum()) == 1
 
 

@@ -87,7 +87,6 @@ BY_N_COLUMNS = [
     "mean",
     "std",
     "n",
-    "ratio",
     "n_paper",
     "verdict",
     "paper_cell_verdict",
@@ -528,7 +527,6 @@ def test_verdicts_by_n_recomputed(by_n: pd.DataFrame, n_paper: int) -> None:
         assert r["paper_inconsistent"] == yes(key in designated(n_paper)), where
         M, S, _ = PUBLISHED[key]
         line_est = Est(float(r["mean"]), float(r["std"]), int(r["n"]))
-        assert close(r["ratio"], line_est.mean / M), where
         if not has_cells(v):
             # An exploratory reading without cells: its verdict recomputed from the estimate the
             # line states, its cause from the line's verdicts.

@@ -6,7 +6,7 @@
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
 //! - `consistency.md`, `consistency.csv` (pipelines with reference values): every pair of Table III
 //!   rows whose grids overlap, with the Welch test of their published means ([`consistency`]);
-//! - `verdicts_by_n.csv` (with reference values): every reading's rows judged with the paper's n
+//! - `verdicts_by_n.csv` (with reference values, not in an exploratory search): every reading's rows judged with the paper's n
 //!   taken as 3, 5 and 10, each with the closest reading ([`verdicts`]); `cross_validation.csv`
 //!   (two or more declared readings): each row judged under the reading chosen on the others
 //!   ([`selection`]);
@@ -80,9 +80,11 @@ pub fn write_comparison(
             put("conclusions.csv", render(&t, &Csv).as_bytes())?;
         }
     }
-    if let Some(t) = verdicts::verdicts_by_n_table(variants) {
+    // An exploratory search judges its choice on held-out rows of its own (held_out.csv).
+    let by_n = plan.exploratory.is_none().then(|| verdicts::verdicts_by_n_table(variants)).flatten();
+    if let Some(t) = &by_n {
         if formats.has(Format::Csv) {
-            put("verdicts_by_n.csv", render(&t, &Csv).as_bytes())?;
+            put("verdicts_by_n.csv", render(t, &Csv).as_bytes())?;
         }
     }
     let selection = selection::selection(plan.exploratory.is_some(), variants);
@@ -137,6 +139,7 @@ pub fn write_comparison(
         held_out: held_out.as_ref(),
         matrix: matrix.as_ref(),
         consistency: consistency.as_ref(),
+        by_n: by_n.is_some(),
     };
     let answer = answer::Answer { series: &series, figure: forest_size, selection: selection.as_ref() };
     if formats.has(Format::Html) {
@@ -177,6 +180,8 @@ struct Tables<'a> {
     matrix: Option<&'a Table>,
     /// The pairs of Table III rows whose grids overlap (pipelines with reference values).
     consistency: Option<&'a Table>,
+    /// Whether `verdicts_by_n.csv` is written.
+    by_n: bool,
 }
 
 /// The hand-written notes a comparison folder may hold beside the report (the paper's
@@ -242,7 +247,7 @@ fn page(
     .into_iter()
     .chain(tables.matrix.map(|_| (Format::Csv, "<a href=\"conclusions.csv\">conclusions.csv</a>")))
     .chain(tables.consistency.map(|_| (Format::Csv, "<a href=\"consistency.csv\">consistency.csv</a>")))
-    .chain(answer.series.first().map(|_| (Format::Csv, "<a href=\"verdicts_by_n.csv\">verdicts_by_n.csv</a>")))
+    .chain(tables.by_n.then_some((Format::Csv, "<a href=\"verdicts_by_n.csv\">verdicts_by_n.csv</a>")))
     .chain(answer.selection.map(|_| (Format::Csv, "<a href=\"cross_validation.csv\">cross_validation.csv</a>")))
     .filter(|(f, _)| formats.has(*f))
     .map(|(_, l)| l)

@@ -32,7 +32,7 @@ fn closest<'v>(
 /// The rule, as stated in captions.
 pub const BY_N_RULE: &str = "Every reading's Table III rows judged with the paper's std over an \
 assumed n_paper = 3, 5 and 10 runs (the paper never states it). Ours: the best cell's estimate \
-(fresh seeds where present) that the verdicts judge, with n and its ratio to the paper; verdicts, the contradictory pairs, \
+(fresh seeds where present) that the verdicts judge, with n; verdicts, the contradictory pairs, \
 the row each pair costs, and the cause. Closest reading: of all readings (declared and exploratory), \
 the one whose best cell has the best verdict for the row at that n, then the ratio closest to 1, \
 then pipeline order.";
@@ -50,7 +50,6 @@ pub fn verdicts_by_n_table(variants: &[VariantDigest]) -> Option<Table> {
         Column::new("Algorithm", "algorithm", Align::Left),
         Column::new("Ours", "mean", Align::Right).fields(&["mean", "std"]),
         Column::new("n", "n", Align::Right),
-        Column::new("Ours/paper", "ratio", Align::Right),
         Column::new("n_paper", "n_paper", Align::Right),
         Column::new("Verdict", "verdict", Align::Left),
         Column::new("Verdict (paper config)", "paper_cell_verdict", Align::Left),
@@ -77,7 +76,6 @@ pub fn verdicts_by_n_table(variants: &[VariantDigest]) -> Option<Table> {
                     text(r.algorithm.label(r.repr)),
                     Value::MeanStd { mean: r.mean, std: r.std, decimals: 2, marked: false },
                     Value::Int(r.n as u64),
-                    Value::Num { value: r.ratio(), decimals: 3, signed: false },
                     Value::Int(paper_n as u64),
                     text(best.verdict.label()),
                     paper_cell.map_or(Value::Missing, |p| text(p.verdict.label())),
