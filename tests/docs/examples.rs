@@ -4,7 +4,11 @@
 //! executes each command with the built binary in a scratch directory holding a copy of the
 //! repository's `pipelines/` (the
 //! commands of one block share it, so a `run` can be followed by a `status`), and compares the
-//! output line by line. Two elisions keep examples honest about what varies (times, paths,
+//! output line by line. A block may also write a file, as a shell here-document does:
+//! `$ cat > FILE <<'EOF'` (or `>>` to append), the file's lines, then `EOF`. A block right after
+//! the line `<!-- same directory as the example above -->` (an HTML comment: no reader sees it)
+//! continues the page's previous block in its directory, so a tutorial's steps can have prose
+//! between them. Two elisions keep examples honest about what varies (times, paths,
 //! progress): a line `...` stands for any number of lines, and `[..]` within a line for any text.
 //! Commands that cannot run in a test (Slurm, a long run) are written as ```sh blocks instead.
 //!
@@ -15,11 +19,22 @@ use crate::markdown::{fences, guide_docs, repo};
 use std::path::Path;
 use std::process::Command;
 
-/// One `$ qsweep …` line of an example, with what it should print.
+/// The line before a ```console block that makes it continue the page's previous block.
+const CONTINUES: &str = "<!-- same directory as the example above -->";
+
+/// What one `$` line does.
+enum Action {
+    /// `$ qsweep ARGS`: run the binary.
+    Qsweep(Vec<String>),
+    /// `$ cat > PATH <<'EOF'` (`>>`: append) and the lines up to `EOF`: write them to PATH.
+    Write { path: String, append: bool, text: String },
+}
+
+/// One `$` line of an example, with what it should print.
 struct Example {
     /// Where the `$` line is, as `FILE:LINE`.
     at: String,
-    args: Vec<String>,
+    action: Action,
     status: i32,
     expected: Vec<String>,
     /// The line of each expected line in the file, to name the one that differs.
@@ -29,24 +44,35 @@ struct Example {
 /// The examples of one ```console block, in order.
 fn parse_block(file: &Path, first_line: usize, lines: &[String]) -> Vec<Example> {
     let mut out: Vec<Example> = Vec::new();
-    for (i, line) in lines.iter().enumerate() {
+    let mut i = 0;
+    while i < lines.len() {
+        let line = &lines[i];
         if let Some(cmd) = line.strip_prefix("$ ") {
-            let args = split_words(cmd);
-            assert_eq!(
-                args.first().map(String::as_str),
-                Some("qsweep"),
-                "{}:{}: a console example runs `qsweep`; write other commands as a ```sh block",
-                file.display(),
-                first_line + i
-            );
             let at = format!("{}:{}", file.display(), first_line + i);
-            out.push(Example {
-                at,
-                args: args[1..].to_vec(),
-                status: 0,
-                expected: Vec::new(),
-                expected_lines: Vec::new(),
-            });
+            let args = split_words(cmd);
+            let action = if let Some((path, append, end)) = here_document(&args) {
+                assert!(
+                    !path.starts_with('/') && !path.split('/').any(|c| c == ".."),
+                    "{at}: a here-document writes inside the example's directory"
+                );
+                let body = &lines[i + 1..];
+                let n = body
+                    .iter()
+                    .position(|l| *l == end)
+                    .unwrap_or_else(|| panic!("{at}: the here-document has no closing `{end}` line"));
+                let text = body[..n].iter().map(|l| format!("{l}\n")).collect();
+                i += n + 1;
+                Action::Write { path, append, text }
+            } else {
+                assert_eq!(
+                    args.first().map(String::as_str),
+                    Some("qsweep"),
+                    "{at}: a console example runs `qsweep` or writes a file (`cat > FILE <<'EOF'`); \
+                     write other commands as a ```sh block"
+                );
+                Action::Qsweep(args[1..].to_vec())
+            };
+            out.push(Example { at, action, status: 0, expected: Vec::new(), expected_lines: Vec::new() });
         } else if let Some(ex) = out.last_mut() {
             match line.strip_prefix("? ") {
                 Some(code) if ex.expected.is_empty() => {
@@ -58,10 +84,23 @@ fn parse_block(file: &Path, first_line: usize, lines: &[String]) -> Vec<Example>
                 }
             }
         } else {
-            panic!("{}:{}: a console block starts with `$ qsweep …`", file.display(), first_line + i);
+            panic!("{}:{}: a console block starts with a `$ ` line", file.display(), first_line + i);
         }
+        i += 1;
     }
     out
+}
+
+/// `cat > PATH <<EOF` or `cat >> PATH <<EOF` (quotes already removed): the path, whether it
+/// appends, and the closing word.
+fn here_document(words: &[String]) -> Option<(String, bool, String)> {
+    match words {
+        [cat, op, path, end] if cat == "cat" && (op == ">" || op == ">>") => {
+            let end = end.strip_prefix("<<")?;
+            Some((path.clone(), op == ">>", end.to_string()))
+        }
+        _ => None,
+    }
 }
 
 /// Shell-like word splitting: whitespace separates, '…' and "…" quote.
@@ -166,13 +205,31 @@ fn run_block(examples: &[Example]) -> Vec<String> {
     copy_dir(&repo().join("pipelines"), &scratch.path().join("pipelines"));
     let mut failures = Vec::new();
     for ex in examples {
+        let args = match &ex.action {
+            Action::Qsweep(args) => args,
+            Action::Write { path, append, text } => {
+                use std::io::Write;
+                let mut f = std::fs::OpenOptions::new()
+                    .create(true)
+                    .write(true)
+                    .append(*append)
+                    .truncate(!*append)
+                    .open(scratch.path().join(path))
+                    .unwrap_or_else(|e| panic!("{}: {path}: {e}", ex.at));
+                f.write_all(text.as_bytes()).unwrap();
+                if !ex.expected.is_empty() || ex.status != 0 {
+                    failures.push(format!("{}: a here-document prints nothing and exits 0", ex.at));
+                }
+                continue;
+            }
+        };
         // stdout and stderr share one pipe (`2>&1`), so the lines come in the order a terminal
         // shows them (progress lines on stderr, the summary on stdout).
         let out = Command::new("sh")
             .arg("-c")
             .arg("exec \"$0\" \"$@\" 2>&1")
             .arg(env!("CARGO_BIN_EXE_qsweep"))
-            .args(&ex.args)
+            .args(args)
             .current_dir(scratch.path())
             .env_remove("QSWEEP_CACHE")
             .env("NO_COLOR", "1")
@@ -191,7 +248,7 @@ fn run_block(examples: &[Example]) -> Vec<String> {
             failures.push(format!(
                 "{at}\n{}: `qsweep {}`\n  exit status: expected {}, got {status}\n  expected output:\n{}\n  actual output:\n{}",
                 ex.at,
-                ex.args.join(" "),
+                args.join(" "),
                 ex.status,
                 indent(&ex.expected),
                 indent(&actual)
@@ -205,13 +262,32 @@ fn indent(lines: &[String]) -> String {
     lines.iter().map(|l| format!("    | {l}")).collect::<Vec<_>>().join("\n")
 }
 
-/// Every console block of README.md and the guide, with its file.
+/// Every console block of README.md and the guide, with its file; a block marked [`CONTINUES`]
+/// is appended to the page's previous block (one directory, one thread).
 fn blocks() -> Vec<Vec<Example>> {
-    let mut out = Vec::new();
+    let mut out: Vec<Vec<Example>> = Vec::new();
     for doc in guide_docs() {
+        let text: Vec<&str> = doc.text.lines().collect();
+        let mut previous: Option<usize> = None;
         for f in fences(&doc.text) {
             if f.info == "console" {
-                out.push(parse_block(&doc.path, f.first_line, &f.lines));
+                let examples = parse_block(&doc.path, f.first_line, &f.lines);
+                // The fence's own line is `first_line - 1` (1-based); the marker is the last
+                // non-blank line before it.
+                let before = text[..f.first_line - 2].iter().rev().find(|l| !l.trim().is_empty());
+                if before.is_some_and(|l| l.trim() == CONTINUES) {
+                    let k = previous.unwrap_or_else(|| {
+                        panic!(
+                            "{}:{}: no earlier console block to continue",
+                            doc.path.display(),
+                            f.first_line
+                        )
+                    });
+                    out[k].extend(examples);
+                } else {
+                    out.push(examples);
+                    previous = Some(out.len() - 1);
+                }
             }
         }
     }
@@ -253,4 +329,27 @@ fn elisions_match_what_they_say() {
     assert_eq!(first_mismatch(&l(&["a", "...", "x", "d"]), &l(&["a", "b", "c", "d"])), Some(2));
     assert_eq!(first_mismatch(&l(&["a", "q"]), &l(&["a", "b"])), Some(1));
     assert_eq!(split_words("report 'a b' --x=\"c\" ''"), vec!["report", "a b", "--x=c", ""]);
+}
+
+#[test]
+fn a_here_document_writes_its_lines() {
+    let l = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let block = l(&[
+        "$ cat > a.yaml <<'EOF'",
+        "name: a",
+        "$ x",
+        "EOF",
+        "$ cat >> a.yaml <<EOF",
+        "EOF",
+        "$ qsweep status a.yaml",
+        "ok",
+    ]);
+    let ex = parse_block(Path::new("t.md"), 1, &block);
+    assert_eq!(ex.len(), 3);
+    assert!(
+        matches!(&ex[0].action, Action::Write { path, append: false, text } if path == "a.yaml" && text == "name: a\n$ x\n")
+    );
+    assert!(matches!(&ex[1].action, Action::Write { append: true, text, .. } if text.is_empty()));
+    assert!(matches!(&ex[2].action, Action::Qsweep(a) if a == &l(&["status", "a.yaml"])));
+    assert_eq!(ex[2].expected, l(&["ok"]));
 }

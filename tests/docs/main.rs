@@ -1,8 +1,11 @@
 //! The documentation's own tests (`cargo test --test docs`): every console example in README.md
 //! and the guide runs against the built binary ([`examples`]), every relative link and anchor
-//! resolves ([`links`]), and the guide's field tables match the code ([`fields`]).
+//! resolves ([`links`]), the guide's field tables match the code ([`fields`]), and README.md and the
+//! guide hold no history (issue numbers, commit hashes, dates), which belongs in CHANGELOG.md
+//! ([`history`]).
 
 mod examples;
 mod fields;
+mod history;
 mod links;
 mod markdown;
