@@ -94,3 +94,15 @@ def test_the_example_rows_are_the_best_readings_fresh_seed_values(variants: pd.D
         assert ours == f"{r['fresh_mean']:.2f} ± {r['fresh_std']:.2f}", (system, exp, alg)
         assert paper == f"{r['paper_mean']:.2f} ± {r['paper_std']:.2f}", (system, exp, alg)
         assert verdict == r["verdict"], (system, exp, alg)
+
+
+def test_replication_md_repeats_the_generated_answer() -> None:
+    """REPLICATION.md's answer quotes the comparison page's generated opening sentence by sentence,
+    so a count that changes in the report fails here until the write-up follows."""
+    page = (PAPER / "README.md").read_text()
+    opening = next(p for p in page.split("\n\n") if p.startswith("Under the best-ranked declared reading"))
+    notes = " ".join((PAPER / "REPLICATION.md").read_text().split())
+    sentences = re.split(r"(?<=[.)]) (?=[A-Z])", " ".join(opening.split()))
+    assert len(sentences) >= 6
+    missing = [s for s in sentences if s not in notes]
+    assert not missing, f"REPLICATION.md does not repeat: {missing}"
