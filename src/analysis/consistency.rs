@@ -209,10 +209,10 @@ mod tests {
         assert_eq!(p.designated(), Some(0));
         assert!(designated(&all, 0) && !designated(&all, 1));
         // With fewer paper runs the pair is no longer shown contradictory: SciPy gives
-        // p = 0.01328 at n = 5 (still below α) and 0.07081 at n = 3.
+        // p = 0.0131998 at n = 5 (still below α) and 0.0707449 at n = 3.
         let at = |n| pairs(&rows, n)[0];
-        assert!((at(5).p - 0.013_28).abs() < 1e-5 && at(5).contradictory, "{:?}", at(5));
-        assert!((at(3).p - 0.070_81).abs() < 1e-5 && !at(3).contradictory, "{:?}", at(3));
+        assert!((at(5).p - 0.013_199_795).abs() < 1e-8 && at(5).contradictory, "{:?}", at(5));
+        assert!((at(3).p - 0.070_744_936).abs() < 1e-8 && !at(3).contradictory, "{:?}", at(3));
         assert_eq!(at(3).designated(), None);
     }
 

@@ -307,10 +307,14 @@ mod tests {
 
     #[test]
     fn fewer_paper_runs_widen_every_test() {
-        // 60 ± 10 (n 20) against 50 ± 20: within 2× at n_paper = 10, not at 3 (the paper's
-        // standard error grows), where it is only consistent.
-        assert_eq!(judge(m(60.0, 10.0, 20), 50.0, 20.0, 10).verdict, Verdict::Within2x);
-        assert_eq!(judge(m(60.0, 10.0, 20), 50.0, 20.0, 3).verdict, Verdict::ConsistentButWide);
+        // 80 ± 10 (n 20) against 50 ± 20: within 2× at n_paper = 10 and 5 (SciPy's TOST p =
+        // 0.0061, 0.0441), not at 3 (0.1111), where it is not within two standard errors either
+        // (|30| > 2·√(400/3 + 100/20) = 23.5).
+        assert_eq!(judge(m(80.0, 10.0, 20), 50.0, 20.0, 10).verdict, Verdict::Within2x);
+        assert_eq!(judge(m(80.0, 10.0, 20), 50.0, 20.0, 5).verdict, Verdict::Within2x);
+        assert_eq!(judge(m(80.0, 10.0, 20), 50.0, 20.0, 3).verdict, Verdict::Differs);
+        // 60 ± 10 stays within 2× at every n (p = 0.0001, 0.0077, 0.0443).
+        assert_eq!(judge(m(60.0, 10.0, 20), 50.0, 20.0, 3).verdict, Verdict::Within2x);
     }
 
     #[test]
@@ -334,10 +338,10 @@ mod tests {
     #[test]
     fn spread_interval_from_the_f_distribution() {
         // s = 130 over 20 trials against S = 13.8 over 10 runs: ratio 9.42; SciPy:
-        // sqrt(r² / f.ppf(0.975, 19, 9)) = 4.906, sqrt(r² / f.ppf(0.025, 19, 9)) = 15.71.
+        // sqrt(r² / f.ppf(0.975, 19, 9)) = 4.908440, sqrt(r² / f.ppf(0.025, 19, 9)) = 15.98691.
         let s = spread(Some(130.0), 20, 13.8, 10).unwrap();
         assert!((s.ratio - 130.0 / 13.8).abs() < 1e-12);
-        assert!((s.lo - 4.9057).abs() < 1e-3 && (s.hi - 15.708).abs() < 1e-2, "{s:?}");
+        assert!((s.lo - 4.908_439_860).abs() < 1e-8 && (s.hi - 15.986_906_463).abs() < 1e-8, "{s:?}");
         assert!(s.differs());
         let same = spread(Some(10.0), 20, 10.0, 10).unwrap();
         assert!(!same.differs() && same.lo < 1.0 && same.hi > 1.0);

@@ -44,10 +44,23 @@ fn table3_has_the_paper_cell_and_a_cause_per_row_and_the_comparison_lists_contra
         let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
         let at = header.iter().position(|h| *h == "paper_cell_mean").expect("paper_cell_mean");
         assert_eq!(header[at - 1], "equivalent_n100", "new columns after the existing ones");
-        assert_eq!(
-            &header[header.len() - 4..],
-            ["verdict", "paper_cell_verdict", "paper_inconsistent", "cause"]
-        );
+        let tail = [
+            "verdict_2se",
+            "paper_cell_verdict_2se",
+            "cause_2se",
+            "contradictory_pair",
+            "paper_inconsistent",
+            "tost2x_p_n10",
+            "paper_cell_tost2x_p_n10",
+            "verdict",
+            "paper_cell_verdict",
+            "cause",
+            "std_ratio",
+            "std_ratio_lo",
+            "std_ratio_hi",
+            "spread_differs",
+        ];
+        assert_eq!(&header[header.len() - tail.len()..], tail);
         for h in ["paper_cell_n", "paper_cell_ci_hi", "paper_cell_ratio_lo", "paper_cell_equivalent_n10"] {
             assert!(header.contains(&h), "{h} in {header:?}");
         }
@@ -56,10 +69,15 @@ fn table3_has_the_paper_cell_and_a_cause_per_row_and_the_comparison_lists_contra
         for r in &rows {
             if r["algorithm"] == "Q(0)-learning" {
                 // Ours takes a few episodes (at most 25): nowhere near 43 or 90, so the row does
-                // not replicate, and it is in the contradictory pair.
-                assert_eq!(r["verdict"], "no", "{r:?}");
-                assert_eq!(r["paper_inconsistent"], "yes");
-                assert_eq!(r["cause"], "paper-inconsistent");
+                // not replicate, and it is in the contradictory pair, which costs Exp. 1's row
+                // (the minimum a cell of its own grid undercuts); Exp. 2's is judged as any row.
+                assert_eq!(r["verdict_2se"], "no", "{r:?}");
+                assert!(!["equivalent", "within-2x"].contains(&r["verdict"].as_str()), "{r:?}");
+                assert_eq!(r["contradictory_pair"], "yes");
+                assert_eq!(r["cause_2se"], "paper-inconsistent", "the old rule marked both rows");
+                let first = r["experiment"] == "1";
+                assert_eq!(r["paper_inconsistent"], if first { "yes" } else { "no" }, "{r:?}");
+                assert_eq!(r["cause"], if first { "paper-inconsistent" } else { "differs-at-paper-config" });
                 assert_eq!(r["paper_cell_n"], "2", "the paper's configuration is a cell of the grid");
                 assert!(r["paper_cell_mean"].parse::<f64>().unwrap() <= 25.0);
             } else {
@@ -77,7 +95,9 @@ fn table3_has_the_paper_cell_and_a_cause_per_row_and_the_comparison_lists_contra
     assert!((p_value - 2.816e-4).abs() < 1e-6, "{p_value}");
     let html = std::fs::read_to_string(sb.path("rep/index.html")).unwrap();
     assert!(html.contains("<p id=\"causes\">"), "{html}");
-    assert!(html.contains("0 replicates, 0 argmin, 2 paper-inconsistent, 0 learner, 0 unexplained"));
+    assert!(html
+        .contains("0 replicates, 0 argmin, 1 paper-inconsistent, 1 differs-at-paper-config, 0 unexplained"));
+    assert_eq!(pair["marked"], "a", "the pair costs Exp. 1's row");
     assert!(html.contains("href=\"consistency.csv\""));
     let md = std::fs::read_to_string(sb.path("rep/consistency.md")).unwrap();
     assert!(md.contains("1 comparable pair of Table III rows, 1 contradictory"), "{md}");

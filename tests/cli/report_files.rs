@@ -283,12 +283,19 @@ fn missing_trials_are_counted_and_reference_values_compared() {
     assert!(header.contains(
         ",paper_mean,paper_std,paper_x,paper_x_dot,paper_theta,paper_theta_dot,paper_actions,diff_mean,"
     ));
-    // The uncertainty columns follow, then ours at the paper's configuration and the cause (issue
-    // #40), so the earlier fields keep their positions.
+    // The uncertainty columns follow, then ours at the paper's configuration, the verdicts and the
+    // cause, so the earlier fields keep their positions.
     assert!(header.contains(
         ",ci_lo,ci_hi,censored,km_median,ratio,ratio_lo,ratio_hi,tost_p_n10,equivalent_n10,tost_p_n100,equivalent_n100,paper_cell_mean,"
     ), "{header}");
-    assert!(header.ends_with(",verdict,paper_cell_verdict,paper_inconsistent,cause"), "{header}");
+    assert!(
+        header.ends_with(
+            ",verdict_2se,paper_cell_verdict_2se,cause_2se,contradictory_pair,paper_inconsistent,\
+             tost2x_p_n10,paper_cell_tost2x_p_n10,verdict,paper_cell_verdict,cause,std_ratio,\
+             std_ratio_lo,std_ratio_hi,spread_differs"
+        ),
+        "{header}"
+    );
     let row = csv.lines().nth(1).unwrap();
     assert!(row.starts_with("Ball-Beam,1,Q(0)-learning,"), "{row}");
     // The uncertainty columns agree with the row's own numbers.

@@ -93,6 +93,15 @@ impl Tally {
     }
 }
 
+/// "1 row is", "3 rows are": the count with `one` or `many` after "row"/"rows".
+fn rows(n: usize, one: &str, many: &str) -> String {
+    if n == 1 {
+        format!("1 row {one}")
+    } else {
+        format!("{n} rows {many}")
+    }
+}
+
 /// The sentences on choosing the reading: leave-one-row-out and the yardstick.
 fn chosen_sentences(s: &Selection) -> String {
     let (cv, cv_eq, cv_se) = s.cross_validated();
@@ -109,9 +118,13 @@ fn chosen_sentences(s: &Selection) -> String {
     );
     if let Some(y) = s.yardstick_2se {
         out.push_str(&format!(
-            " The best of {} readings has {} rows within two standard errors; were all readings equally \
+            " The best of {} readings has {} within two standard errors; were all readings equally \
              good, the best would reach a median {} (95th percentile {}, p = {:.3}).",
-            s.readings, y.observed, y.median, y.p95, y.p
+            s.readings,
+            rows(y.observed, "", "").trim_end(),
+            y.median,
+            y.p95,
+            y.p
         ));
     }
     if let Some(y) = s.yardstick_scale {
@@ -147,18 +160,20 @@ pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
                 "{who}, {rep10} of {} Table III rows replicate, taking the paper's means to average 10 \
                  runs: {eq} equivalent (TOST, ours ÷ paper within {:.2}–{:.2}) and {w2} shown within 2× \
                  (the same test within {}–{}). {wide} more {} within two standard errors but not shown \
-                 within 2× (consistent but wide), {differs} differ{}. With 5 runs behind each published \
-                 mean {rep5} rows replicate, with 3 runs {rep3}; {} equivalent at 100 runs. By ratio \
-                 alone, {} rows are within 2× ({} with their whole 95 % interval){geo}.",
+                 within 2× (consistent but wide), {differs} {}{}. With 5 runs behind each published \
+                 mean {}, with 3 runs {rep3}; {} equivalent at 100 runs. By ratio alone, {} within 2× \
+                 ({} with their whole 95 % interval){geo}.",
                 t.rows,
                 MARGIN.0,
                 MARGIN.1,
                 MARGIN_2X.0,
                 MARGIN_2X.1,
                 if wide == 1 { "is" } else { "are" },
+                if differs == 1 { "differs" } else { "differ" },
                 if undecided > 0 { format!(", {undecided} undecided") } else { String::new() },
+                rows(rep5, "replicates", "replicate"),
                 t.equivalent[1],
-                t.within_2x,
+                rows(t.within_2x, "is", "are"),
                 t.whole_interval,
             ));
             if let Some(sel) = selection {
@@ -166,9 +181,9 @@ pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
             }
             if t.spread.0 + t.spread.1 > 0 {
                 out.push(format!(
-                    "Our spread differs from the paper's in {} rows ({} wider, {} narrower; 95 % F \
+                    "Our spread differs from the paper's in {} ({} wider, {} narrower; 95 % F \
                      interval of the std ratio).",
-                    t.spread.0 + t.spread.1,
+                    rows(t.spread.0 + t.spread.1, "", "").trim_end(),
                     t.spread.0,
                     t.spread.1
                 ));
@@ -176,9 +191,13 @@ pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
         } else {
             out.push(format!(
                 "As written ({}): {rep10} of {} replicate ({eq} equivalent, {w2} within 2×), {wide} \
-                 consistent but wide, {differs} differ; {rep5} at 5 runs, {rep3} at 3; by ratio {} \
+                 consistent but wide, {differs} {}; {rep5} at 5 runs, {rep3} at 3; by ratio {} \
                  within 2× ({} whole-interval){geo}.",
-                s.info.id, t.rows, t.within_2x, t.whole_interval,
+                s.info.id,
+                t.rows,
+                if differs == 1 { "differs" } else { "differ" },
+                t.within_2x,
+                t.whole_interval,
             ));
         }
     }

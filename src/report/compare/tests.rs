@@ -163,6 +163,8 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
         [
             "variants.md",
             "variants.csv",
+            "verdicts_by_n.csv",
+            "cross_validation.csv",
             "consistency.md",
             "consistency.csv",
             "figures/forest.svg",
@@ -178,7 +180,7 @@ fn comparison_of_two_variants_is_right_and_deterministic() {
     let out = files(tmp.path());
     assert_eq!(
         out.keys().cloned().collect::<Vec<_>>().len(),
-        10,
+        12,
         "no temporary files left: {:?}",
         out.keys()
     );
