@@ -4,6 +4,8 @@
 //! `--json` objects the binary prints (docs/json.md), the cache's Arrow schema
 //! (docs/reading-results.md), the columns of a committed `table3.csv` (docs/reports.md), and the
 //! setting names the pipeline parser offers in its unknown-field error (docs/pipelines.md).
+//! README's and REPLICATION.md's answer (counts, example rows, the yardstick) is checked against
+//! the committed report by `tests/python/test_readme_answer.py`.
 
 use crate::markdown::{prose_lines, repo};
 use std::collections::BTreeSet;
@@ -236,103 +238,6 @@ fn the_report_column_tables_list_exactly_the_columns_written() {
         variants,
         "docs/reports.md against variants.csv"
     );
-}
-
-/// `12.3` and `4.56` as the report's Markdown prints them (two decimals).
-fn two_decimals(s: &str) -> String {
-    s.parse::<f64>().map(|v| format!("{v:.2}")).unwrap_or_else(|_| s.to_string())
-}
-
-#[test]
-fn the_readme_table_iii_rows_equal_the_committed_report() {
-    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
-    let csv = std::fs::read_to_string(repo().join("reports/paper/gym-v0-terminal/table3.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|c| *c == name).unwrap();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let prose = prose_lines(&readme);
-    let start = prose
-        .iter()
-        .position(|l| l.starts_with("A few rows of Table III"))
-        .expect("the README's Table III rows");
-    let table: Vec<&String> = prose[start..]
-        .iter()
-        .skip_while(|l| !l.starts_with('|'))
-        .take_while(|l| l.starts_with('|'))
-        .skip(2)
-        .collect();
-    assert!(!table.is_empty());
-    for line in table {
-        let cells: Vec<&str> = line.split('|').map(str::trim).filter(|c| !c.is_empty()).collect();
-        let [system, exp, algorithm, ours, paper] = cells[..] else { panic!("README row {line}") };
-        let row = rows
-            .iter()
-            .find(|r| {
-                r[col("system")] == system && r[col("experiment")] == exp && r[col("algorithm")] == algorithm
-            })
-            .unwrap_or_else(|| panic!("no row {system} {exp} {algorithm} in table3.csv"));
-        let pm = |m: &str, s: &str| format!("{} ± {}", two_decimals(row[col(m)]), two_decimals(row[col(s)]));
-        assert_eq!(ours, pm("mean", "std"), "README.md: {line}");
-        assert_eq!(paper, pm("paper_mean", "paper_std"), "README.md: {line}");
-        assert_eq!(row[col("n")], "10", "README.md says the best cell's 10 seeds: {line}");
-    }
-}
-
-#[test]
-fn the_readme_replication_answer_counts_equal_variants_csv() {
-    let readme = std::fs::read_to_string(repo().join("README.md"))
-        .unwrap()
-        .split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ");
-    let csv = std::fs::read_to_string(repo().join("reports/paper/variants.csv")).unwrap();
-    let header = csv_header("reports/paper/variants.csv");
-    let col = |name: &str| header.iter().position(|c| c == name).unwrap();
-    // `title` may be quoted with commas: read the fields before it and count the rest from the end.
-    let rows: Vec<Vec<String>> =
-        csv.lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect();
-    let field = |r: &Vec<String>, name: &str| {
-        let i = col(name);
-        if i < col("title") {
-            r[i].clone()
-        } else {
-            r[r.len() - (header.len() - i)].clone()
-        }
-    };
-    let variant =
-        |id: &str| rows.iter().find(|r| r[col("variant")] == id).unwrap_or_else(|| panic!("no {id}")).clone();
-    let (aw, best) = (variant("as-written"), variant("gym-v0-terminal"));
-    assert_eq!(field(&best, "rank"), "1", "the README calls gym-v0-terminal the best-fitting reading");
-    let expected = [
-        format!("as written, {} of its {} Table III rows", field(&aw, "replicating"), field(&aw, "rows")),
-        format!("({} more within 2×)", field(&aw, "within_2x")),
-        format!("{} are and {} more are within 2×", field(&best, "replicating"), field(&best, "within_2x")),
-    ];
-    for e in expected {
-        assert!(readme.contains(&e), "README.md should say `{e}` (reports/paper/variants.csv)");
-    }
-    assert!(
-        rows.iter().all(|r| field(r, "equivalent_n10") == "0"),
-        "README.md says no row of any reading is equivalent"
-    );
-    // The causes, counted in the best reading's table3.csv (its last column; no field is quoted
-    // there).
-    let t3 = std::fs::read_to_string(repo().join("reports/paper/gym-v0-terminal/table3.csv")).unwrap();
-    let cause = |name: &str| t3.lines().skip(1).filter(|l| l.rsplit(',').next() == Some(name)).count();
-    assert_eq!(csv_header("reports/paper/gym-v0-terminal/table3.csv").last().unwrap(), "cause");
-    let expected = [
-        format!("{} replicate, {} miss only because our grid", cause("replicates"), cause("argmin")),
-        format!(
-            "{} differ at the paper's configuration, and {} (crisp",
-            cause("learner"),
-            cause("paper-inconsistent")
-        ),
-    ];
-    for e in expected {
-        assert!(readme.contains(&e), "README.md should say `{e}` (reports/paper/gym-v0-terminal/table3.csv)");
-    }
-    assert_eq!(cause("unexplained"), 0, "README.md names no unexplained row");
 }
 
 #[test]

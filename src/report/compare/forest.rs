@@ -497,7 +497,9 @@ systems:
             )),
             "{text}"
         );
-        assert!(text.contains(&format!("By ratio alone, {} rows are within 2×", t.within_2x)), "{text}");
+        let within =
+            if t.within_2x == 1 { "1 row is".to_string() } else { format!("{} rows are", t.within_2x) };
+        assert!(text.contains(&format!("By ratio alone, {within} within 2×")), "{text}");
         let t = Tally::of(&series[0]);
         assert!(
             text.contains(&format!("As written (as-written): {} of 3 replicate", t.replicating[2])),

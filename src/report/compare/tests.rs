@@ -105,13 +105,8 @@ fn by_hand(d: &ReportData) -> (usize, usize, usize, usize, usize, usize, f64) {
 }
 
 #[test]
-fn verdicts_follow_the_replication_rule() {
-    // se = √(3²/10 + 2²/4) = √1.9 ≈ 1.378; 2·se ≈ 2.757.
-    assert_eq!(fit_verdict(8.7, Some(2.0), 4, 6.0, 3.0), FitVerdict::Replicates);
-    assert_eq!(fit_verdict(8.8, Some(2.0), 4, 6.0, 3.0), FitVerdict::Within2x);
-    assert_eq!(fit_verdict(12.0, Some(2.0), 4, 6.0, 3.0), FitVerdict::Within2x);
-    assert_eq!(fit_verdict(12.1, Some(2.0), 4, 6.0, 3.0), FitVerdict::DoesNotReplicate);
-    assert_eq!(fit_verdict(6.0, None, 1, 6.0, 3.0), FitVerdict::Within2x, "no std: not within 2 SE");
+fn fit_order_and_diff_labels() {
+    // The verdicts themselves are tested in analysis::verdict; here the order they rank.
     let f = |within_2se, ratio_within_2x, geo_mean| Fit {
         within_2se,
         ratio_within_2x,
