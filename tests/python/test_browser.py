@@ -293,7 +293,7 @@ def check_opening(page: dict, screenshot: Path) -> None:
     """The comparison page opens with the answer and the forest plot, both on the first screen
     (900 px high)."""
     answer = page["answer"]
-    assert answer and "Table III rows are within 2× of the paper" in answer["text"], answer
+    assert answer and "Table III rows replicate" in answer["text"], answer
     forest = [i for i in page["images"] if i["src"] == "figures/forest.svg"]
     assert len(forest) == 1, page["images"]
     assert answer["top"] < 900 and forest[0]["bottom"] <= 900, \

@@ -44,9 +44,9 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
         Column::new("Contradictory", "contradictory", Align::Left),
         Column::new("Marked", "marked", Align::Left),
         Column::new("p (n=5)", "p_n5", Align::Right),
-        Column::new("Contradictory (n=5)", "contradictory_n5", Align::Left),
+        Column::new("n=5", "contradictory_n5", Align::Left),
         Column::new("p (n=3)", "p_n3", Align::Right),
-        Column::new("Contradictory (n=3)", "contradictory_n3", Align::Left),
+        Column::new("n=3", "contradictory_n3", Align::Left),
     ];
     let num = |value: f64, decimals: usize| {
         if value.is_finite() {
@@ -99,7 +99,8 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
          (α = {ALPHA}). {CONSISTENCY_RULE} Config: the published configuration's bins or sets per \
          variable, then the action count. Grids imply: what the published minima must satisfy \
          (b ≤ a: row a's configuration is a cell of row b's grid). Marked: the row the pair costs (a or \
-         b). p and contradictory (n=5, n=3): the same test with the paper's means taken over 5 or 3 runs.",
+         b). p (n=5, n=3), n=5, n=3: the same test and whether it finds the pair contradictory with the \
+         paper's means taken over 5 or 3 runs.",
         found.len(),
         if found.len() == 1 { "" } else { "s" }
     );

@@ -250,15 +250,15 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
         Column::new("Variant", "variant", Align::Left),
         Column::new("Title", "title", Align::Left),
         Column::new("Rows with reference", "rows", Align::Right),
-        Column::new("Replicate (n=10)", "replicating_n10", Align::Right),
-        Column::new("Equivalent", "equivalent_n10", Align::Right),
-        Column::new("Within 2× (TOST)", "within_2x_n10", Align::Right),
-        Column::new("Consistent but wide", "consistent_but_wide_n10", Align::Right),
+        Column::new("Replicate", "replicating_n10", Align::Right),
+        Column::new("Equiv.", "equivalent_n10", Align::Right),
+        Column::new("Within 2×", "within_2x_n10", Align::Right),
+        Column::new("Wide", "consistent_but_wide_n10", Align::Right),
         Column::new("Differs", "differs_n10", Align::Right),
-        Column::new("Replicate (n=5)", "replicating_n5", Align::Right),
-        Column::new("Replicate (n=3)", "replicating_n3", Align::Right),
-        Column::new("Within 2 SE (old rule)", "within_2se", Align::Right),
-        Column::new("Ratio within 2× (old rule)", "ratio_within_2x", Align::Right),
+        Column::new("Repl. n=5", "replicating_n5", Align::Right),
+        Column::new("Repl. n=3", "replicating_n3", Align::Right),
+        Column::new("≤ 2 SE (old)", "within_2se", Align::Right),
+        Column::new("Ratio ≤ 2× (old)", "ratio_within_2x", Align::Right),
         Column::new("Config matches", "config_match", Align::Right),
         Column::new("Order matches", "order_match", Align::Right),
         Column::new("Experiments ordered", "order_experiments", Align::Right),
@@ -315,7 +315,8 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
     let caption = format!(
         "How well each variant reproduces the reference values (one row per variant; counts over its \
          Table III rows that have a reference value and a best cell). {SCALE_RULE} Replicate: equivalent \
-         or within-2x, at the paper's n taken as 10, 5 or 3. {VERDICT_RULE} Config matches: the \
+         or within-2x (Equiv., Within 2×), with the paper's n taken as 10 (Repl. n=5, n=3: as 5 or 3); \
+         Wide: consistent but wide. ≤ 2 SE and Ratio ≤ 2× (old): the old rule, which ranks the readings. {VERDICT_RULE} Config matches: the \
          best cell has the reference's bins or sets per variable and action count. Order matches: of the \
          experiments where every algorithm has a reference, those whose algorithms (Q(0), Q(λ)) rank by \
          mean as in the reference. Geo. mean: exp of the mean of ln(ours/reference) over the rows. {FIT_ORDER} \

@@ -256,7 +256,20 @@ fn page(
         h.push_str(&format!("<p>Data: {}</p>\n", links.join(" · ")));
     }
     h.push_str("<h2 id=\"fit\">Fit to the reference values</h2>\n");
-    h.push_str(&captioned(tables.fit));
+    // The page shows the columns that decide; the CSV and Markdown hold them all.
+    h.push_str(&captioned(&without(
+        tables.fit,
+        &[
+            "ratio_within_2x",
+            "config_match",
+            "order_match",
+            "order_experiments",
+            "equivalent_n100",
+            "fresh_over_selection",
+        ],
+        "variants.csv adds the old rule's ratio within 2×, the configuration and Q(0)/Q(λ) order \
+         matches, the TOST at n = 100 and the fresh-seed geometric mean.",
+    )));
     if let Some(t) = tables.held_out {
         h.push_str("<h2 id=\"held-out\">Held-out rows</h2>\n");
         h.push_str(&captioned(t));
@@ -267,7 +280,11 @@ fn page(
     }
     if let Some(t) = tables.consistency {
         h.push_str("<h2 id=\"consistency\">The paper against itself</h2>\n");
-        h.push_str(&captioned(t));
+        h.push_str(&captioned(&without(
+            t,
+            &["t", "df", "p_n5", "p_n3"],
+            "consistency.csv adds Welch's t, its degrees of freedom and the p-values at n = 5 and 3.",
+        )));
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
         for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
@@ -290,6 +307,29 @@ fn page(
     }
     h.push_str("</body>\n</html>\n");
     h
+}
+
+/// `table` without the columns whose first CSV field is in `hide`, its caption followed by `note`
+/// (where a column was hidden), for a page that must fit its width.
+fn without(table: &Table, hide: &[&str], note: &str) -> Table {
+    let keep: Vec<usize> =
+        (0..table.columns.len()).filter(|&i| !hide.contains(&table.columns[i].csv[0].as_str())).collect();
+    if keep.len() == table.columns.len() {
+        return table.clone();
+    }
+    Table {
+        title: table.title.clone(),
+        caption: format!("{} {note}", table.caption),
+        columns: keep.iter().map(|&i| table.columns[i].clone()).collect(),
+        rows: table
+            .rows
+            .iter()
+            .map(|r| super::table::Row {
+                values: keep.iter().map(|&i| r.values[i].clone()).collect(),
+                highlight: r.highlight,
+            })
+            .collect(),
+    }
 }
 
 /// A comparison table as HTML. The caption is a paragraph of its own: inside the table it would
