@@ -93,13 +93,18 @@ impl Tally {
     }
 }
 
-/// "1 row is", "3 rows are": the count with `one` or `many` after "row"/"rows".
-fn rows(n: usize, one: &str, many: &str) -> String {
+/// "1 row", "3 rows".
+fn n_rows(n: usize) -> String {
     if n == 1 {
-        format!("1 row {one}")
+        "1 row".into()
     } else {
-        format!("{n} rows {many}")
+        format!("{n} rows")
     }
+}
+
+/// "1 row is", "3 rows are": the count, then `one` or `many`.
+fn rows(n: usize, one: &str, many: &str) -> String {
+    format!("{} {}", n_rows(n), if n == 1 { one } else { many })
 }
 
 /// The sentences on choosing the reading: leave-one-row-out and the yardstick.
@@ -121,7 +126,7 @@ fn chosen_sentences(s: &Selection) -> String {
             " The best of {} readings has {} within two standard errors; were all readings equally \
              good, the best would reach a median {} (95th percentile {}, p = {:.3}).",
             s.readings,
-            rows(y.observed, "", "").trim_end(),
+            n_rows(y.observed),
             y.median,
             y.p95,
             y.p
@@ -183,7 +188,7 @@ pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
                 out.push(format!(
                     "Our spread differs from the paper's in {} ({} wider, {} narrower; 95 % F \
                      interval of the std ratio).",
-                    rows(t.spread.0 + t.spread.1, "", "").trim_end(),
+                    n_rows(t.spread.0 + t.spread.1),
                     t.spread.0,
                     t.spread.1
                 ));

@@ -5,7 +5,7 @@
 
 use super::super::model::published_rows;
 use super::super::table::{Align, Column, Row, Table, Value};
-use super::fit::{fit_order, Cause, Fit, HEADLINE_N};
+use super::fit::{fit_order, Cause, Fit, HEADLINE_N, PAPER_N_SET};
 use super::VariantDigest;
 use crate::analysis::consistency::{pairs, Config, Pair, ALPHA, CONSISTENCY_RULE};
 use crate::analysis::verdict::CAUSE_RULE;
@@ -26,7 +26,8 @@ fn config_text(c: &Option<Config>) -> Value {
 pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
     let rows: Vec<_> = published_rows(plan).into_iter().next()?.into_iter().map(|r| r.2).collect();
     let found = pairs(&rows, HEADLINE_N);
-    let fewer = [5, 3].map(|n| pairs(&rows, n));
+    // The pairs with fewer paper runs: 5, then 3 (the sensitivity set below the headline).
+    let fewer = [PAPER_N_SET[1], PAPER_N_SET[0]].map(|n| pairs(&rows, n));
     let columns = vec![
         Column::new("System", "system", Align::Left),
         Column::new("Representation", "representation", Align::Left),

@@ -100,7 +100,15 @@ pub struct RowFit {
     pub spread: Option<Spread>,
 }
 
+/// A Table III row's identity: system, experiment id, algorithm.
+pub type RowKey = (SystemKind, String, Algorithm);
+
 impl RowFit {
+    /// The row's identity, the same in every reading.
+    pub fn key(&self) -> RowKey {
+        (self.system, self.experiment.clone(), self.algorithm)
+    }
+
     /// The row judged at the headline n ([`HEADLINE_N`]).
     pub fn headline(&self) -> &RowJudgement {
         &self.by_n[PAPER_N_SET.len() - 1]
@@ -142,10 +150,11 @@ pub fn rows_of(data: &ReportData) -> Vec<RowFit> {
             let paper_cell = e.reference_cell(alg).and_then(|i| moments(&e.cells[i]));
             let row_verdict = fit_verdict(mean, std, n, r.mean, r.std);
             let at_2se = paper_cell.map(|m| fit_verdict(m.mean, m.std, m.n, r.mean, r.std));
-            let in_pair = contradictions[PAPER_N_SET.len() - 1].in_pair.contains(&(ei, alg));
-            let by_n = std::array::from_fn(|k| {
+            let by_n: [RowJudgement; 3] = std::array::from_fn(|k| {
                 judge_row(best, paper_cell, r, &contradictions[k], (ei, alg), PAPER_N_SET[k])
             });
+            // The old rule's cause reads the pairs at the headline n (the last of the set).
+            let in_pair = by_n[PAPER_N_SET.len() - 1].in_pair;
             out.push(RowFit {
                 system,
                 experiment: e.exp.id.clone(),

@@ -3,20 +3,10 @@
 //! permutation yardstick ([`crate::analysis::selection`]) for the best reading's count. Written as
 //! `cross_validation.csv` and stated in the answer.
 
-use super::fit::{fit_order, Fit, FitVerdict, RowFit, Verdict};
+use super::fit::{fit_order, Fit, FitVerdict, RowFit, RowKey, Verdict};
 use super::VariantDigest;
 use crate::analysis::selection::{yardstick, Yardstick, PERMUTATIONS, SEED};
 use crate::report::table::{Align, Column, Row, Table, Value};
-use crate::sim::env::SystemKind;
-use crate::sim::Algorithm;
-
-/// A Table III row's identity.
-type RowKey = (SystemKind, String, Algorithm);
-
-fn key(r: &RowFit) -> RowKey {
-    (r.system, r.experiment.clone(), r.algorithm)
-}
-
 /// One held-out row: the reading chosen on the other rows and the row's verdicts under it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeldOut {
@@ -72,18 +62,20 @@ pub fn selection(exploratory: bool, variants: &[VariantDigest]) -> Option<Select
     let rows: Vec<&RowFit> = declared[0]
         .rows
         .iter()
-        .filter(|r| declared.iter().all(|v| v.rows.iter().any(|o| key(o) == key(r))))
+        .filter(|r| declared.iter().all(|v| v.rows.iter().any(|o| o.key() == r.key())))
         .collect();
     if rows.is_empty() {
         return None;
     }
-    let row_of = |v: &VariantDigest, k: &RowKey| v.rows.iter().find(|o| &key(o) == k).cloned();
+    fn row_of<'v>(v: &'v VariantDigest, k: &RowKey) -> Option<&'v RowFit> {
+        v.rows.iter().find(|o| &o.key() == k)
+    }
     let held_out = rows
         .iter()
         .map(|r| {
-            let k = key(r);
+            let k = r.key();
             let fits: Vec<Fit> =
-                declared.iter().map(|v| Fit::from_rows(v.rows.iter().filter(|o| key(o) != k))).collect();
+                declared.iter().map(|v| Fit::from_rows(v.rows.iter().filter(|o| o.key() != k))).collect();
             let chosen = declared[fit_order(&fits)[0]];
             let under = row_of(chosen, &k).expect("every declared reading scores the row");
             HeldOut {
@@ -98,9 +90,7 @@ pub fn selection(exploratory: bool, variants: &[VariantDigest]) -> Option<Select
     let fits: Vec<Fit> = declared.iter().map(|v| v.fit).collect();
     let best = declared[fit_order(&fits)[0]];
     let outcomes = |f: &dyn Fn(&RowFit) -> bool| -> Vec<Vec<bool>> {
-        rows.iter()
-            .map(|r| declared.iter().map(|v| row_of(v, &key(r)).is_some_and(|o| f(&o))).collect())
-            .collect()
+        rows.iter().map(|r| declared.iter().map(|v| row_of(v, &r.key()).is_some_and(f)).collect()).collect()
     };
     Some(Selection {
         best: best.info.id.clone(),

@@ -13,16 +13,16 @@ fn closest<'v>(
     row: &RowFit,
     k: usize,
 ) -> Option<(&'v VariantDigest<'v>, &'v RowFit)> {
-    let same = |o: &&RowFit| {
-        o.system == row.system && o.experiment == row.experiment && o.algorithm == row.algorithm
+    let key = row.key();
+    let closer = |a: &RowFit, b: &RowFit| {
+        let (va, vb) = (a.by_n[k].best.verdict, b.by_n[k].best.verdict);
+        va < vb || (va == vb && a.ratio().ln().abs() < b.ratio().ln().abs())
     };
     let mut best: Option<(&VariantDigest, &RowFit)> = None;
     for v in variants {
-        let Some(o) = v.rows.iter().find(same) else { continue };
-        let rank = |r: &RowFit| (r.by_n[k].best.verdict, r.ratio().ln().abs());
-        if best
-            .is_none_or(|(_, b)| rank(o).0 < rank(b).0 || (rank(o).0 == rank(b).0 && rank(o).1 < rank(b).1))
-        {
+        let Some(o) = v.rows.iter().find(|o| o.key() == key) else { continue };
+        // Strictly closer only: ties keep the earlier reading (pipeline order).
+        if best.is_none_or(|(_, b)| closer(o, b)) {
             best = Some((v, o));
         }
     }
