@@ -2,7 +2,7 @@
 //! An optional first non-flag argument filters configurations by name, e.g.
 //! `cargo bench --bench engine -- cart-pole/fuzzy`.
 
-use qsweep::bench;
+use qsweep_pipeline::bench;
 
 fn main() {
     // cargo passes `--bench`; any other non-flag argument is the filter.

@@ -5,12 +5,12 @@
 //! production / kernel (steps per second) shows what the engine's layering costs; the target is
 //! ≥ 1.0 (docs/speed.md). Both are timed by thread CPU time, alternating, 5 runs each, best kept.
 
-use qsweep::bench;
-use qsweep::sim::config::TrialConfig;
-use qsweep::sim::env::SystemKind;
-use qsweep::sim::repr::ReprKind;
-use qsweep::sim::rng::TrialRng;
-use qsweep::sim::{math, run_trial, Algorithm};
+use qsweep_engine::config::TrialConfig;
+use qsweep_engine::env::SystemKind;
+use qsweep_engine::repr::ReprKind;
+use qsweep_engine::rng::TrialRng;
+use qsweep_engine::{math, run_trial, Algorithm};
+use qsweep_pipeline::bench;
 
 const STEPS: u64 = 3_000_000;
 

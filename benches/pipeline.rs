@@ -11,8 +11,8 @@
 //! race (`paper-race.yaml`) against `max_seeds` seeds in every cell, in trials and in simulated
 //! steps (target: at most 25 % of the trials).
 
-use qsweep::cache::{Store, TrialRecord};
-use qsweep::sim::{Outcome, StopReason};
+use qsweep_engine::{Outcome, StopReason};
+use qsweep_pipeline::cache::{Store, TrialRecord};
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -155,10 +155,10 @@ fn main() {
 
     // Plan the paper grid in-process.
     let start = Instant::now();
-    let loaded = qsweep::spec::load(&paper, &[]).unwrap();
-    let plan = qsweep::plan::plan(&loaded, None).unwrap();
+    let loaded = qsweep_pipeline::spec::load(&paper, &[]).unwrap();
+    let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
     let plan_secs = start.elapsed().as_secs_f64();
-    let unique = qsweep::exec::jobs(&plan);
+    let unique = qsweep_pipeline::exec::jobs(&plan);
     println!(
         "plan paper.yaml ({} variants): {} distinct trials in {:.3} s (target < 1 s)",
         plan.variants.len(),
@@ -169,7 +169,7 @@ fn main() {
     // A warm cache: one synthetic row per trial, in segments of 500 (what --batch-trials writes).
     let dir = tempfile::tempdir().unwrap();
     let store = Store::open(dir.path()).unwrap();
-    let synthetic = |jobs: &[qsweep::exec::Job<'_>]| -> Vec<TrialRecord> {
+    let synthetic = |jobs: &[qsweep_pipeline::exec::Job<'_>]| -> Vec<TrialRecord> {
         jobs.iter()
             .map(|t| {
                 let outcome = Outcome {
@@ -192,9 +192,10 @@ fn main() {
     }
     // The fresh-seed stage is planned from the grid's stored outcomes: replay it and store its
     // trials too, so that the no-op run below has nothing to run.
-    let staged = qsweep::race::replay_cached(&plan, &store, &store.keys().unwrap()).unwrap().plan;
+    let staged = qsweep_pipeline::race::replay_cached(&plan, &store, &store.keys().unwrap()).unwrap().plan;
     let grid: std::collections::HashSet<_> = unique.iter().map(|t| t.key).collect();
-    let fresh: Vec<_> = qsweep::exec::jobs(&staged).into_iter().filter(|t| !grid.contains(&t.key)).collect();
+    let fresh: Vec<_> =
+        qsweep_pipeline::exec::jobs(&staged).into_iter().filter(|t| !grid.contains(&t.key)).collect();
     let fresh_records = synthetic(&fresh);
     for chunk in fresh_records.chunks(500) {
         store.write_segment(chunk).unwrap();
@@ -237,13 +238,13 @@ fn claim_overhead(records: &[TrialRecord]) {
     let trial_cpu: f64 = records.iter().map(|r| r.cpu_seconds.unwrap_or(r.seconds)).sum();
     let dir = tempfile::tempdir().unwrap();
     let store = Store::open(dir.path()).unwrap();
-    let claims = qsweep::cache::claims::Claims::open(&store).unwrap();
+    let claims = qsweep_pipeline::cache::claims::Claims::open(&store).unwrap();
     let keys: Vec<_> = records.iter().map(|r| r.key).collect();
     let rounds = 20;
     let start = Instant::now();
     for _ in 0..rounds {
         for &k in &keys {
-            assert_eq!(claims.try_take(k).unwrap(), qsweep::cache::claims::Take::Taken);
+            assert_eq!(claims.try_take(k).unwrap(), qsweep_pipeline::cache::claims::Take::Taken);
         }
         claims.heartbeat();
         claims.release(&keys);
@@ -263,11 +264,11 @@ fn claim_overhead(records: &[TrialRecord]) {
 /// per trial times `max_seeds`.
 fn race_cost(pipeline: &Path, cache: &Path) {
     let start = Instant::now();
-    let loaded = qsweep::spec::load(pipeline, &[]).unwrap();
-    let plan = qsweep::plan::plan(&loaded, None).unwrap();
+    let loaded = qsweep_pipeline::spec::load(pipeline, &[]).unwrap();
+    let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
     let store = Store::open(cache).unwrap();
     let scan = store.keys().unwrap();
-    let raced = qsweep::race::replay_cached(&plan, &store, &scan).unwrap();
+    let raced = qsweep_pipeline::race::replay_cached(&plan, &store, &scan).unwrap();
     let secs = start.elapsed().as_secs_f64();
     let wanted = raced.plan.trials().map(|(_, _, t)| t.key).collect();
     let outcomes = store.read_outcomes(&scan, &wanted, false).unwrap();

@@ -2,10 +2,10 @@
 //! `tests/fixtures/pipelines/tiny.yaml`, run its trials into a fresh cache while collecting the execution's
 //! events, then write its report. `cargo run --release --example library_run [CACHE_DIR]`.
 
-use qsweep::exec::{Event, ExecOptions};
-use qsweep::pipeline::{run_trials, scan, Selection};
-use qsweep::report::formats::{Format, Formats};
-use qsweep::report::ReportOptions;
+use qsweep_pipeline::exec::{Event, ExecOptions};
+use qsweep_pipeline::run::{run_trials, scan, Selection};
+use qsweep_report::formats::{Format, Formats};
+use qsweep_report::ReportOptions;
 
 fn main() -> anyhow::Result<()> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -13,9 +13,9 @@ fn main() -> anyhow::Result<()> {
         Some(dir) => std::path::PathBuf::from(dir),
         None => std::env::temp_dir().join(format!("qsweep-example-{}", std::process::id())),
     };
-    let loaded = qsweep::spec::load(&root.join("tests/fixtures/pipelines/tiny.yaml"), &[])?;
-    let plan = qsweep::plan::plan(&loaded, None)?;
-    let store = qsweep::cache::Store::open(&work.join("cache"))?;
+    let loaded = qsweep_pipeline::spec::load(&root.join("tests/fixtures/pipelines/tiny.yaml"), &[])?;
+    let plan = qsweep_pipeline::plan::plan(&loaded, None)?;
+    let store = qsweep_pipeline::cache::Store::open(&work.join("cache"))?;
     let keys = scan(&store)?.stored;
 
     let mut events: Vec<Event> = Vec::new();
@@ -39,7 +39,7 @@ fn main() -> anyhow::Result<()> {
         force: false,
         rebuild: false,
     };
-    let report = qsweep::report::write(plan.clone(), &store, &keys, &opts)?;
+    let report = qsweep_report::write(plan.clone(), &store, &keys, &opts)?;
     println!(
         "report: {} files in {} ({} of {} planned trials present)",
         report.summary.files.len(),

@@ -2,11 +2,11 @@
 //! filled in, so its key is the pipeline cell's key) and run one trial of it, as `qsweep trial`
 //! does. `cargo run --release --example one_trial`.
 
-use qsweep::plan::{one_cell, CellRequest};
-use qsweep::sim::env::SystemKind;
-use qsweep::sim::repr::ReprKind;
-use qsweep::sim::{run_trial, Algorithm};
-use qsweep::spec::Override;
+use qsweep_engine::env::SystemKind;
+use qsweep_engine::repr::ReprKind;
+use qsweep_engine::{run_trial, Algorithm};
+use qsweep_pipeline::plan::{one_cell, CellRequest};
+use qsweep_pipeline::spec::Override;
 
 fn main() -> anyhow::Result<()> {
     let request = CellRequest {

@@ -3,7 +3,7 @@
 Python's decimal module at 420 significant digits (no third-party package).
 
     python3 scripts/math_reference.py tables      # Rust source of exp's 2^(j/32) table (hi, lo)
-    python3 scripts/math_reference.py reference   # writes tests/fixtures/math/reference.csv
+    python3 scripts/math_reference.py reference   # writes crates/qsweep-engine/tests/fixtures/math/reference.csv
 
 reference.csv has one row per (function, input): `fn,x,ref,frac` where `x` and `ref` are the
 hexadecimal bit patterns of the input and of the correctly rounded result, and `frac` is
@@ -167,4 +167,4 @@ if __name__ == "__main__":
     if what == "tables":
         tables()
     else:
-        reference(Path(__file__).resolve().parent.parent / "tests/fixtures/math/reference.csv")
+        reference(Path(__file__).resolve().parent.parent / "crates/qsweep-engine/tests/fixtures/math/reference.csv")

@@ -6,11 +6,11 @@
 //! appear at any time without a bump, so readers should ignore fields they do not know. Every
 //! format is at version 1. docs/json.md documents each one.
 
-use crate::bench::BenchResult;
-use crate::sim::env::SystemKind;
-use crate::sim::feasible::Feasibility;
-use crate::sim::{Outcome, TrialConfig};
-use crate::status::Status;
+use qsweep_engine::env::SystemKind;
+use qsweep_engine::feasible::Feasibility;
+use qsweep_engine::{Outcome, TrialConfig};
+use qsweep_pipeline::bench::BenchResult;
+use qsweep_pipeline::status::Status;
 use serde::{Deserialize, Serialize};
 
 /// `qsweep run --json`: one object, printed after the trials ran (before the report is written).
@@ -250,11 +250,11 @@ pub struct PipelineBenchReport {
     /// Pipeline name.
     pub pipeline: String,
     /// How the cells were ranked: `cached` (CPU seconds of the cached trials) or `estimated`.
-    pub basis: crate::bench::pipeline::CostBasis,
+    pub basis: qsweep_pipeline::bench::pipeline::CostBasis,
     /// Distinct cells of the plan.
     pub cells: usize,
     /// The timed cells, most expensive first.
-    pub results: Vec<crate::bench::pipeline::CellBench>,
+    pub results: Vec<qsweep_pipeline::bench::pipeline::CellBench>,
 }
 
 impl PipelineBenchReport {
@@ -263,7 +263,7 @@ impl PipelineBenchReport {
 }
 
 /// One visited cell of the best policy (defined with the search).
-pub use crate::sim::feasible::PolicyCell as FeasibleCell;
+pub use qsweep_engine::feasible::PolicyCell as FeasibleCell;
 
 /// `qsweep feasible --json`: the search's settings, its result and the best policy's visited cells.
 #[derive(Debug, Serialize)]

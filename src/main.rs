@@ -16,8 +16,12 @@ fn main() -> ExitCode {
             for cause in err.chain().skip(1) {
                 eprintln!("  caused by: {cause}");
             }
-            let usage = err.chain().any(|c| c.downcast_ref::<qsweep::error::UserError>().is_some());
-            ExitCode::from(if usage { qsweep::error::exit::USAGE } else { qsweep::error::exit::FAILURE })
+            let usage = err.chain().any(|c| c.downcast_ref::<qsweep_pipeline::error::UserError>().is_some());
+            ExitCode::from(if usage {
+                qsweep_pipeline::error::exit::USAGE
+            } else {
+                qsweep_pipeline::error::exit::FAILURE
+            })
         }
     }
 }

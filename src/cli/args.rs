@@ -1,8 +1,8 @@
 //! Value parsers shared by subcommands: finite numbers, comma lists, NAME=VALUE pairs. Range
 //! rules come from `sim::rules`, the same ones pipeline files and `TrialConfig::validate` use.
 
-use crate::sim::env::SystemKind;
-use crate::sim::rules::{self, Real};
+use qsweep_engine::env::SystemKind;
+use qsweep_engine::rules::{self, Real};
 
 /// A system name.
 pub fn system(s: &str) -> Result<SystemKind, String> {

@@ -1,9 +1,9 @@
 //! `qsweep bench`: steps per second of the production engine on the standard configurations.
 
 use super::pipeline_args::{CacheArgs, PipelineArgs};
-use crate::bench::{self, BenchResult};
-use crate::error::user_error;
 use clap::Args;
+use qsweep_pipeline::bench::{self, BenchResult};
+use qsweep_pipeline::error::user_error;
 use std::path::PathBuf;
 
 /// Arguments of `qsweep bench`.
@@ -79,12 +79,12 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
         };
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
-    Ok(crate::error::exit::OK)
+    Ok(qsweep_pipeline::error::exit::OK)
 }
 
 /// `qsweep bench --pipeline P`: time the plan's most expensive cells.
 fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
-    use crate::bench::pipeline::{format_row, header, ranked_cells, time_cell, CostBasis};
+    use qsweep_pipeline::bench::pipeline::{format_row, header, ranked_cells, time_cell, CostBasis};
     if a.top == 0 {
         return Err(user_error("--top: must be at least 1"));
     }
@@ -134,5 +134,5 @@ fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
         let share: f64 = results.iter().map(|r| r.share).sum();
         println!("these cells: {:.1}% of the pipeline's cost", 100.0 * share);
     }
-    Ok(crate::error::exit::OK)
+    Ok(qsweep_pipeline::error::exit::OK)
 }

@@ -3,14 +3,14 @@
 
 use super::args;
 use super::simulate::env_params;
-use crate::error::user_error;
 use crate::formats::FeasibleReport as Report;
-use crate::sim::config::TrialConfig;
-use crate::sim::env::{BeamControl, EnvParams, StartKind, State, SystemKind};
-use crate::sim::feasible::{first_start, policy_cells, search};
-use crate::sim::repr::{Binning, ReprKind};
-use crate::sim::Algorithm;
 use clap::Args;
+use qsweep_engine::config::TrialConfig;
+use qsweep_engine::env::{BeamControl, EnvParams, StartKind, State, SystemKind};
+use qsweep_engine::feasible::{first_start, policy_cells, search};
+use qsweep_engine::repr::{Binning, ReprKind};
+use qsweep_engine::Algorithm;
+use qsweep_pipeline::error::user_error;
 
 /// Arguments of `qsweep feasible`.
 #[derive(Debug, Args)]
@@ -66,8 +66,8 @@ pub struct FeasibleArgs {
 fn parse_range(system: SystemKind, s: &str) -> anyhow::Result<(usize, [f64; 2])> {
     let bad = || user_error(format!("--range: '{s}' is not VAR=LO,HI (e.g. x_dot=-3,3)"));
     let (name, value) = s.split_once('=').ok_or_else(bad)?;
-    let j =
-        crate::spec::variable_index(system, name.trim()).map_err(|e| user_error(format!("--range: {e}")))?;
+    let j = qsweep_pipeline::spec::variable_index(system, name.trim())
+        .map_err(|e| user_error(format!("--range: {e}")))?;
     let v = args::finite_list(value).map_err(|e| user_error(format!("--range {s}: {e}")))?.0;
     match v[..] {
         [lo, hi] if lo < hi => Ok((j, [lo, hi])),

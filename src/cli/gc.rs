@@ -2,10 +2,10 @@
 //! references.
 
 use super::pipeline_args::CacheArgs;
-use crate::error::exit;
-use crate::plan::plan;
-use crate::spec::load;
 use clap::Args;
+use qsweep_pipeline::error::exit;
+use qsweep_pipeline::plan::plan;
+use qsweep_pipeline::spec::load;
 use std::path::PathBuf;
 
 /// Arguments of `qsweep gc`.
@@ -29,11 +29,11 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         let plans =
             a.pipelines.iter().map(|p| plan(&load(p, &[])?, None)).collect::<anyhow::Result<Vec<_>>>()?;
         let names = plans.iter().map(|p| p.name.clone()).collect();
-        (Some(crate::pipeline::referenced_keys(&plans, &store)?), Some(names))
+        (Some(qsweep_pipeline::run::referenced_keys(&plans, &store)?), Some(names))
     };
     let r = store.gc(keep.as_ref(), a.dry_run)?;
-    let version = crate::report::memo::ANALYSIS_VERSION;
-    let memos = crate::analysis::derived::gc(store.dir(), names.as_ref(), version, a.dry_run)?;
+    let version = qsweep_report::memo::ANALYSIS_VERSION;
+    let memos = qsweep_report::derived::gc(store.dir(), names.as_ref(), version, a.dry_run)?;
     for s in &r.skipped {
         eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");
     }

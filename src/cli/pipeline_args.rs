@@ -2,13 +2,13 @@
 //! confirmation of the pipeline commands (`run`, `status`, `report`, `slurm`), and the cache
 //! directory of every command that reads or writes a cache (those, `bench`, `verify`, `gc`).
 
-use crate::cache::store::Store;
-use crate::error::user_error;
-use crate::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
-use crate::report::formats::{Format, Formats, DEFAULT_FORMATS};
-use crate::report::{ReportOptions, ReportOutcome};
-use crate::spec::{load, Override};
 use clap::Args;
+use qsweep_pipeline::cache::store::Store;
+use qsweep_pipeline::error::user_error;
+use qsweep_pipeline::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
+use qsweep_pipeline::spec::{load, Override};
+use qsweep_report::formats::{Format, Formats, DEFAULT_FORMATS};
+use qsweep_report::{ReportOptions, ReportOutcome};
 use std::path::{Path, PathBuf};
 
 /// Pipeline file, overrides and cache location.
@@ -77,7 +77,8 @@ impl CacheArgs {
     /// written is a usage error found before any trial runs, not an I/O error at the first flush.
     pub fn writable_store(&self) -> anyhow::Result<Store> {
         let store = self.store()?;
-        let probe = store.dir().join(format!("{}probe.{}", crate::atomic::TEMP_PREFIX, std::process::id()));
+        let probe =
+            store.dir().join(format!("{}probe.{}", qsweep_pipeline::atomic::TEMP_PREFIX, std::process::id()));
         std::fs::File::create(&probe).map_err(|e| unwritable(store.dir(), &e))?;
         let _ = std::fs::remove_file(&probe);
         Ok(store)
@@ -146,7 +147,7 @@ impl ReportFlags {
     /// The report options for `plan`.
     pub fn options(&self, plan: &Plan, force: bool) -> ReportOptions {
         ReportOptions {
-            dir: self.out.clone().unwrap_or_else(|| crate::report::default_dir(plan)),
+            dir: self.out.clone().unwrap_or_else(|| qsweep_report::default_dir(plan)),
             formats: Formats::of(&self.formats),
             force,
             rebuild: self.rebuild,
@@ -155,7 +156,7 @@ impl ReportFlags {
 }
 
 /// Warn about each damaged cache segment that was moved aside (`run` and `report` alike).
-pub fn warn_quarantined(scan: &crate::pipeline::Scan) {
+pub fn warn_quarantined(scan: &qsweep_pipeline::run::Scan) {
     for (d, to) in &scan.quarantined {
         eprintln!("warning: damaged cache segment {d}; moved to {}", to.display());
     }

@@ -1,8 +1,8 @@
 //! The CLI's reporter of execution events: an indicatif bar with rate and ETA on a terminal,
 //! plain lines every few seconds otherwise (nothing when quiet or `--json`: the `()` reporter).
 
-use crate::exec::{Event, Reporter};
 use indicatif::{ProgressBar, ProgressStyle};
+use qsweep_pipeline::exec::{Event, Reporter};
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 

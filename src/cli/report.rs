@@ -1,12 +1,12 @@
-//! `qsweep report`: write the pipeline's report from the cache ([`crate::report::write`]).
+//! `qsweep report`: write the pipeline's report from the cache ([`qsweep_report::write`]).
 //!
 //! It never replaces a report with one lacking trials of its own plan when the kept one holds
 //! more (a fresh clone's empty cache would otherwise overwrite the committed report) unless told
 //! to with `--force`, and never creates the cache.
 
 use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
-use crate::error::exit;
 use clap::Args;
+use qsweep_pipeline::error::exit;
 
 /// Arguments of `qsweep report`.
 #[derive(Debug, Args)]
@@ -33,10 +33,10 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
     let pipeline = plan.name.clone();
     let store = a.pipeline.cache.required_store()?;
-    let scan = crate::pipeline::scan(&store)?;
+    let scan = qsweep_pipeline::run::scan(&store)?;
     warn_quarantined(&scan);
     let opts = a.report.options(&plan, a.force);
-    let outcome = crate::report::write(plan, &store, &scan.stored, &opts)?;
+    let outcome = qsweep_report::write(plan, &store, &scan.stored, &opts)?;
     if a.json {
         let v = crate::formats::ReportJson {
             format_version: crate::formats::ReportJson::FORMAT_VERSION,

@@ -1,9 +1,9 @@
 //! `qsweep run`: execute the pipeline's missing trials, store them, then write the report.
 
 use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
-use crate::exec::{ExecOptions, Reporter, INTERRUPTED};
-use crate::pipeline::AfterRun;
 use clap::Args;
+use qsweep_pipeline::exec::{ExecOptions, Reporter, INTERRUPTED};
+use qsweep_pipeline::run::AfterRun;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -22,7 +22,7 @@ pub struct RunArgs {
     /// cost-balanced split of the plan's trials, so shards on several machines sharing one cache
     /// run every trial exactly once. Cached trials are skipped as usual.
     #[arg(long, value_name = "I/N")]
-    pub shard: Option<crate::exec::shard::Shard>,
+    pub shard: Option<qsweep_pipeline::exec::shard::Shard>,
     /// Print nothing but errors.
     #[arg(long, short = 'q')]
     pub quiet: bool,
@@ -48,7 +48,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let plan = a.pipeline.plan()?;
     let store = a.pipeline.cache.writable_store()?;
     install_ctrlc();
-    let scan = crate::pipeline::scan(&store)?;
+    let scan = qsweep_pipeline::run::scan(&store)?;
     warn_quarantined(&scan);
     let opts = ExecOptions {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
@@ -56,12 +56,12 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
         claims: Some(claims(&store)?),
     };
-    let sel = crate::pipeline::Selection { shard: a.shard, force: a.force };
+    let sel = qsweep_pipeline::run::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();
     let reporter: &mut dyn Reporter = if a.quiet || a.json { &mut () } else { &mut bar };
     let (name, ropts) = (plan.name.clone(), a.report.options(&plan, false));
     let (done, after) =
-        crate::pipeline::run_trials_replayed(plan, &store, &scan.stored, sel, &opts, reporter)?;
+        qsweep_pipeline::run::run_trials_replayed(plan, &store, &scan.stored, sel, &opts, reporter)?;
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
@@ -91,7 +91,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         if !a.quiet {
             eprintln!("interrupted: {} finished trials are stored; run again to continue", report.executed);
         }
-        return Ok(crate::error::exit::INTERRUPTED);
+        return Ok(qsweep_pipeline::error::exit::INTERRUPTED);
     }
     if !a.no_report {
         // The trials just stored are in new segments: scan again (the old scan's keys freed first);
@@ -104,32 +104,34 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
                     scan
                 } else {
                     drop(scan);
-                    let scan = crate::pipeline::scan(&store)?;
+                    let scan = qsweep_pipeline::run::scan(&store)?;
                     warn_quarantined(&scan);
                     scan
                 };
-                let plan = crate::race::Replayed::of(plan, &store, &scan.stored)?;
+                let plan = qsweep_pipeline::race::Replayed::of(plan, &store, &scan.stored)?;
                 (scan, plan)
             }
         };
-        let outcome = crate::report::write_replayed(plan, &store, &scan.stored, &ropts)?;
+        let outcome = qsweep_report::write_replayed(plan, &store, &scan.stored, &ropts)?;
         if !(a.quiet || a.json) {
             print_report(&outcome, &ropts);
         }
     }
     if report.failed > 0 {
         eprintln!("{} trials failed (diverged); see the `failure` column of trials.parquet", report.failed);
-        return Ok(crate::error::exit::FAILURE);
+        return Ok(qsweep_pipeline::error::exit::FAILURE);
     }
-    Ok(crate::error::exit::OK)
+    Ok(qsweep_pipeline::error::exit::OK)
 }
 
 /// This run's claims on the cache, released at once by Ctrl-C / SIGTERM.
-fn claims(store: &crate::cache::Store) -> anyhow::Result<std::sync::Arc<crate::cache::claims::Claims>> {
-    let dir = store.dir().join(crate::cache::claims::CLAIMS_DIR);
-    let claims =
-        crate::cache::claims::Claims::open(store).map_err(|e| super::pipeline_args::unwritable(&dir, &e))?;
-    crate::cache::claims::register(&claims);
+fn claims(
+    store: &qsweep_pipeline::cache::Store,
+) -> anyhow::Result<std::sync::Arc<qsweep_pipeline::cache::claims::Claims>> {
+    let dir = store.dir().join(qsweep_pipeline::cache::claims::CLAIMS_DIR);
+    let claims = qsweep_pipeline::cache::claims::Claims::open(store)
+        .map_err(|e| super::pipeline_args::unwritable(&dir, &e))?;
+    qsweep_pipeline::cache::claims::register(&claims);
     Ok(claims)
 }
 
@@ -137,9 +139,9 @@ fn install_ctrlc() {
     // A second Ctrl-C exits at once; finished trials are already in renamed segments.
     let _ = ctrlc::set_handler(|| {
         // Other runs on the cache may take this run's unfinished trials now.
-        crate::cache::claims::release_registered();
+        qsweep_pipeline::cache::claims::release_registered();
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
-            std::process::exit(i32::from(crate::error::exit::INTERRUPTED));
+            std::process::exit(i32::from(qsweep_pipeline::error::exit::INTERRUPTED));
         }
         eprintln!("\ninterrupted (Ctrl-C or SIGTERM): storing finished trials, finishing running ones; press Ctrl-C again to stop now");
     });

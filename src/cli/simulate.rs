@@ -2,9 +2,9 @@
 //! Ball-Beam under `--control rate` adds the (hidden) beam angle as a `theta` column.
 
 use super::args;
-use crate::error::user_error;
-use crate::sim::env::{BeamControl, EnvParams, SystemKind};
 use clap::Args;
+use qsweep_engine::env::{BeamControl, EnvParams, SystemKind};
+use qsweep_pipeline::error::user_error;
 use std::io::Write;
 
 /// Arguments of `qsweep simulate`.
@@ -65,7 +65,7 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<u8> {
             state.len()
         )));
     }
-    let steps = crate::sim::trial::simulate(&env, &state, &actions);
+    let steps = qsweep_engine::trial::simulate(&env, &state, &actions);
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     writeln!(out, "step,action,{},reward,terminal", vars.join(","))?;
     let row = |s: &[f64]| s[..vars.len()].iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(",");
@@ -76,5 +76,5 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<u8> {
         writeln!(out, "{},{action},{},{},{}", i + 1, row(s), t.reward, u8::from(t.terminal))?;
     }
     out.flush()?;
-    Ok(crate::error::exit::OK)
+    Ok(qsweep_pipeline::error::exit::OK)
 }

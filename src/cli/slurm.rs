@@ -2,8 +2,8 @@
 //! a report job that waits for it.
 
 use super::pipeline_args::PipelineArgs;
-use crate::slurm::{memory, plain_text, sbatch_option, time_limit, Submission};
 use clap::Args;
+use qsweep_pipeline::slurm::{memory, plain_text, sbatch_option, time_limit, Submission};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -73,7 +73,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     let submission = Submission {
         pipeline_name: plan.name.clone(),
         generated_by: std::env::args_os()
-            .map(|w| crate::slurm::quote(&w.to_string_lossy()))
+            .map(|w| qsweep_pipeline::slurm::quote(&w.to_string_lossy()))
             .collect::<Vec<_>>()
             .join(" "),
         qsweep,
@@ -82,7 +82,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         variants: a.pipeline.variant.clone(),
         yes: a.pipeline.yes,
         cache: abs(&a.pipeline.cache.dir())?,
-        report_dir: abs(&a.out.clone().unwrap_or_else(|| crate::report::default_dir(&plan)))?,
+        report_dir: abs(&a.out.clone().unwrap_or_else(|| qsweep_report::default_dir(&plan)))?,
         tasks: a.array,
         max_running: a.max_running,
         cpus_per_task: a.cpus_per_task,
@@ -99,13 +99,13 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     let script = submission.render()?;
     print!("{script}");
 
-    let unique = crate::exec::jobs(&plan);
+    let unique = qsweep_pipeline::exec::jobs(&plan);
     let cached: HashSet<_> = match a.pipeline.cache.existing_store()? {
         Some(store) => store.keys()?.keys,
         None => HashSet::new(),
     };
-    let per_shard = crate::pipeline::shard_counts(&plan, &unique, &cached, a.array);
-    let sizes = |f: fn(&crate::pipeline::ShardCount) -> usize| {
+    let per_shard = qsweep_pipeline::run::shard_counts(&plan, &unique, &cached, a.array);
+    let sizes = |f: fn(&qsweep_pipeline::run::ShardCount) -> usize| {
         let v: Vec<usize> = per_shard.iter().map(f).collect();
         (v.iter().min().copied().unwrap_or(0), v.iter().max().copied().unwrap_or(0))
     };
@@ -140,5 +140,5 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
              check `scontrol show config | grep MaxArraySize`"
         );
     }
-    Ok(crate::error::exit::OK)
+    Ok(qsweep_pipeline::error::exit::OK)
 }

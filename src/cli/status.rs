@@ -1,11 +1,11 @@
 //! `qsweep status`: prints what is cached and what is missing, per system and experiment, without
 //! running anything, and with `--explain` why missing cells are missing (the diagnosis is
-//! [`crate::status`]).
+//! [`qsweep_pipeline::status`]).
 
 use super::pipeline_args::PipelineArgs;
 use crate::formats::{StatusRace, StatusReport};
-use crate::status::{reason_counts, MissingCell};
 use clap::Args;
+use qsweep_pipeline::status::{reason_counts, MissingCell};
 
 /// Arguments of `qsweep status`.
 #[derive(Debug, Args)]
@@ -31,7 +31,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     let store = a.pipeline.cache.existing_store()?;
     // `--explain`'s report folders are judged from the plan as planned (replayed by the report).
     let planned = (a.explain && !a.json && store.is_some()).then(|| plan.clone());
-    let s = crate::status::status(plan, store.as_ref(), a.explain)?;
+    let s = qsweep_pipeline::status::status(plan, store.as_ref(), a.explain)?;
     let v = StatusReport::of(&s);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -78,10 +78,10 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         print_explanation(&s.plan, cells);
     }
     if let (Some(plan), Some(store)) = (planned, &store) {
-        let dir = crate::report::default_dir(&plan);
+        let dir = qsweep_report::default_dir(&plan);
         let keys = store.keys()?;
-        let formats = crate::report::formats::Formats::default();
-        let explained = crate::report::staleness(plan, store, &keys, &dir, formats)?;
+        let formats = qsweep_report::formats::Formats::default();
+        let explained = qsweep_report::staleness(plan, store, &keys, &dir, formats)?;
         let folders = &explained.folders;
         let stale = folders.iter().filter(|(_, why)| why.is_some()).count();
         for (d, why) in folders {
@@ -96,11 +96,11 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
         );
         print_stale_intervals(&explained);
     }
-    Ok(crate::error::exit::OK)
+    Ok(qsweep_pipeline::error::exit::OK)
 }
 
 /// The cells whose intervals the next report computes, at most [`LISTED`] of them by name.
-fn print_stale_intervals(e: &crate::report::Staleness) {
+fn print_stale_intervals(e: &qsweep_report::Staleness) {
     const LISTED: usize = 20;
     for name in e.stale.iter().take(LISTED) {
         println!("interval computed by the next report (not in the statistics' memo: new trials, or never reported): {name}");
@@ -117,7 +117,7 @@ fn print_stale_intervals(e: &crate::report::Staleness) {
 }
 
 /// One line per missing cell, then how many cells each reason explains when there are several.
-fn print_explanation(plan: &crate::plan::Plan, cells: &[MissingCell]) {
+fn print_explanation(plan: &qsweep_pipeline::plan::Plan, cells: &[MissingCell]) {
     for m in cells {
         let e = &plan.experiments[m.experiment];
         let c = &e.cells[m.cell];
@@ -127,7 +127,7 @@ fn print_explanation(plan: &crate::plan::Plan, cells: &[MissingCell]) {
             e.system.name(),
             e.id,
             c.algorithm.name(),
-            c.coords.iter().map(|&v| crate::spec::format_value(v)).collect::<Vec<_>>().join("×")
+            c.coords.iter().map(|&v| qsweep_pipeline::spec::format_value(v)).collect::<Vec<_>>().join("×")
         );
         println!("missing {label} ({} of {} seeds): {}", m.missing, m.trials, m.reason);
     }

@@ -4,7 +4,7 @@
 use super::trial_args::TrialArgs;
 use super::trial_config::config;
 use crate::formats::TrialReport;
-use crate::sim::run_trial;
+use qsweep_engine::run_trial;
 
 /// Run `qsweep trial`.
 pub fn run(a: TrialArgs) -> anyhow::Result<u8> {
@@ -45,5 +45,9 @@ pub fn run(a: TrialArgs) -> anyhow::Result<u8> {
         let rate = out.total_steps as f64 / seconds.max(1e-9);
         println!("{} steps in {:.3} s ({:.2} M steps/s)", out.total_steps, seconds, rate / 1e6);
     }
-    Ok(if out.failure.is_some() { crate::error::exit::FAILURE } else { crate::error::exit::OK })
+    Ok(if out.failure.is_some() {
+        qsweep_pipeline::error::exit::FAILURE
+    } else {
+        qsweep_pipeline::error::exit::OK
+    })
 }

@@ -2,11 +2,11 @@
 //! pipeline could give the cell (Table II defaults where left out).
 
 use super::args;
-use crate::sim::config::TieBreak;
-use crate::sim::env::SystemKind;
-use crate::sim::repr::ReprKind;
-use crate::sim::Algorithm;
 use clap::Args;
+use qsweep_engine::config::TieBreak;
+use qsweep_engine::env::SystemKind;
+use qsweep_engine::repr::ReprKind;
+use qsweep_engine::Algorithm;
 
 /// Arguments of `qsweep trial`.
 #[derive(Debug, Args)]

@@ -2,11 +2,11 @@
 //! one-cell plan, so a trial and the pipeline cell with the same settings share their key.
 
 use super::trial_args::TrialArgs;
-use crate::error::user_error;
-use crate::plan::{one_cell, CellRequest};
-use crate::sim::config::TrialConfig;
-use crate::sim::env::{SystemKind, TaskKind};
-use crate::spec::Override;
+use qsweep_engine::config::TrialConfig;
+use qsweep_engine::env::{SystemKind, TaskKind};
+use qsweep_pipeline::error::user_error;
+use qsweep_pipeline::plan::{one_cell, CellRequest};
+use qsweep_pipeline::spec::Override;
 
 /// Resolve the arguments into a validated trial configuration: the flags become the settings of
 /// a one-cell plan ([`one_cell`]), resolved exactly as a pipeline cell with the same settings, so
@@ -53,7 +53,7 @@ pub fn config(a: &TrialArgs) -> anyhow::Result<TrialConfig> {
         }
         overrides.push(Override::setting(&["systems", system.name(), "success", "steps"], v));
     }
-    let mut env = crate::sim::env::EnvParams::default_for(system);
+    let mut env = qsweep_engine::env::EnvParams::default_for(system);
     for (name, v) in &a.params {
         env.set_param(name, *v).map_err(|e| user_error(format!("--param: {e}")))?;
         overrides.push(Override::setting(&["systems", system.name(), "params", name], *v));

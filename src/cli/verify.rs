@@ -2,9 +2,9 @@
 //! with `--recompute N`, run N stored trials again and compare their outcomes with the rows.
 
 use super::pipeline_args::CacheArgs;
-use crate::cache::verify::QUARANTINE;
-use crate::error::exit;
 use clap::Args;
+use qsweep_pipeline::cache::verify::QUARANTINE;
+use qsweep_pipeline::error::exit;
 
 /// Arguments of `qsweep verify`.
 #[derive(Debug, Args)]
@@ -55,13 +55,13 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     let mut ok = report.damaged.is_empty();
     // The statistics' memos: a damaged one loses nothing (the next report recomputes it), but it
     // is damage all the same, like a damaged segment.
-    let d = crate::analysis::derived::check(store.dir());
+    let d = qsweep_report::derived::check(store.dir());
     for (p, why) in &d.damaged {
         println!("damaged statistics' memo: {} ({why}; the next report recomputes it)", p.display());
     }
     println!("statistics' memos: {} intact ({} entries), {} damaged", d.intact, d.entries, d.damaged.len());
     ok &= d.damaged.is_empty();
-    let parts = crate::report::trials::check(store.dir());
+    let parts = qsweep_report::trials::check(store.dir());
     for p in &parts.damaged {
         println!("damaged trial part: {} (the next report encodes it again)", p.display());
     }
@@ -74,7 +74,7 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     ok &= parts.damaged.is_empty();
     let reports = a.reports.clone().unwrap_or_else(|| std::path::PathBuf::from("reports"));
     if reports.is_dir() {
-        let m = crate::report::memo::check_tree(&reports);
+        let m = qsweep_report::memo::check_tree(&reports);
         for (p, why) in &m.damaged {
             println!("damaged memo: {} ({why})", p.display());
         }
@@ -103,7 +103,7 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
             println!(
                 "recompute: no trial of engine {} to recompute ({} trials of other engine versions are stored; \
                  `qsweep run` a pipeline with this binary to compute them)",
-                crate::cache::ENGINE_VERSION,
+                qsweep_pipeline::cache::ENGINE_VERSION,
                 r.other_engine
             );
             return Ok(exit::FAILURE);
@@ -120,7 +120,7 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
             "recomputed {} of {} trials of engine {} (draw seed {}) in {:.1} s: {}{others}",
             r.checked,
             r.eligible,
-            crate::cache::ENGINE_VERSION,
+            qsweep_pipeline::cache::ENGINE_VERSION,
             a.seed,
             started.elapsed().as_secs_f64(),
             if r.differing.is_empty() {

@@ -57,14 +57,14 @@ fn pipeline_bench_times_the_costliest_cells_to_their_real_stop() {
     let rows = v["results"].as_array().unwrap();
     assert_eq!(rows.len(), 3);
     // The cache's own record of the same trials: total steps per cell.
-    let store = qsweep::cache::Store::open(&sb.cache()).unwrap();
+    let store = qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap();
     let recs = store.read_all().unwrap();
     let mut share = 0.0;
     for r in rows {
         let name = r["cell"].as_str().unwrap();
         let steps: u64 = recs
             .iter()
-            .filter(|rec| qsweep::bench::pipeline::cell_name(None, &cell_of(rec)) == name)
+            .filter(|rec| qsweep_pipeline::bench::pipeline::cell_name(None, &cell_of(rec)) == name)
             .map(|rec| rec.outcome.total_steps)
             .sum();
         assert_eq!(r["steps"].as_u64().unwrap(), steps, "{name}: the real trials, to their real stop");
@@ -82,8 +82,8 @@ fn pipeline_bench_times_the_costliest_cells_to_their_real_stop() {
 }
 
 /// A plan cell standing for a cached record (same configuration), for naming.
-fn cell_of(rec: &qsweep::cache::TrialRecord) -> qsweep::plan::Cell {
-    qsweep::plan::Cell {
+fn cell_of(rec: &qsweep_pipeline::cache::TrialRecord) -> qsweep_pipeline::plan::Cell {
+    qsweep_pipeline::plan::Cell {
         algorithm: rec.config.learner.algorithm,
         coords: vec![],
         config: rec.config.clone(),

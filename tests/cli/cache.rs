@@ -12,7 +12,7 @@ fn truncated_and_garbage_segments_are_quarantined_and_their_trials_recomputed() 
     let segs = sb.segment_paths();
     assert!(segs.len() >= 5);
     // Truncate one real segment (its trials are lost) and add garbage.
-    let lost = qsweep::cache::rows::read_segment(&segs[0], &|_| true).unwrap().len();
+    let lost = qsweep_pipeline::cache::rows::read_segment(&segs[0], &|_| true).unwrap().len();
     let bytes = std::fs::read(&segs[0]).unwrap();
     std::fs::write(&segs[0], &bytes[..bytes.len() / 2]).unwrap();
     std::fs::write(sb.cache().join("seg-garbage.parquet"), b"PAR1 not really").unwrap();
@@ -53,7 +53,7 @@ fn diverging_trials_are_stored_as_failed_and_the_run_exits_1() {
     assert_eq!((v["executed"].as_u64(), v["failed"].as_u64()), (Some(4), Some(4)), "{v}");
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("4 trials failed"), "{err}");
-    let recs = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
+    let recs = qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
     assert!(recs.iter().all(|r| r.outcome.failure.as_deref().is_some_and(|f| f.contains("non-finite"))));
     // Failed trials are results too: a rerun serves them from the cache.
     let v = sb.run_json(&p, &[]);
@@ -82,7 +82,7 @@ fn two_concurrent_runs_on_one_cache_both_finish_and_store_every_trial() {
     for o in [&a, &b] {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    let recs = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
+    let recs = qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
     assert_eq!(recs.len(), 112, "every trial exactly once after dropping identical duplicates");
     let v = sb.run_json(&p, &["--set", "seeds=4"]);
     assert_eq!((v["executed"].as_u64(), v["cached"].as_u64()), (Some(0), Some(112)));
@@ -159,7 +159,8 @@ fn sigkill_at_several_points_loses_only_unflushed_trials() {
         child.kill().unwrap(); // SIGKILL
         child.wait().unwrap();
         // Whatever is in renamed segments is intact and is served, never recomputed.
-        let stored = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap().len() as u64;
+        let stored =
+            qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap().len() as u64;
         assert!(stdout(&mut sb.qsweep(&["verify", "--no-quarantine"])).contains(" 0 damaged"));
         let status: Value =
             serde_json::from_str(&stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"])))
@@ -264,11 +265,11 @@ fn verify_recompute_finds_a_planted_wrong_row() {
     assert!(all.contains("recomputed 56 of 56") && all.contains("all 56 agree"), "{all}");
 
     let segs = sb.segment_paths();
-    let mut rows = qsweep::cache::rows::read_segment(&segs[0], &|_| true).unwrap();
+    let mut rows = qsweep_pipeline::cache::rows::read_segment(&segs[0], &|_| true).unwrap();
     let mut wrong = rows.remove(0);
     wrong.outcome.episodes += 1;
     wrong.outcome.episode_lengths.push(1);
-    let store = qsweep::cache::Store::open(&sb.cache()).unwrap();
+    let store = qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap();
     store.write_segment(&[wrong.clone()]).unwrap();
     std::fs::remove_file(&segs[0]).unwrap();
     store.write_segment(&rows).unwrap();
@@ -286,16 +287,16 @@ fn verify_recompute_with_nothing_to_check_fails() {
     let sb = Sandbox::new();
     let p = sb.fixture("tiny.yaml");
     sb.run_json(&p, &[]);
-    let store = qsweep::cache::Store::open(&sb.cache()).unwrap();
+    let store = qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap();
     let segs = sb.segment_paths();
     let mut rows = Vec::new();
     for s in &segs {
-        rows.extend(qsweep::cache::rows::read_segment(s, &|_| true).unwrap());
+        rows.extend(qsweep_pipeline::cache::rows::read_segment(s, &|_| true).unwrap());
         std::fs::remove_file(s).unwrap();
     }
     for r in &mut rows {
-        r.engine_version = qsweep::cache::ENGINE_VERSION - 1;
-        r.key = qsweep::cache::Key::from_canonical(&r.config_json(), r.seed, r.engine_version);
+        r.engine_version = qsweep_pipeline::cache::ENGINE_VERSION - 1;
+        r.key = qsweep_pipeline::cache::Key::from_canonical(&r.config_json(), r.seed, r.engine_version);
     }
     store.write_segment(&rows).unwrap();
     let out = sb.qsweep(&["verify", "--recompute", "10"]).assert().code(1).get_output().stdout.clone();

@@ -2,9 +2,9 @@
 //! that dies strands nothing, and the results do not depend on who ran what.
 
 use crate::helpers::{fails_with, stdout, Sandbox};
-use qsweep::cache::claims::lease::{Holder, LEASE};
-use qsweep::cache::claims::{Claims, CLAIMS_DIR};
-use qsweep::cache::{Key, Store};
+use qsweep_pipeline::cache::claims::lease::{Holder, LEASE};
+use qsweep_pipeline::cache::claims::{Claims, CLAIMS_DIR};
+use qsweep_pipeline::cache::{Key, Store};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -115,7 +115,7 @@ fn a_sigkilled_run_strands_nothing_the_other_finishes_and_a_restart_has_nothing_
 }
 
 /// The keys of tiny.yaml's trials, computed in a scratch cache.
-fn tiny_records() -> Vec<qsweep::cache::TrialRecord> {
+fn tiny_records() -> Vec<qsweep_pipeline::cache::TrialRecord> {
     let sb = Sandbox::new();
     sb.run_json(&sb.fixture("tiny.yaml"), &[]);
     let mut r = Store::open(&sb.cache()).unwrap().read_all().unwrap();
@@ -170,7 +170,7 @@ fn a_trial_claimed_by_a_live_run_is_waited_for_and_shown_as_running_elsewhere() 
     // This test process is the other run: it holds a claim on the first trial.
     let store = Store::open(&sb.cache()).unwrap();
     let other = Claims::open(&store).unwrap();
-    assert_eq!(other.try_take(records[0].key).unwrap(), qsweep::cache::claims::Take::Taken);
+    assert_eq!(other.try_take(records[0].key).unwrap(), qsweep_pipeline::cache::claims::Take::Taken);
     let status = stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"]));
     let status: Value = serde_json::from_str(&status).unwrap();
     assert_eq!((count(&status, "missing"), count(&status, "running_elsewhere")), (56, 1));

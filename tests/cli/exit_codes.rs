@@ -1,8 +1,8 @@
 //! The guide's exit-code table (docs/commands.md), checked against every subcommand: the table lists exactly the
-//! `qsweep::error::exit` constants, and each subcommand exits with each code that applies to it.
+//! `qsweep_pipeline::error::exit` constants, and each subcommand exits with each code that applies to it.
 
 use crate::helpers::{repo, Test};
-use qsweep::error::exit;
+use qsweep_pipeline::error::exit;
 use std::collections::BTreeSet;
 
 /// The codes of the guide's "Exit codes" table (docs/commands.md).

@@ -45,7 +45,7 @@ fn forest_plot_dots_are_table3_ratios_and_the_page_opens_with_the_answer() {
     let (dots, ticks) = read_svg(&svg);
     assert!(ticks.len() >= 3, "{ticks:?}");
     // The axis from its outermost ticks: ln(value) linear in x.
-    let ln = qsweep::sim::math::ln;
+    let ln = qsweep_engine::math::ln;
     let ((x0, v0), (x1, v1)) = (ticks[0], ticks[ticks.len() - 1]);
     let ln_value = |x: f64| ln(v0) + (x - x0) / (x1 - x0) * (ln(v1) - ln(v0));
     let px = (ln(v1) - ln(v0)) / (x1 - x0); // ln units per pixel

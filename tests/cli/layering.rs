@@ -1,32 +1,39 @@
-//! The architecture's import rules (ARCHITECTURE.md), checked on the source: every top-level
-//! module imports only modules of lower layers, and no file imports a file that imports it back
-//! (directly or through others). Test code (`*tests.rs`, `mod tests { … }`) is left out.
+//! The architecture's import rules inside each crate (ARCHITECTURE.md), checked on the source.
+//! Between crates the compiler holds the layers (a crate cannot name one that does not depend on
+//! it); inside a crate only this test does: every top-level module of `qsweep-pipeline` imports
+//! only modules of lower layers, the report's `derive` never imports its `render`, the engine's
+//! representations never import the learner, and in no crate does a file import a
+//! file that imports it back (directly or through others). Test code (`*tests.rs`,
+//! `mod tests { … }`) is left out.
 
 use crate::helpers::repo;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// The layers, lowest first: a module may import only modules of a strictly lower layer.
-const LAYERS: &[&[&str]] = &[
-    &["sim", "atomic", "parquet_io", "error"],
+/// The crates' source folders, relative to the repository.
+const CRATES: &[&str] =
+    &["crates/qsweep-engine/src", "crates/qsweep-pipeline/src", "crates/qsweep-report/src", "src"];
+
+/// The layers of `qsweep-pipeline`, lowest first: a module may import only modules of a strictly
+/// lower layer.
+const PIPELINE_LAYERS: &[&[&str]] = &[
+    &["atomic", "parquet_io", "error"],
     &["analysis", "cache", "spec"],
     &["plan"],
     &["fresh"],
     &["race"],
     &["exec"],
-    &["report"],
-    &["pipeline"],
+    &["run"],
     &["bench", "slurm", "status"],
-    &["formats"],
-    &["cli"],
 ];
 
 fn layer(module: &str) -> Option<usize> {
-    LAYERS.iter().position(|l| l.contains(&module))
+    PIPELINE_LAYERS.iter().position(|l| l.contains(&module))
 }
 
-/// Every library source file by module path (`report::compare::fit`), with its non-test text.
-fn sources() -> BTreeMap<String, (String, bool)> {
+/// Every library source file of the crate at `src` by module path (`compare::fit`), with its
+/// non-test text.
+fn sources(src: &str) -> BTreeMap<String, (String, bool)> {
     fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
@@ -37,7 +44,7 @@ fn sources() -> BTreeMap<String, (String, bool)> {
             }
         }
     }
-    let src = repo().join("src");
+    let src = repo().join(src);
     let mut files = Vec::new();
     walk(&src, &mut files);
     let mut out = BTreeMap::new();
@@ -127,9 +134,9 @@ fn paths(code: &str) -> Vec<Vec<String>> {
     found.into_iter().map(|p| p.split("::").map(str::to_string).collect()).collect()
 }
 
-/// The module files each file imports.
-fn graph() -> BTreeMap<String, BTreeSet<String>> {
-    let files = sources();
+/// The module files each file of the crate at `src` imports.
+fn graph(src: &str) -> BTreeMap<String, BTreeSet<String>> {
+    let files = sources(src);
     let resolve = |segs: &[String]| -> Option<String> {
         (1..=segs.len()).rev().map(|n| segs[..n].join("::")).find(|m| files.contains_key(m))
     };
@@ -169,12 +176,12 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
 }
 
 #[test]
-fn no_module_imports_a_higher_layer() {
+fn no_pipeline_module_imports_a_higher_layer() {
     let mut wrong = Vec::new();
-    for (module, targets) in graph() {
+    for (module, targets) in graph("crates/qsweep-pipeline/src") {
         let top = module.split("::").next().unwrap().to_string();
         let Some(own) = layer(&top) else {
-            wrong.push(format!("{module}: top-level module `{top}` is in no layer of ARCHITECTURE.md"));
+            wrong.push(format!("{module}: top-level module `{top}` is in no layer of tests/cli/layering.rs"));
             continue;
         };
         for t in targets {
@@ -187,9 +194,34 @@ fn no_module_imports_a_higher_layer() {
     assert!(wrong.is_empty(), "imports against the layers:\n{}", wrong.join("\n"));
 }
 
+/// Imports from a module (and its children) into another that must never happen in one crate.
+fn forbidden(src: &str, from: &str, to: &str) -> Vec<String> {
+    let under = |m: &str, top: &str| m == top || m.starts_with(&format!("{top}::"));
+    graph(src)
+        .into_iter()
+        .filter(|(m, _)| under(m, from))
+        .flat_map(|(m, ts)| ts.into_iter().filter(|t| under(t, to)).map(move |t| format!("{m} imports {t}")))
+        .collect()
+}
+
+#[test]
+fn representations_never_import_the_learner() {
+    let wrong = forbidden("crates/qsweep-engine/src", "repr", "learner");
+    assert!(
+        wrong.is_empty(),
+        "the learner reads `Features` (repr/activation.rs), not the reverse: {wrong:?}"
+    );
+}
+
 #[test]
 fn no_file_imports_a_file_that_imports_it_back() {
-    let edges = graph();
+    for src in CRATES {
+        no_cycles(src);
+    }
+}
+
+fn no_cycles(src: &str) {
+    let edges = graph(src);
     // Tarjan's strongly connected components: any component of two or more files is a cycle.
     struct S<'a> {
         edges: &'a BTreeMap<String, BTreeSet<String>>,
@@ -248,16 +280,19 @@ fn no_file_imports_a_file_that_imports_it_back() {
             visit(&mut s, v);
         }
     }
-    assert!(s.cycles.is_empty(), "files that import each other: {:?}", s.cycles);
+    assert!(s.cycles.is_empty(), "{src}: files that import each other: {:?}", s.cycles);
 }
 
 /// The checks above must see real imports: they would pass vacuously on a parser that found none.
 #[test]
 fn the_import_scan_sees_known_imports() {
-    let g = graph();
+    let g = graph("crates/qsweep-pipeline/src");
     assert!(g["race"].contains("analysis"), "{:?}", g["race"]);
-    assert!(g["report::stage"].contains("report::folder"), "{:?}", g["report::stage"]);
-    assert!(g["sim::repr::fuzzy"].contains("sim::repr::activation"), "{:?}", g["sim::repr::fuzzy"]);
-    assert!(g["sim::repr"].contains("sim::repr::crisp"), "re-exports count: {:?}", g["sim::repr"]);
-    assert!(g["cli::verify"].contains("cache::verify"), "{:?}", g["cli::verify"]);
+    let g = graph("crates/qsweep-report/src");
+    assert!(g["stage"].contains("folder"), "{:?}", g["stage"]);
+    let g = graph("crates/qsweep-engine/src");
+    assert!(g["repr::fuzzy"].contains("repr::activation"), "{:?}", g["repr::fuzzy"]);
+    assert!(g["repr"].contains("repr::crisp"), "re-exports count: {:?}", g["repr"]);
+    let g = graph("src");
+    assert!(g["cli::verify"].contains("cli::pipeline_args"), "{:?}", g["cli::verify"]);
 }

@@ -2,15 +2,16 @@
 //! reporter (what `examples/library_run.rs` shows), and a rerun finds everything cached.
 
 use crate::helpers::repo;
-use qsweep::exec::{Event, ExecOptions};
-use qsweep::pipeline::{run_trials, scan, Selection};
+use qsweep_pipeline::exec::{Event, ExecOptions};
+use qsweep_pipeline::run::{run_trials, scan, Selection};
 
 #[test]
 fn a_library_user_runs_a_pipeline_and_reads_its_events() {
     let dir = tempfile::tempdir().unwrap();
-    let loaded = qsweep::spec::load(&repo().join("tests/fixtures/pipelines/tiny.yaml"), &[]).unwrap();
-    let plan = qsweep::plan::plan(&loaded, None).unwrap();
-    let store = qsweep::cache::Store::open(&dir.path().join("cache")).unwrap();
+    let loaded =
+        qsweep_pipeline::spec::load(&repo().join("tests/fixtures/pipelines/tiny.yaml"), &[]).unwrap();
+    let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
+    let store = qsweep_pipeline::cache::Store::open(&dir.path().join("cache")).unwrap();
     let sel = Selection { shard: None, force: false };
     let opts = ExecOptions { jobs: 2, batch_trials: 10, ..Default::default() };
     let mut events: Vec<Event> = Vec::new();
@@ -42,8 +43,8 @@ fn a_library_user_runs_a_pipeline_and_reads_its_events() {
 
 /// Each cell's trials, race state and fresh trials: what a replay decides.
 fn replayed_cells(
-    p: &qsweep::plan::Plan,
-) -> Vec<(Vec<qsweep::plan::PlannedTrial>, Option<bool>, Vec<qsweep::plan::PlannedTrial>)> {
+    p: &qsweep_pipeline::plan::Plan,
+) -> Vec<(Vec<qsweep_pipeline::plan::PlannedTrial>, Option<bool>, Vec<qsweep_pipeline::plan::PlannedTrial>)> {
     p.experiments
         .iter()
         .flat_map(|e| &e.cells)
@@ -56,17 +57,18 @@ fn replayed_cells(
 /// replay itself, and a run that stored trials hands nothing on (the cache changed).
 #[test]
 fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
-    use qsweep::pipeline::run_trials_replayed;
+    use qsweep_pipeline::run::run_trials_replayed;
     for fixture in ["fresh.yaml", "race.yaml"] {
         let dir = tempfile::tempdir().unwrap();
-        let loaded = qsweep::spec::load(&repo().join("tests/fixtures/pipelines").join(fixture), &[]).unwrap();
-        let plan = qsweep::plan::plan(&loaded, None).unwrap();
-        let store = qsweep::cache::Store::open(&dir.path().join("cache")).unwrap();
+        let loaded =
+            qsweep_pipeline::spec::load(&repo().join("tests/fixtures/pipelines").join(fixture), &[]).unwrap();
+        let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
+        let store = qsweep_pipeline::cache::Store::open(&dir.path().join("cache")).unwrap();
         let sel = Selection { shard: None, force: false };
         let opts = ExecOptions { jobs: 2, ..Default::default() };
         let first = scan(&store).unwrap().stored;
         let (done, handed) = run_trials_replayed(plan.clone(), &store, &first, sel, &opts, &mut ()).unwrap();
-        let qsweep::pipeline::AfterRun::Planned(back) = handed else {
+        let qsweep_pipeline::run::AfterRun::Planned(back) = handed else {
             panic!("{fixture}: trials ran, nothing is handed on")
         };
         // Each round replayed the plan in place and took it back: the plan as planned.
@@ -75,10 +77,10 @@ fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
         let (again, handed) =
             run_trials_replayed(plan.clone(), &store, &scanned, sel, &opts, &mut ()).unwrap();
         assert_eq!(again.exec.executed, 0, "{fixture}");
-        let qsweep::pipeline::AfterRun::Replayed(handed) = handed else {
+        let qsweep_pipeline::run::AfterRun::Replayed(handed) = handed else {
             panic!("{fixture}: nothing ran: the replayed plan is handed on")
         };
-        let own = qsweep::race::Replayed::of(plan.clone(), &store, &scanned).unwrap();
+        let own = qsweep_pipeline::race::Replayed::of(plan.clone(), &store, &scanned).unwrap();
         // Every trial of the replayed plan ran in the first call, each once.
         let distinct: std::collections::HashSet<_> = own.plan().trials().map(|(_, _, t)| t.key).collect();
         assert_eq!(done.exec.executed, distinct.len(), "{fixture}");
@@ -86,14 +88,14 @@ fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
         // It is the staged plan, replayed: the fresh seeds or the later rounds are in it.
         assert!(handed.plan().trial_count() > plan.trial_count(), "{fixture}");
         // And the report written from it is the report's own, byte for byte.
-        let to = |out: &str| qsweep::report::ReportOptions {
+        let to = |out: &str| qsweep_report::ReportOptions {
             dir: dir.path().join(out),
             formats: Default::default(),
             force: false,
             rebuild: false,
         };
-        qsweep::report::write_replayed(handed, &store, &scanned, &to("handed")).unwrap();
-        qsweep::report::write(plan.clone(), &store, &scanned, &to("own")).unwrap();
+        qsweep_report::write_replayed(handed, &store, &scanned, &to("handed")).unwrap();
+        qsweep_report::write(plan.clone(), &store, &scanned, &to("own")).unwrap();
         for name in ["table3.md", "table3.csv", "index.html", "memo.json", "manifest.json"] {
             let a = std::fs::read(dir.path().join("handed").join(name)).unwrap();
             let b = std::fs::read(dir.path().join("own").join(name)).unwrap();

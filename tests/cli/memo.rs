@@ -195,7 +195,7 @@ fn grids_races_fresh_seeds_and_variant_subsets_are_skipped_when_intact() {
 /// informational `seconds` vary, left out) recorded with the [`ANALYSIS_VERSION`] it was written
 /// under.
 ///
-/// [`ANALYSIS_VERSION`]: qsweep::report::memo::ANALYSIS_VERSION
+/// [`ANALYSIS_VERSION`]: qsweep_report::memo::ANALYSIS_VERSION
 const GOLDEN: (u32, &str) = (4, "e01956a920a904a92ecc7397aa3102801f7044e24a199cb3f2eeacae2e8a1952");
 
 #[test]
@@ -212,7 +212,7 @@ fn analysis_golden_outputs_change_only_with_analysis_version() {
         h.update(&(bytes.len() as u64).to_le_bytes());
         h.update(bytes);
     }
-    let got = (qsweep::report::memo::ANALYSIS_VERSION, h.finalize().to_hex().to_string());
+    let got = (qsweep_report::memo::ANALYSIS_VERSION, h.finalize().to_hex().to_string());
     assert_eq!(
         (got.0, got.1.as_str()),
         GOLDEN,
@@ -428,7 +428,7 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
 
 #[test]
 fn memos_of_an_older_analysis_version_are_recomputed() {
-    use qsweep::report::memo::{Memo, ANALYSIS_VERSION};
+    use qsweep_report::memo::{Memo, ANALYSIS_VERSION};
     let sb = Sandbox::new();
     let p = sb.fixture("variants.yaml");
     let inc = sb.path("rep");

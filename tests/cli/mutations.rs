@@ -3,7 +3,7 @@
 
 use crate::helpers::repo;
 use proptest::prelude::*;
-use qsweep::error::UserError;
+use qsweep_pipeline::error::UserError;
 
 /// One edit of the text: insert, delete or replace a character, or duplicate, drop or swap lines.
 #[derive(Debug, Clone)]
@@ -69,10 +69,10 @@ proptest! {
         for e in &edits {
             text = apply(&text, e);
         }
-        match qsweep::spec::load_str(&text, "mutant.yaml", &[]) {
+        match qsweep_pipeline::spec::load_str(&text, "mutant.yaml", &[]) {
             Ok(spec) => {
-                let loaded = qsweep::spec::LoadedSpec { spec, path: "mutant.yaml".into(), variants: Vec::new() };
-                if let Err(err) = qsweep::plan::plan(&loaded, Some(200_000)) {
+                let loaded = qsweep_pipeline::spec::LoadedSpec { spec, path: "mutant.yaml".into(), variants: Vec::new() };
+                if let Err(err) = qsweep_pipeline::plan::plan(&loaded, Some(200_000)) {
                     prop_assert!(err.downcast_ref::<UserError>().is_some(), "{err:#}");
                     prop_assert!(err.to_string().contains("mutant.yaml"), "{err:#}");
                 }

@@ -2,7 +2,7 @@
 //! formatting, thread-count independence, clean errors and interruption.
 
 use crate::helpers::{fails_with, stdout, Sandbox};
-use qsweep::cache::Store;
+use qsweep_pipeline::cache::Store;
 use serde_json::Value;
 
 fn count(v: &Value, field: &str) -> u64 {

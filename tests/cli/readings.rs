@@ -106,7 +106,7 @@ fn simulate_under_rate_control_prints_the_beam_angle() {
     for (got, want) in theta.iter().zip([0.08, 0.16, 0.2, 0.12]) {
         assert!((got - want).abs() < 1e-12, "{theta:?}");
     }
-    let sin = qsweep::sim::math::sin;
+    let sin = qsweep_engine::math::sin;
     let v1 = 0.1 * 9.81 * sin(0.1 * 0.8);
     assert_eq!(rows[2][2..4], ["0".to_string(), format!("{v1}")]);
     let err = fails_with(

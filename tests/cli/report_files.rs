@@ -4,22 +4,22 @@
 //! check its files: all present, PNGs decode at the expected size, SVGs are XML, `index.html`
 //! links only local files, and a second run is byte-identical.
 
-use qsweep::cache::store::Store;
-use qsweep::cache::{Key, TrialRecord};
-use qsweep::plan::Plan;
-use qsweep::report::formats::{Format, Formats};
-use qsweep::report::{self, curves, figures, ReportOptions, ReportSummary};
-use qsweep::sim::env::SystemKind;
-use qsweep::sim::repr::ReprKind;
-use qsweep::sim::{run_trial, Algorithm, Outcome, StopReason};
-use qsweep::spec::Reference;
+use qsweep_engine::env::SystemKind;
+use qsweep_engine::repr::ReprKind;
+use qsweep_engine::{run_trial, Algorithm, Outcome, StopReason};
+use qsweep_pipeline::cache::store::Store;
+use qsweep_pipeline::cache::{Key, TrialRecord};
+use qsweep_pipeline::plan::Plan;
+use qsweep_pipeline::spec::Reference;
+use qsweep_report::formats::{Format, Formats};
+use qsweep_report::{curves, figures, ReportOptions, ReportSummary};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 fn quick_plan() -> Plan {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/quick.yaml");
-    let loaded = qsweep::spec::load(&path, &[]).expect("quick.yaml loads");
-    qsweep::plan::plan(&loaded, None).expect("quick.yaml plans")
+    let loaded = qsweep_pipeline::spec::load(&path, &[]).expect("quick.yaml loads");
+    qsweep_pipeline::plan::plan(&loaded, None).expect("quick.yaml plans")
 }
 
 /// A deterministic outcome for a trial: mostly converged after a key-dependent number of
@@ -79,9 +79,9 @@ fn cache_of(records: &HashMap<Key, TrialRecord>, dir: &Path) -> Store {
 
 /// The report of `plan` from `store` into `dir` in `formats`, as `qsweep report` writes it.
 fn write_report(plan: &Plan, store: &Store, dir: &Path, formats: Formats) -> ReportSummary {
-    let scan = qsweep::pipeline::scan(store).unwrap();
+    let scan = qsweep_pipeline::run::scan(store).unwrap();
     let opts = ReportOptions { dir: dir.to_path_buf(), formats, force: false, rebuild: false };
-    report::write(plan.clone(), store, &scan.stored, &opts).unwrap().summary
+    qsweep_report::write(plan.clone(), store, &scan.stored, &opts).unwrap().summary
 }
 
 fn files_under(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
@@ -158,7 +158,7 @@ fn quick_report_is_complete_valid_and_deterministic() {
 
     // PNGs decode at the figure's size; SVGs are XML with the same size.
     for s in SystemKind::ALL {
-        let exps: Vec<_> = qsweep::report::ReportData::build(&plan, &recs)
+        let exps: Vec<_> = qsweep_report::ReportData::build(&plan, &recs)
             .experiments
             .into_iter()
             .filter(|e| e.exp.system == s)

@@ -20,7 +20,11 @@ fn the_cache_and_the_report_files_agree_on_every_shared_column() {
         .assert()
         .success();
     let segment = schema_of(&sb.segment_paths()[0]);
-    assert_eq!(segment, *qsweep::cache::rows::schema(), "segments are written with the documented schema");
+    assert_eq!(
+        segment,
+        *qsweep_pipeline::cache::rows::schema(),
+        "segments are written with the documented schema"
+    );
     let files = [
         ("cache", segment),
         ("cells", schema_of(&out.join("cells.parquet"))),

@@ -18,7 +18,7 @@ fn ball_beam_matches_equation_1_computed_by_hand() {
     assert_eq!(rows[1], ["0", "", "0.1", "0.5", "0", "0"]);
     // x1 = x0 + τ ẋ0; ẋ1 = ẋ0 + τ g sin(φ1), with the engine's own sin (the same on every CPU).
     let (tau, g) = (0.02, 9.81);
-    let sin = qsweep::sim::math::sin;
+    let sin = qsweep_engine::math::sin;
     let (x1, v1) = (0.1 + tau * 0.5, 0.5 + tau * g * sin(0.5));
     let (x2, v2) = (x1 + tau * v1, v1 + tau * g * sin(-0.25));
     for (row, (x, v)) in rows[2..].iter().zip([(x1, v1), (x2, v2)]) {

@@ -3,7 +3,7 @@
 //! `scripts/slurm/test.sh`, run by CI.)
 
 use crate::helpers::{fails_with, stdout, Sandbox};
-use qsweep::cache::Store;
+use qsweep_pipeline::cache::Store;
 use std::collections::HashSet;
 use std::os::unix::fs::PermissionsExt;
 use std::path::{Path, PathBuf};

@@ -195,7 +195,7 @@ fn trial_and_a_pipeline_cell_resolve_to_the_same_configuration() {
         "name: one\nseeds: [3]\ndefaults: { max_episodes: 4, q_init: -0.5 }\nsystems:\n  cart-pole:\n    params: { gravity: 9.8 }\n    success: { steps: 300 }\n    experiments:\n      - { id: a, repr: fuzzy, algorithms: [q-lambda], vary: { actions: 3 }, fixed: { x: 2, x_dot: 3, theta: 2, theta_dot: 3 }, settings: { alpha: 0.2, width: 0.5 } }\n",
     );
     sb.run_json(&p, &[]);
-    let stored = qsweep::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
+    let stored = qsweep_pipeline::cache::Store::open(&sb.cache()).unwrap().read_all().unwrap();
     assert_eq!(stored.len(), 1);
     let out = stdout(crate::helpers::qsweep().args([
         "trial",
@@ -226,9 +226,9 @@ fn trial_and_a_pipeline_cell_resolve_to_the_same_configuration() {
         "--json",
     ]));
     let v: Value = serde_json::from_str(&out).unwrap();
-    let from_trial: qsweep::sim::TrialConfig = serde_json::from_value(v["config"].clone()).unwrap();
+    let from_trial: qsweep_engine::TrialConfig = serde_json::from_value(v["config"].clone()).unwrap();
     assert_eq!(from_trial, stored[0].config);
-    assert_eq!(qsweep::cache::Key::of(&from_trial, 3), stored[0].key);
+    assert_eq!(qsweep_pipeline::cache::Key::of(&from_trial, 3), stored[0].key);
 }
 
 /// `counting: failures` is a report setting: an exploratory variant that only sets it runs no

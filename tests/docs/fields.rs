@@ -112,7 +112,7 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
 fn the_cache_column_table_lists_exactly_the_schema() {
     let documented = table_after(&guide("reading-results.md"), "cache's columns, one row per trial");
     let schema: BTreeSet<String> =
-        qsweep::cache::rows::schema().fields().iter().map(|f| f.name().clone()).collect();
+        qsweep_pipeline::cache::rows::schema().fields().iter().map(|f| f.name().clone()).collect();
     assert_eq!(documented, schema, "docs/reading-results.md's cache columns against cache::rows::schema()");
 }
 

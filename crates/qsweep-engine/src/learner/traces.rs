@@ -1,0 +1,244 @@
+//! Eligibility traces, eqs. (7)/(20) with the cutoff, in two layouts: one trace per parameter,
+//! swept every step (small tables whose traces are mostly live), or the live traces as a packed
+//! list (everything else, crisp tables included). Both apply exactly the literal rule, trace by
+//! trace: each trace is decayed by one multiplication by γλ per step and dropped when the decayed
+//! value falls below the cutoff, so the two layouts give bit-identical results.
+//!
+//! The traces are stored already decayed for the next step: the decay e ← γλe of step t+1 depends
+//! on nothing learned at step t+1, so it is done in the same pass that applies step t's update.
+
+use crate::config::{LearnerConfig, TraceKind};
+
+/// How traces decay and grow (eqs. 7 and 20 with the cutoff), shared by every layout.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TraceRule {
+    /// γλ.
+    pub(super) decay: f64,
+    cutoff: f64,
+    /// The least trace that stays live, for [`keeps`](Self::keeps): the cutoff, or the least
+    /// positive f64 when the cutoff is 0 (a trace is dropped below the cutoff and at exactly 0).
+    floor: f64,
+    replacing: bool,
+}
+
+impl TraceRule {
+    /// The rule of a learner configuration (γλ, the cutoff, the trace kind).
+    pub(super) fn of(cfg: &LearnerConfig) -> Self {
+        let cutoff = cfg.trace_cutoff;
+        Self {
+            decay: cfg.gamma * cfg.lambda,
+            cutoff,
+            floor: if cutoff > 0.0 { cutoff } else { f64::from_bits(1) },
+            replacing: cfg.traces == TraceKind::Replacing,
+        }
+    }
+
+    /// `e · γλ`, dropped to exactly 0 below the cutoff. (The test `e < cutoff || e == 0` is the
+    /// same for traces, which are never negative or NaN: with cutoff 0, a zero stays 0.)
+    #[inline(always)]
+    pub(super) fn decayed(self, e: f64) -> f64 {
+        let e = e * self.decay;
+        if e < self.cutoff {
+            0.0
+        } else {
+            e
+        }
+    }
+
+    /// Whether a trace decayed to `x = e · γλ` stays live, i.e. `decayed(e) != 0`, in one
+    /// comparison: traces are never negative, so `x < cutoff || x == 0` is `x < floor` (and a NaN
+    /// stays live in both).
+    #[inline(always)]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // deliberately true for NaN, as the literal rule is
+    pub(super) fn keeps(self, x: f64) -> bool {
+        !(x < self.floor)
+    }
+
+    /// The trace after adding activation `w` to a (decayed) trace `e`: eq. (20), or replacing.
+    #[inline(always)]
+    pub(super) fn extend(self, e: f64, w: f64) -> f64 {
+        if self.replacing {
+            e.max(w)
+        } else {
+            e + w
+        }
+    }
+}
+
+/// One trace per parameter (0 where none is live).
+#[derive(Debug, Clone)]
+pub(super) struct DenseTraces {
+    e: Vec<f64>,
+}
+
+impl DenseTraces {
+    pub(super) fn new(n: usize) -> Self {
+        Self { e: vec![0.0; n] }
+    }
+
+    pub(super) fn clear(&mut self) {
+        self.e.fill(0.0);
+    }
+
+    /// Every trace as it enters the next update.
+    pub(super) fn values(&self) -> Vec<f64> {
+        self.e.clone()
+    }
+
+    /// Extend the activation's traces, then sweep every parameter: q ← q + step·e and decay e.
+    /// Parameters without a live trace have trace exactly 0, so decaying them is a no-op, and q
+    /// moves exactly where the list-based update moves it (see the comment on the sweep).
+    #[inline(never)]
+    pub(super) fn update(
+        &mut self,
+        q: &mut [f64],
+        na: usize,
+        rule: TraceRule,
+        (index, weight): (&[u32], &[f64]),
+        action: usize,
+        step: f64,
+    ) {
+        let trace = &mut self.e[..];
+        for (&i, &w) in index.iter().zip(weight) {
+            let k = i as usize * na + action;
+            trace[k] = rule.extend(trace[k], w);
+        }
+        // The list-based update adds step·e to every non-zero trace and to the current
+        // activation's entries. Adding step·0 = ±0 everywhere else is exact too, up to the sign of
+        // a zero q, which no sum can see. Only a non-finite step (an overflowing α·δ) makes step·0
+        // a NaN: then exactly the list-based entries move.
+        if step.is_finite() {
+            for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+                *q += step * *e;
+                *e = rule.decayed(*e);
+            }
+        } else {
+            for &i in index {
+                let k = i as usize * na + action;
+                if trace[k] == 0.0 {
+                    q[k] += step * trace[k];
+                }
+            }
+            for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+                if *e != 0.0 {
+                    *q += step * *e;
+                }
+                *e = rule.decayed(*e);
+            }
+        }
+    }
+}
+
+/// The live traces as a packed list, plus a map from parameter to list position. Traces are
+/// applied and decayed in list order, which never matters: every trace and parameter update is
+/// per entry.
+#[derive(Debug, Clone)]
+pub(super) struct SparseTraces {
+    /// (parameter index, trace) of every live trace: every non-zero trace, plus any entry extended
+    /// by a zero weight this step, exactly the entries a list-based update touches. One list of
+    /// pairs, not two lists, so the pass over it checks one bound.
+    live: Vec<(u32, f64)>,
+    /// Per parameter: 1 + its position in `live`, or 0 when it has no live trace.
+    slot: Vec<u32>,
+}
+
+impl SparseTraces {
+    pub(super) fn new(n: usize) -> Self {
+        Self { live: Vec::new(), slot: vec![0; n] }
+    }
+
+    pub(super) fn clear(&mut self) {
+        for &(k, _) in &self.live {
+            self.slot[k as usize] = 0;
+        }
+        self.live.clear();
+    }
+
+    /// Every trace as it enters the next update.
+    pub(super) fn values(&self, n: usize) -> Vec<f64> {
+        let mut e = vec![0.0; n];
+        for &(k, v) in &self.live {
+            e[k as usize] = v;
+        }
+        e
+    }
+
+    /// One update: extend the activation's traces for `action` (a single feature, every crisp
+    /// step, through the slot map; several through a branch-free pass), then apply and decay.
+    #[inline(always)]
+    pub(super) fn update(
+        &mut self,
+        q: &mut [f64],
+        na: usize,
+        rule: TraceRule,
+        (index, weight): (&[u32], &[f64]),
+        action: usize,
+        step: f64,
+    ) {
+        if let ([i], [w]) = (index, weight) {
+            let target = *i as usize * na + action;
+            match self.slot[target] as usize {
+                0 => {
+                    self.live.push((target as u32, rule.extend(0.0, *w)));
+                    self.slot[target] = self.live.len() as u32;
+                }
+                p => self.live[p - 1].1 = rule.extend(self.live[p - 1].1, *w),
+            }
+            self.apply_and_decay(q, rule, step);
+        } else {
+            self.update_many(q, na, rule, (index, weight), action, step);
+        }
+    }
+
+    /// Several active features: extend the current activation's traces (branch-free: which are
+    /// new is data-dependent; a parameter without a live trace gets the next free position, whose
+    /// trace the resize set to 0, so extending it gives extend(0, w) exactly as for a new trace),
+    /// then apply and decay every live trace in one pass.
+    #[inline(never)]
+    fn update_many(
+        &mut self,
+        q: &mut [f64],
+        na: usize,
+        rule: TraceRule,
+        (index, weight): (&[u32], &[f64]),
+        action: usize,
+        step: f64,
+    ) {
+        let Self { live, slot } = self;
+        let mut len = live.len();
+        live.resize(len + index.len(), (0, 0.0));
+        for (&i, &w) in index.iter().zip(weight) {
+            let k = i as usize * na + action;
+            let p = slot[k] as usize;
+            let dest = if p == 0 { len } else { p - 1 };
+            live[dest] = (k as u32, rule.extend(live[dest].1, w));
+            slot[k] = dest as u32 + 1;
+            len += usize::from(p == 0);
+        }
+        live.truncate(len);
+        self.apply_and_decay(q, rule, step);
+    }
+
+    /// Apply `step · e` to every live trace's parameter and decay the trace for the next step,
+    /// dropping those that vanish. A vanishing trace is replaced by the last one (not yet visited),
+    /// so only moved traces rewrite their slot: most traces stay where they are.
+    #[inline(always)]
+    fn apply_and_decay(&mut self, q: &mut [f64], rule: TraceRule, step: f64) {
+        let Self { live, slot } = self;
+        let mut r = 0;
+        while let Some(&(k, e)) = live.get(r) {
+            q[k as usize] += step * e;
+            let next = e * rule.decay;
+            if rule.keeps(next) {
+                live[r].1 = next;
+                r += 1;
+            } else {
+                slot[k as usize] = 0;
+                live.swap_remove(r);
+                if let Some(&(moved, _)) = live.get(r) {
+                    slot[moved as usize] = r as u32 + 1;
+                }
+            }
+        }
+    }
+}

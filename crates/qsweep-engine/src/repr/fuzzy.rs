@@ -1,0 +1,412 @@
+//! Fuzzy representation: Gaussian membership functions (eq. 9) per variable with centres evenly
+//! spaced over `[lo, hi]` (endpoints included) and spread `σ = width · spacing`; the rule base is the
+//! Cartesian product of the per-variable sets (eq. 8), firing strength the product (eq. 10),
+//! normalised to sum 1 (eq. 11).
+//!
+//! For a grid rule base the normaliser of eq. (11) factorises, `Σ_m Π_j μ_j = Π_j Σ_k μ_jk`, so the
+//! normalised strengths are the outer product of per-variable normalised memberships; that is how
+//! they are computed. Values outside `[lo, hi]` are clamped to the range first (the fuzzy analogue of
+//! the crisp edge bin), and sets whose membership is below `prune` are skipped (`prune = 0` is exact).
+
+use super::activation::{strides, Activations, Encode, Representation};
+use crate::math;
+
+/// Most fuzzy sets a single variable may have.
+pub const MAX_SETS: usize = 64;
+
+/// Most state variables a rule base may have (Cart-Pole's four).
+const MAX_VARS: usize = 4;
+
+/// Windows up to this many sets (every variable, as with the default prune) take the activation
+/// path with small scratch arrays.
+const SMALL_WINDOW: usize = 8;
+
+/// `width` that makes neighbouring memberships cross at 0.5: `1 / (2·sqrt(2·ln 2))`.
+pub const HALF_CROSSING_WIDTH: f64 = 0.424_660_900_144_009_5;
+
+#[derive(Debug, Clone)]
+struct Variable {
+    lo: f64,
+    hi: f64,
+    n: usize,
+    /// 1 / spacing (the window position is a product, not a division).
+    inv_spacing: f64,
+    inv_two_sigma_sq: f64,
+    /// Half-width of the window of sets that can exceed `prune`, in units of `spacing`.
+    reach: f64,
+    /// Every set's centre, `lo + k·spacing` (the midpoint for a single set).
+    centres: Vec<f64>,
+}
+
+impl Variable {
+    /// Most sets a window can hold: ⌊2·reach⌋ + 1 centres lie within ±reach spacings of a point,
+    /// plus one for rounding in the window edges.
+    fn max_window(&self) -> usize {
+        if self.reach.is_finite() {
+            ((2.0 * self.reach) as usize).saturating_add(2).min(self.n)
+        } else {
+            self.n
+        }
+    }
+
+    /// The set nearest to window position `pos` (≥ 0 or NaN): ⌊pos + ½⌋ with halves rounded up,
+    /// as `pos.round()` rounds them (exact for pos < 2⁵², without a library call).
+    #[inline(always)]
+    fn nearest(&self, pos: f64) -> usize {
+        let t = pos as usize;
+        let up = pos - t as f64 >= 0.5;
+        (t + usize::from(up)).min(self.n - 1)
+    }
+}
+
+/// A grid of Gaussian fuzzy sets with normalised product firing strengths.
+#[derive(Debug, Clone)]
+pub struct Fuzzy {
+    vars: Vec<Variable>,
+    strides: Vec<u32>,
+    n_features: usize,
+    /// Largest window of any variable.
+    max_window: usize,
+}
+
+impl Fuzzy {
+    /// `sets[j]` Gaussians over `ranges[j]` with σ = `width` × centre spacing; memberships below
+    /// `prune` are skipped (0 keeps every rule).
+    pub fn new(sets: &[u32], ranges: &[[f64; 2]], width: f64, prune: f64) -> Self {
+        assert_eq!(sets.len(), ranges.len());
+        assert!(sets.len() <= MAX_VARS, "at most {MAX_VARS} state variables");
+        let vars: Vec<Variable> = sets
+            .iter()
+            .zip(ranges)
+            .map(|(&n, r)| {
+                let n = n as usize;
+                assert!((1..=MAX_SETS).contains(&n));
+                let spacing = if n > 1 { (r[1] - r[0]) / (n - 1) as f64 } else { r[1] - r[0] };
+                let sigma = width * spacing;
+                let reach = if prune > 0.0 {
+                    // exp(−d²/2σ²) ≥ prune  ⇔  d ≤ σ·sqrt(2 ln(1/prune)).
+                    width * (2.0 * math::ln(1.0 / prune)).sqrt()
+                } else {
+                    f64::INFINITY
+                };
+                let centres = if n == 1 {
+                    vec![(r[0] + r[1]) / 2.0]
+                } else {
+                    (0..n).map(|k| r[0] + k as f64 * spacing).collect()
+                };
+                Variable {
+                    lo: r[0],
+                    hi: r[1],
+                    n,
+                    inv_spacing: 1.0 / spacing,
+                    inv_two_sigma_sq: 1.0 / (2.0 * sigma * sigma),
+                    reach,
+                    centres,
+                }
+            })
+            .collect();
+        let n_features = sets.iter().map(|&s| s as usize).product();
+        let max_window = vars.iter().map(Variable::max_window).max().unwrap_or(1);
+        Self { vars, strides: strides(sets), n_features, max_window }
+    }
+
+    /// Centre of set `k` of variable `j`.
+    pub fn centre(&self, j: usize, k: usize) -> f64 {
+        self.vars[j].centres[k]
+    }
+
+    /// Normalised memberships of variable `j` at `value`: writes the window's memberships into
+    /// `mu` and returns (its first set, its length), the length at most the variable's
+    /// `max_window`, which `mu` must hold.
+    #[inline(always)]
+    fn memberships(&self, j: usize, value: f64, mu: &mut [f64]) -> (usize, usize) {
+        let v = &self.vars[j];
+        if v.n == 1 {
+            mu[0] = 1.0;
+            return (0, 1);
+        }
+        let x = value.clamp(v.lo, v.hi);
+        let pos = (x - v.lo) * v.inv_spacing;
+        let first = ceil_to_index(pos - v.reach);
+        // A saturating cast is floor for every input here (negatives and NaN give 0 either way).
+        let last = ((pos + v.reach) as usize).min(v.n - 1);
+        let (first, last) = if first > last {
+            let nearest = v.nearest(pos);
+            (nearest, nearest)
+        } else {
+            (first, last)
+        };
+        let m = last + 1 - first;
+        let mut sum = 0.0;
+        for (w, &c) in mu[..m].iter_mut().zip(&v.centres[first..=last]) {
+            let d = x - c;
+            *w = math::exp(-(d * d) * v.inv_two_sigma_sq);
+            sum += *w;
+        }
+        if sum.is_nan() || sum <= 0.0 {
+            // Every membership underflowed (a very narrow width): the nearest set takes it all.
+            mu[0] = 1.0;
+            return (v.nearest(pos), 1);
+        }
+        let inv = 1.0 / sum;
+        for w in &mut mu[..m] {
+            *w *= inv;
+        }
+        (first, m)
+    }
+}
+
+impl Representation for Fuzzy {
+    fn n_features(&self) -> usize {
+        self.n_features
+    }
+
+    fn max_active(&self) -> usize {
+        self.vars.iter().map(Variable::max_window).product()
+    }
+
+    fn activate(&self, state: &[f64], out: &mut Activations) {
+        if self.max_window <= SMALL_WINDOW {
+            self.activate_with::<SMALL_WINDOW>(state, out);
+        } else {
+            self.activate_with::<MAX_SETS>(state, out);
+        }
+    }
+}
+
+impl Encode for Fuzzy {
+    type Active = Activations;
+
+    #[inline(always)]
+    fn encode(&self, state: &[f64], out: &mut Activations) {
+        self.activate(state, out);
+    }
+}
+
+impl Fuzzy {
+    /// [`activate`](Representation::activate) with scratch room for `W` sets per variable. Every
+    /// variable's memberships are computed first: they are independent, so their latency chains
+    /// (the exponentials, the normalising division) overlap. The weights are the outer product,
+    /// with the last variable (stride 1) innermost so that a run of rules is a run of table rows.
+    #[inline(always)]
+    fn activate_with<const W: usize>(&self, state: &[f64], out: &mut Activations) {
+        let nv = self.vars.len();
+        // Slots 4 − nv .. 4 hold the variables in order; the slots before them are padding of one
+        // set with membership 1 and stride 0 (x · 1 = x exactly).
+        let pad = MAX_VARS - nv;
+        let mut mu = [[1.0f64; W]; MAX_VARS];
+        let mut len = [1usize; MAX_VARS];
+        let mut stride = [0u32; MAX_VARS];
+        let mut base = 0u32;
+        let f = &mut out.factors;
+        f.vars = nv;
+        f.mu.clear();
+        for (j, &value) in state[..nv].iter().enumerate() {
+            let slot = pad + j;
+            let (first, m) = self.memberships(j, value, &mut mu[slot]);
+            len[slot] = m;
+            stride[slot] = self.strides[j];
+            base += first as u32 * self.strides[j];
+            f.first[j] = first as u32;
+            f.len[j] = m as u32;
+            f.mu.extend_from_slice(&mu[slot][..m]);
+        }
+        let [m0, m1, m2, m3] = len;
+        let total = m0 * m1 * m2 * m3;
+        // Resizing from the last step's length writes only the difference.
+        out.index.resize(total, 0);
+        out.weight.resize(total, 0.0);
+        let (mu3, s3) = (&mu[3][..m3], stride[3]);
+        let mut rows = out.index.chunks_exact_mut(m3).zip(out.weight.chunks_exact_mut(m3));
+        for (k0, &p0) in mu[0][..m0].iter().enumerate() {
+            let o0 = base + k0 as u32 * stride[0];
+            for (k1, &p1) in mu[1][..m1].iter().enumerate() {
+                let (p01, o01) = (p0 * p1, o0 + k1 as u32 * stride[1]);
+                for (k2, &p2) in mu[2][..m2].iter().enumerate() {
+                    let (p012, o012) = (p01 * p2, o01 + k2 as u32 * stride[2]);
+                    let Some((ri, rw)) = rows.next() else { unreachable!("total rows") };
+                    for (k3, ((i, w), &m)) in ri.iter_mut().zip(rw.iter_mut()).zip(mu3).enumerate() {
+                        *i = o012 + k3 as u32 * s3;
+                        *w = p012 * m;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `y.ceil().max(0.0) as usize` without the `ceil` library call: 0 for y ≤ 0 and NaN, else the
+/// smallest integer ≥ y (exact for the small y of a window edge, which is below `MAX_SETS`).
+#[inline]
+fn ceil_to_index(y: f64) -> usize {
+    if y > 0.0 {
+        let t = y as usize;
+        if (t as f64) < y {
+            t + 1
+        } else {
+            t
+        }
+    } else {
+        0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn eq_9_to_11(f: &Fuzzy, sets: &[u32], state: &[f64], width: f64, ranges: &[[f64; 2]]) -> Vec<f64> {
+        // Literal eqs. (9)–(11): every rule's product of Gaussians, divided by the sum over rules.
+        let n: usize = sets.iter().map(|&s| s as usize).product();
+        let mut raw = vec![0.0; n];
+        for (rule, w) in raw.iter_mut().enumerate() {
+            let mut rem = rule;
+            let mut prod = 1.0;
+            for j in (0..sets.len()).rev() {
+                let k = rem % sets[j] as usize;
+                rem /= sets[j] as usize;
+                let spacing = (ranges[j][1] - ranges[j][0]) / (sets[j] - 1) as f64;
+                let sigma = width * spacing;
+                let x = state[j].clamp(ranges[j][0], ranges[j][1]);
+                let c = f.centre(j, k);
+                prod *= libm::exp(-((x - c) * (x - c)) / (2.0 * sigma * sigma));
+            }
+            *w = prod;
+        }
+        let total: f64 = raw.iter().sum();
+        raw.iter().map(|w| w / total).collect()
+    }
+
+    #[test]
+    fn exact_rule_base_matches_equations_9_to_11() {
+        let sets = [3, 2, 4, 5];
+        let ranges = [[-2.4, 2.4], [-2.0, 2.0], [-0.2, 0.2], [-3.0, 3.0]];
+        let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, 0.0);
+        let mut a = Activations::default();
+        for state in [[0.1, -0.3, 0.05, 1.0], [2.0, 5.0, -0.19, -2.9], [-9.0, 0.0, 0.0, 0.0]] {
+            f.activate(&state, &mut a);
+            assert_eq!(a.len(), 3 * 2 * 4 * 5);
+            let reference = eq_9_to_11(&f, &sets, &state, HALF_CROSSING_WIDTH, &ranges);
+            let mut dense = vec![0.0; f.n_features()];
+            for (i, w) in a.index.iter().zip(&a.weight) {
+                dense[*i as usize] += w;
+            }
+            for (ours, theirs) in dense.iter().zip(&reference) {
+                assert!((ours - theirs).abs() < 1e-14, "{ours} vs {theirs}");
+            }
+        }
+    }
+
+    #[test]
+    fn memberships_sum_to_one_and_pruning_keeps_the_big_ones() {
+        let ranges = [[-1.0, 1.0], [-1.0, 1.0]];
+        for n in 1..=10u32 {
+            for prune in [0.0, 1e-6] {
+                let f = Fuzzy::new(&[n, 10], &ranges, HALF_CROSSING_WIDTH, prune);
+                let mut a = Activations::default();
+                for i in 0..50 {
+                    let x = -1.3 + 0.053 * f64::from(i);
+                    f.activate(&[x, -x * 0.7], &mut a);
+                    let s: f64 = a.weight.iter().sum();
+                    assert!((s - 1.0).abs() < 1e-12, "sum {s}");
+                    assert!(a.weight.iter().all(|w| *w > 0.0));
+                    let mut idx = a.index.clone();
+                    idx.sort_unstable();
+                    idx.dedup();
+                    assert_eq!(idx.len(), a.len(), "rules are distinct");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn neighbours_cross_at_one_half_with_the_default_width() {
+        let f = Fuzzy::new(&[2], &[[0.0, 1.0]], HALF_CROSSING_WIDTH, 0.0);
+        let mut a = Activations::default();
+        f.activate(&[0.5], &mut a);
+        assert!((a.weight[0] - 0.5).abs() < 1e-15 && (a.weight[1] - 0.5).abs() < 1e-15);
+        let v = &f.vars[0];
+        let raw = math::exp(-(0.5f64 * 0.5) * v.inv_two_sigma_sq);
+        assert!((raw - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn window_edges_match_ceil_and_floor() {
+        for y in [-3.0, -0.5, -0.0, 0.0, 1e-300, 0.3, 1.0, 1.0 + f64::EPSILON, 2.5, 62.999, 63.0, f64::NAN] {
+            assert_eq!(ceil_to_index(y), y.ceil().max(0.0) as usize, "{y}");
+            assert_eq!(y as usize, y.floor() as usize, "{y}");
+        }
+        assert_eq!(f64::INFINITY as usize, f64::INFINITY.floor() as usize);
+        assert_eq!(ceil_to_index(f64::NEG_INFINITY), 0);
+    }
+
+    #[test]
+    fn max_active_bounds_every_activation() {
+        let ranges = [[-1.0, 1.0], [-2.0, 2.0]];
+        for (sets, prune) in [([10, 4], 1e-6), ([7, 64], 1e-3), ([5, 3], 0.0)] {
+            let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, prune);
+            let mut a = Activations::default();
+            let mut most = 0;
+            for i in 0..400 {
+                let x = -1.2 + 0.006 * f64::from(i);
+                f.activate(&[x, 1.7 * x], &mut a);
+                most = most.max(a.len());
+            }
+            assert!(most <= f.max_active(), "{sets:?}: {most} > {}", f.max_active());
+        }
+    }
+
+    /// The factorised overlap (a product of per-variable dots) is the rule-by-rule sum
+    /// Σᵢ wᵢ(s)·wᵢ(s′), for neighbouring, distant and clamped states, pruned or not.
+    #[test]
+    fn overlap_factorises_over_variables() {
+        let ranges = [[-2.4, 2.4], [-2.0, 2.0], [-0.2, 0.2], [-3.0, 3.0]];
+        for (sets, prune) in [([4, 4, 4, 4], 1e-3), ([7, 3, 9, 2], 0.0), ([10, 10, 10, 10], 1e-3)] {
+            let f = Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, prune);
+            let (mut a, mut b) = (Activations::default(), Activations::default());
+            for i in 0..60 {
+                let t = f64::from(i) * 0.37;
+                let s =
+                    [math::sin(t) * 2.0, math::cos(t), 0.15 * math::sin(3.0 * t), 2.5 * math::cos(0.7 * t)];
+                let s2 = [
+                    s[0] + 0.01 * f64::from(i % 7),
+                    s[1] - 0.3,
+                    s[2] * 0.9,
+                    if i % 5 == 0 { 9.0 } else { s[3] },
+                ];
+                f.activate(&s, &mut a);
+                f.activate(&s2, &mut b);
+                let mut by_rule = 0.0;
+                for (k, w) in a.index.iter().zip(&a.weight) {
+                    if let Some(p) = b.index.iter().position(|j| j == k) {
+                        by_rule += w * b.weight[p];
+                    }
+                }
+                let factored = a.overlap(&b);
+                assert!((factored - by_rule).abs() <= 1e-15, "{sets:?} {i}: {factored} vs {by_rule}");
+                assert!((a.overlap(&a) - a.weight.iter().map(|w| w * w).sum::<f64>()).abs() <= 1e-15);
+            }
+        }
+    }
+
+    /// Regression: a huge width made the window bound `(2·reach) as usize + 2` overflow (a panic
+    /// in debug builds, a one-set window and an out-of-bounds write in release).
+    #[test]
+    fn huge_width_overflows_no_window_bound() {
+        let f = Fuzzy::new(&[10, 3], &[[0.0, 1.0], [-1.0, 1.0]], 1e19, 1e-3);
+        assert_eq!(f.max_active(), 30);
+        let mut a = Activations::default();
+        f.activate(&[0.3, 0.2], &mut a);
+        assert_eq!(a.len(), 30);
+        assert!((a.weight.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tiny_width_never_divides_by_zero() {
+        let f = Fuzzy::new(&[5], &[[0.0, 1.0]], 1e-6, 0.0);
+        let mut a = Activations::default();
+        f.activate(&[0.37], &mut a);
+        assert_eq!(a.index, vec![1]);
+        assert_eq!(a.weight, vec![1.0]);
+    }
+}

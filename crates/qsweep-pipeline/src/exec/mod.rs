@@ -1,0 +1,309 @@
+//! Executing trials: a rayon pool pulls trials longest-first from a shared counter (so the tail
+//! is short), the calling thread collects finished trials and hands them to a sink in batches
+//! bounded by count and by time (so an interrupted run keeps them), and reports [`Event`]s to the
+//! caller's [`Reporter`].
+//!
+//! With claims ([`ExecOptions::claims`]) a run that shares its cache with others claims each trial
+//! before running it, sets aside those another run is computing, and waits for them at the end
+//! ([`claimed`]).
+//!
+//! Results never depend on the number of threads: each trial is a pure function of its config and
+//! seed, and batches are written in completion order, which only affects segment layout.
+
+pub mod claimed;
+mod events;
+mod job;
+pub mod shard;
+
+pub use events::{Event, Reporter};
+
+use crate::cache::claims::{lease::HEARTBEAT, Claims};
+use crate::cache::TrialRecord;
+use claimed::{Pick, Scheduler, POLL};
+pub use job::{jobs, Job};
+use qsweep_engine::repr::ReprKind;
+use qsweep_engine::{run_trial, TrialConfig};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::{Duration, Instant};
+
+/// Set by the Ctrl-C / SIGTERM handler: workers start no new trials, the run flushes and stops.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// How to run.
+#[derive(Debug, Clone)]
+pub struct ExecOptions {
+    /// Worker threads.
+    pub jobs: usize,
+    /// Flush after this many finished trials...
+    pub batch_trials: usize,
+    /// ...or after this long since the last flush, whichever comes first.
+    pub batch_interval: Duration,
+    /// Claim each trial in the cache before running it, so that concurrent runs on the cache
+    /// never compute one twice (`None`: run every job, as a library user without a shared cache).
+    pub claims: Option<Arc<Claims>>,
+}
+
+impl Default for ExecOptions {
+    fn default() -> Self {
+        Self {
+            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            batch_trials: 500,
+            batch_interval: Duration::from_secs(10),
+            claims: None,
+        }
+    }
+}
+
+/// What an execution did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ExecReport {
+    /// Trials run and stored.
+    pub executed: usize,
+    /// Of those, trials whose simulation diverged (stored with a failure reason).
+    pub failed: usize,
+    /// Trials another run (sharing the cache) stored while this one ran: not run here.
+    pub elsewhere: usize,
+    /// Whether Ctrl-C stopped the run early.
+    pub interrupted: bool,
+}
+
+/// CPU seconds the calling thread has used so far (`CLOCK_THREAD_CPUTIME_ID`): what a trial costs,
+/// whatever else the machine is doing. `None` where the clock is not available.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    #[cfg(unix)]
+    {
+        let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+        // SAFETY: clock_gettime only writes the timespec it is given.
+        let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+        (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
+}
+
+/// A rough relative cost of a trial, used only to start long trials first.
+pub fn estimated_cost(c: &TrialConfig) -> f64 {
+    let per_step = match c.repr.kind {
+        ReprKind::Crisp => 1.0 + 0.05 * f64::from(c.actions),
+        // Active rules per step: about min(n, 5) sets per variable survive pruning.
+        ReprKind::Fuzzy => {
+            c.repr.resolution.iter().map(|&n| f64::from(n.min(5))).product::<f64>() * f64::from(c.actions)
+        }
+    };
+    per_step * (c.limits.max_total_steps as f64).min(c.limits.episode_cap() as f64 * 10.0)
+}
+
+/// Run `jobs` and hand finished records to `sink` in batches; stops early (after flushing) when
+/// [`INTERRUPTED`] is set. With claims, a job another run holds is left to it and waited for, and
+/// each claim is released once its trial is handed to the sink. A sink error stops the run and is
+/// returned; records already handed to the sink are kept. Every step is reported to `reporter`.
+pub fn execute(
+    jobs: &[Job<'_>],
+    opts: &ExecOptions,
+    mut sink: impl FnMut(&[TrialRecord]) -> anyhow::Result<()>,
+    reporter: &mut dyn Reporter,
+) -> anyhow::Result<ExecReport> {
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    // Longest first; ties keep plan order, so scheduling is reproducible.
+    order.sort_by(|&a, &b| estimated_cost(jobs[b].config).total_cmp(&estimated_cost(jobs[a].config)));
+    let threads = opts.jobs.max(1);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let claims = opts.claims.as_deref();
+    let sched = Scheduler::new(jobs, order, claims);
+    let stop = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<TrialRecord>();
+    let mut report = ExecReport::default();
+    reporter.event(&Event::Started { trials: jobs.len() });
+
+    let collected = std::thread::scope(|scope| -> anyhow::Result<()> {
+        let (sched, stop) = (&sched, &stop);
+        scope.spawn(move || {
+            pool.scope(|s| {
+                for _ in 0..threads {
+                    let tx = tx.clone();
+                    s.spawn(move |_| loop {
+                        if stop.load(Ordering::Relaxed) || INTERRUPTED.load(Ordering::Relaxed) {
+                            break;
+                        }
+                        let job = match sched.pick() {
+                            Pick::Run(j) => jobs[j],
+                            Pick::Wait => {
+                                std::thread::sleep(POLL);
+                                continue;
+                            }
+                            Pick::Done => break,
+                        };
+                        let start = Instant::now();
+                        let cpu = thread_cpu_seconds();
+                        let outcome = run_trial(job.config, job.seed);
+                        let cpu = thread_cpu_seconds().zip(cpu).map(|(b, a)| b - a);
+                        let rec = TrialRecord::new(
+                            job.config.clone(),
+                            job.seed,
+                            outcome,
+                            start.elapsed().as_secs_f64(),
+                        )
+                        .with_cpu_seconds(cpu);
+                        debug_assert_eq!(rec.key, job.key);
+                        if tx.send(rec).is_err() {
+                            break;
+                        }
+                    });
+                }
+            });
+        });
+
+        let mut batch: Vec<TrialRecord> = Vec::new();
+        let mut last_flush = Instant::now();
+        let mut last_beat = Instant::now();
+        let mut elsewhere = (0, 0);
+        let mut flush = |batch: &mut Vec<TrialRecord>,
+                         report: &mut ExecReport,
+                         reporter: &mut dyn Reporter|
+         -> anyhow::Result<()> {
+            if !batch.is_empty() {
+                sink(batch)?;
+                if let Some(c) = claims {
+                    c.release(&batch.iter().map(|r| r.key).collect::<Vec<_>>());
+                }
+                reporter.event(&Event::Flushed { trials: batch.len() });
+                report.executed += batch.len();
+                report.failed += batch.iter().filter(|r| r.outcome.failure.is_some()).count();
+                batch.clear();
+            }
+            Ok(())
+        };
+        let result = loop {
+            match rx.recv_timeout(Duration::from_millis(200)) {
+                Ok(rec) => {
+                    reporter.event(&Event::Finished { key: rec.key, failed: rec.outcome.failure.is_some() });
+                    batch.push(rec);
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => reporter.event(&Event::Tick),
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    break flush(&mut batch, &mut report, &mut *reporter)
+                }
+            }
+            if let Some(c) = claims {
+                if last_beat.elapsed() >= HEARTBEAT {
+                    c.heartbeat();
+                    last_beat = Instant::now();
+                }
+                let now = (
+                    sched.running_elsewhere.load(Ordering::Relaxed),
+                    sched.stored_elsewhere.load(Ordering::Relaxed),
+                );
+                if now != elsewhere {
+                    elsewhere = now;
+                    reporter.event(&Event::Elsewhere { running: now.0, stored: now.1 });
+                }
+            }
+            // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
+            // SIGKILL soon after) store what is finished at once rather than at the next batch.
+            // So in the tail of a run that shares the cache: other runs may be waiting for
+            // exactly these trials, which their claims keep from them until they are stored.
+            if batch.len() >= opts.batch_trials
+                || last_flush.elapsed() >= opts.batch_interval
+                || INTERRUPTED.load(Ordering::Relaxed)
+                || (!batch.is_empty() && sched.exhausted() && claims.is_some_and(|c| c.others_present()))
+            {
+                if let Err(e) = flush(&mut batch, &mut report, &mut *reporter) {
+                    break Err(e);
+                }
+                last_flush = Instant::now();
+            }
+        };
+        if result.is_err() {
+            stop.store(true, Ordering::Relaxed);
+            // Drain so workers are never blocked; their trials are lost, the stored ones are not.
+            while rx.recv().is_ok() {}
+        }
+        result
+    });
+    // Nothing is held between executions: claims of trials a failing sink did not store go now.
+    if let Some(c) = claims {
+        c.release_all();
+    }
+    report.elsewhere = sched.stored_elsewhere.load(Ordering::Relaxed);
+    report.interrupted =
+        INTERRUPTED.load(Ordering::Relaxed) && report.executed + report.elsewhere < jobs.len();
+    if report.interrupted {
+        reporter.event(&Event::Interrupted);
+    }
+    reporter.event(&Event::Done { executed: report.executed, failed: report.failed });
+    collected?;
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cache::Key;
+    use qsweep_engine::env::SystemKind;
+    use qsweep_engine::Algorithm;
+
+    fn jobs_for(configs: &[TrialConfig]) -> Vec<Job<'_>> {
+        configs
+            .iter()
+            .flat_map(|c| (0..3).map(move |seed| Job { config: c, seed, key: Key::of(c, seed) }))
+            .collect()
+    }
+
+    #[test]
+    fn results_are_identical_on_one_or_two_threads_and_batches_cover_every_job() {
+        let mut configs = Vec::new();
+        for (sys, res) in [(SystemKind::BallBeam, vec![3, 3]), (SystemKind::MountainCar, vec![4, 4])] {
+            for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
+                let mut c = TrialConfig::paper(sys, repr, Algorithm::QLambda, res.clone(), 3);
+                c.limits.max_episodes = 30;
+                configs.push(c);
+            }
+        }
+        let jobs = jobs_for(&configs);
+        let run = |threads| {
+            let opts = ExecOptions { jobs: threads, batch_trials: 4, ..Default::default() };
+            let mut got = Vec::new();
+            let mut batches = 0;
+            let mut events: Vec<Event> = Vec::new();
+            let r = execute(
+                &jobs,
+                &opts,
+                |b| {
+                    assert!(b.len() <= 4);
+                    batches += 1;
+                    got.extend(b.iter().cloned());
+                    Ok(())
+                },
+                &mut events,
+            )
+            .unwrap();
+            assert_eq!(r.executed, jobs.len());
+            // Started first, Done last, one Finished per trial, the flushes add up to the trials.
+            assert_eq!(events.first(), Some(&Event::Started { trials: jobs.len() }));
+            assert_eq!(events.last(), Some(&Event::Done { executed: jobs.len(), failed: 0 }));
+            let finished = events.iter().filter(|e| matches!(e, Event::Finished { .. })).count();
+            let flushed: usize =
+                events.iter().map(|e| if let Event::Flushed { trials } = e { *trials } else { 0 }).sum();
+            assert_eq!((finished, flushed), (jobs.len(), jobs.len()));
+            assert!(batches >= jobs.len() / 4);
+            got.sort_by_key(|r| r.key);
+            got.into_iter().map(|r| (r.key, r.outcome)).collect::<Vec<_>>()
+        };
+        assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn a_failing_sink_stops_the_run_and_reports_the_error() {
+        let c = TrialConfig::paper(SystemKind::BallBeam, ReprKind::Crisp, Algorithm::Q0, vec![2, 2], 3);
+        let cs = vec![c];
+        let jobs = jobs_for(&cs);
+        let opts = ExecOptions { jobs: 2, batch_trials: 1, ..Default::default() };
+        let mut events: Vec<Event> = Vec::new();
+        let err = execute(&jobs, &opts, |_| anyhow::bail!("disk full"), &mut events).unwrap_err();
+        assert!(err.to_string().contains("disk full"));
+        assert!(matches!(events.last(), Some(Event::Done { executed: 0, .. })), "{events:?}");
+    }
+}

@@ -1,0 +1,544 @@
+//! Races: seeds go, round by round, only to the cells of a heatmap that can still be its best.
+//!
+//! A heatmap is one experiment × algorithm of one variant (one Table III row). Round 0 is the
+//! pipeline's `seeds`. After each round the cells still in the race (the *contenders*) are tested
+//! against the current best contender, chosen by Table III's rule ([`crate::analysis::best_cell`]):
+//! a cell whose mean is higher than the best's by a one-sided Welch t-test, with Holm's correction
+//! over the contenders tested in that round at α = 1 − `confidence` ([`welch`]), leaves the race.
+//! Every remaining contender gets `batch` more seeds, numbered on from the largest first-round
+//! seed, until one contender remains or every contender has `max_seeds`.
+//!
+//! The measure is the one Table III averages: episodes to the goal, a trial that never reached it
+//! counted at the episode cap ([`crate::analysis::episodes_counted`]). For that capped
+//! measure a censored trial is an exact value, not missing data; and since its true episode count
+//! is larger still, censoring can only make a cell look better than it is, so a cell is never
+//! dropped because of its own failures.
+//!
+//! What the guarantee is, and is not: Holm keeps the chance of wrongly dropping any cell in one
+//! round's family at or below α, whatever the dependence between the tests; the rounds are
+//! repeated looks at growing samples and are not corrected for (as in F-Race), so over a whole race
+//! the chance of losing a truly best cell is somewhat above α. Welch's test assumes roughly normal
+//! means; with 5–10 skewed episode counts per cell that is an approximation, which is why the
+//! first round should not be tiny and every verdict is stated as "not significantly worse".
+//!
+//! A race is a pure function of the pipeline and the cached outcomes: [`replay`] replays the
+//! rounds from the cache, as far as their trials are present, and plans the next round's trials.
+//! Rerunning a finished race runs nothing; raising `max_seeds` runs only the new rounds; the answer
+//! is the same on any number of threads or shards, because every decision reads only stored outcomes.
+
+use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
+use crate::cache::store::{KeySet, Store};
+use crate::cache::{Key, ENGINE_VERSION};
+use crate::plan::{Plan, PlannedTrial, StageOutcome};
+use qsweep_engine::{Algorithm, Outcome};
+use std::collections::{HashMap, HashSet};
+
+pub use crate::plan::ReadOutcomes;
+
+/// How one heatmap's race stands.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatRace {
+    /// Index of the experiment in the plan.
+    pub experiment: usize,
+    /// The algorithm (the heatmap's column of the figure).
+    pub algorithm: Algorithm,
+    /// Cells in the heatmap.
+    pub cells: usize,
+    /// Rounds whose trials are all present and decided.
+    pub rounds_done: u32,
+    /// The most rounds the race can take (1 + ⌈(max_seeds − first seeds) / batch⌉).
+    pub rounds_max: u32,
+    /// The race is over (one contender left, or every contender at `max_seeds`).
+    pub finished: bool,
+    /// Contenders after the last decided round (every cell before the first).
+    pub contenders: usize,
+    /// Trials planned so far: every decided round's and the pending round's.
+    pub trials: usize,
+    /// Of those, in the cache.
+    pub cached: usize,
+    /// Trials of the same heatmap with `max_seeds` seeds in every cell.
+    pub without_race: usize,
+}
+
+/// A plan whose races are replayed against the cache.
+#[derive(Debug, Clone)]
+pub struct Raced {
+    /// The plan with every raced cell's trials (decided rounds and the pending one) and its
+    /// `contender` flag set; experiments without a race are as planned.
+    pub plan: Plan,
+    /// Every raced heatmap, in plan order.
+    pub heats: Vec<HeatRace>,
+}
+
+impl Plan {
+    /// Whether some experiment races.
+    pub fn has_race(&self) -> bool {
+        self.experiments.iter().any(|e| e.race.is_some())
+    }
+
+    /// The most rounds any of its races can take (1 without a race).
+    pub fn race_rounds_max(&self) -> u32 {
+        self.experiments
+            .iter()
+            .filter_map(|e| {
+                let r = e.race?;
+                let first = e.cells.first().map_or(0, |c| c.trials.len()) as u32;
+                Some(rounds_max(first, r.batch, r.max_seeds))
+            })
+            .max()
+            .unwrap_or(1)
+    }
+
+    /// The most stages the plan can take, each planned from the outcomes of those before: a
+    /// race's rounds ([`Plan::race_rounds_max`]), then one more for the fresh seeds.
+    pub fn stages_max(&self) -> u32 {
+        self.race_rounds_max() + u32::from(self.has_fresh())
+    }
+}
+
+fn rounds_max(first: u32, batch: u32, max_seeds: u32) -> u32 {
+    1 + max_seeds.saturating_sub(first).div_ceil(batch)
+}
+
+/// One heatmap's race while it is replayed.
+struct Heat {
+    exp: usize,
+    algorithm: Algorithm,
+    /// Indices of the heatmap's cells in the experiment.
+    cells: Vec<usize>,
+    /// Their canonical configurations (for the keys of extra seeds).
+    canonical: Vec<String>,
+    contender: Vec<bool>,
+    /// The first extra seed's number.
+    next_seed: u64,
+    first: u32,
+    rounds_done: u32,
+    finished: bool,
+}
+
+/// A plan whose stages (races, fresh seeds) are replayed against one scan of the cache: what a
+/// report reads. Only [`Replayed::of`] and [`replay_cached_owned`]'s result make one, so a report
+/// handed one never replays it again (a no-op `qsweep run` replays its plan once, not twice).
+#[derive(Debug, Clone)]
+pub struct Replayed(Plan);
+
+impl Replayed {
+    /// `plan` replayed against what `store` holds of the trials `scan` lists; a plan without
+    /// stages comes back as it is (not copied).
+    pub fn of(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Self> {
+        if plan.is_staged() {
+            Ok(Self(replay_cached_owned(plan, store, scan)?.plan))
+        } else {
+            Ok(Self(plan))
+        }
+    }
+
+    /// The replayed plan.
+    pub fn plan(&self) -> &Plan {
+        &self.0
+    }
+
+    /// The replayed plan, given up.
+    pub fn into_plan(self) -> Plan {
+        self.0
+    }
+}
+
+impl Raced {
+    /// Its plan, as replayed against the scan it was replayed against.
+    pub fn into_replayed(self) -> Replayed {
+        Replayed(self.plan)
+    }
+}
+
+/// What a replay ([`replay_owned`]) changes in a plan, noted before it, so that the replayed plan
+/// can be taken back to the plan as planned instead of replaying a copy: a replay only appends
+/// trials to a raced cell, sets its `contender` and sets the fresh trials of a best cell.
+#[derive(Debug, Clone)]
+pub struct Unreplay(Vec<(usize, Vec<CellAsPlanned>)>);
+
+/// A staged cell as planned: its trial count and race state.
+type CellAsPlanned = (usize, Option<bool>);
+
+impl Unreplay {
+    /// The staged experiments' cells of `plan` as they are: each cell's trial count and race
+    /// state. `None` when a cell already has fresh trials (a replay replaces them: not undone).
+    pub fn of(plan: &Plan) -> Option<Self> {
+        let mut out = Vec::new();
+        for (ei, e) in plan.experiments.iter().enumerate() {
+            if e.race.is_none() && e.fresh.is_none() {
+                continue;
+            }
+            if e.cells.iter().any(|c| !c.fresh.is_empty()) {
+                return None;
+            }
+            out.push((ei, e.cells.iter().map(|c| (c.trials.len(), c.contender)).collect()));
+        }
+        Some(Self(out))
+    }
+
+    /// `replayed`, the plan this was noted of after a replay, as it was before.
+    pub fn undo(self, mut replayed: Plan) -> Plan {
+        for (ei, cells) in self.0 {
+            for (c, (n, contender)) in replayed.experiments[ei].cells.iter_mut().zip(cells) {
+                c.trials.truncate(n);
+                c.contender = contender;
+                c.fresh.clear();
+            }
+        }
+        replayed
+    }
+}
+
+/// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
+/// the trials `scan` lists (the plan itself, with no race).
+pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
+    replay_cached_owned(plan.clone(), store, scan)
+}
+
+/// [`replay_cached`] of a plan the caller gives up, replayed in place (a report of the paper's
+/// readings holds no second copy of its 37,000 cells).
+pub fn replay_cached_owned(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
+    replay_owned(plan, &scan.keys, &mut |wanted| {
+        store.read_outcomes_as(scan, wanted, false, |k, s| (k, StageOutcome::from(&s.outcome)))
+    })
+}
+
+/// Replay every race of `plan`: replay its rounds from the outcomes of the trials in `cached`
+/// (`read` fetches the outcomes of some of them), as far as each round's trials are all cached,
+/// and plan the next round's; then plan the fresh-seed trials of every decided best cell
+/// ([`crate::fresh::plan_fresh`]). Without a race or a `fresh:` block the plan comes back as it is.
+pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
+    replay_owned(plan.clone(), cached, read)
+}
+
+/// [`replay`] of a plan the caller gives up, replayed in place.
+pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
+    let mut heats: Vec<Heat> = Vec::new();
+    for (ei, e) in out.experiments.iter_mut().enumerate() {
+        if e.race.is_none() {
+            continue;
+        }
+        let first_seeds: Vec<u64> =
+            e.cells.first().map(|c| c.trials.iter().map(|t| t.seed).collect()).unwrap_or_default();
+        let next_seed = first_seeds.iter().max().map_or(0, |m| m + 1);
+        for &algorithm in &e.algorithms {
+            let cells: Vec<usize> =
+                (0..e.cells.len()).filter(|&i| e.cells[i].algorithm == algorithm).collect();
+            for &i in &cells {
+                e.cells[i].contender = Some(true);
+            }
+            heats.push(Heat {
+                exp: ei,
+                algorithm,
+                canonical: cells
+                    .iter()
+                    .map(|&i| crate::cache::key::canonical_config(&e.cells[i].config))
+                    .collect(),
+                contender: vec![true; cells.len()],
+                cells,
+                next_seed,
+                first: first_seeds.len() as u32,
+                rounds_done: 0,
+                finished: false,
+            });
+        }
+    }
+    // Every heatmap advances as far as the cache allows; they share one read per pass.
+    let mut known: HashMap<Key, StageOutcome> = HashMap::new();
+    loop {
+        let mut wanted = HashSet::new();
+        for h in heats.iter().filter(|h| !h.finished) {
+            let e = &out.experiments[h.exp];
+            let live = h.cells.iter().zip(&h.contender).filter(|(_, c)| **c);
+            for (&i, _) in live {
+                let keys = e.cells[i].trials.iter().map(|t| t.key);
+                wanted.extend(keys.filter(|key| cached.contains(key) && !known.contains_key(key)));
+            }
+        }
+        if !wanted.is_empty() {
+            let got = read(&wanted)?;
+            known.reserve(got.len());
+            known.extend(got);
+        }
+        let mut advanced = false;
+        for h in heats.iter_mut().filter(|h| !h.finished) {
+            let e = &mut out.experiments[h.exp];
+            let race = e.race.expect("raced experiment");
+            // Each contender's sample, or nothing while one of its trials is missing.
+            let mut samples: Vec<Option<Sample>> = Vec::with_capacity(h.cells.len());
+            let mut complete = true;
+            for (k, &i) in h.cells.iter().enumerate() {
+                if !h.contender[k] {
+                    samples.push(None);
+                    continue;
+                }
+                let cell = &e.cells[i];
+                let (limits, counting) = (&cell.config.limits, e.counting);
+                let outcomes: Option<Vec<Outcome>> =
+                    cell.trials.iter().map(|t| known.get(&t.key).map(StageOutcome::outcome)).collect();
+                match outcomes {
+                    Some(os) => samples.push(Some(Sample {
+                        values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
+                        successes: os.iter().filter(|o| o.converged).count(),
+                    })),
+                    None => {
+                        complete = false;
+                        break;
+                    }
+                }
+            }
+            if !complete {
+                continue;
+            }
+            let keep = decide(&samples, 1.0 - race.confidence.0);
+            for (k, &i) in h.cells.iter().enumerate() {
+                h.contender[k] = keep[k];
+                e.cells[i].contender = Some(keep[k]);
+            }
+            h.rounds_done += 1;
+            advanced = true;
+            let left: Vec<usize> = (0..h.cells.len()).filter(|&k| h.contender[k]).collect();
+            let n_max = race.max_seeds as usize;
+            if left.len() <= 1 || left.iter().all(|&k| e.cells[h.cells[k]].trials.len() >= n_max) {
+                h.finished = true;
+                continue;
+            }
+            for &k in &left {
+                let cell = &mut e.cells[h.cells[k]];
+                let have = cell.trials.len();
+                let add = (n_max - have).min(race.batch as usize);
+                let extra = (have - h.first as usize) as u64;
+                for j in 0..add as u64 {
+                    let seed = h.next_seed + extra + j;
+                    let key = Key::from_canonical(&h.canonical[k], seed, ENGINE_VERSION);
+                    cell.trials.push(PlannedTrial { seed, key });
+                }
+            }
+        }
+        if !advanced {
+            break;
+        }
+    }
+    // The best cells are decided only once the races are: fresh seeds come last.
+    if out.has_fresh() {
+        crate::fresh::plan_fresh(&mut out, cached, &mut known, read)?;
+    }
+    let heats = heats
+        .into_iter()
+        .map(|h| {
+            let e = &out.experiments[h.exp];
+            let race = e.race.expect("raced experiment");
+            let trials: Vec<&PlannedTrial> = h.cells.iter().flat_map(|&i| &e.cells[i].trials).collect();
+            HeatRace {
+                experiment: h.exp,
+                algorithm: h.algorithm,
+                cells: h.cells.len(),
+                rounds_done: h.rounds_done,
+                rounds_max: rounds_max(h.first, race.batch, race.max_seeds),
+                finished: h.finished,
+                contenders: h.contender.iter().filter(|&&c| c).count(),
+                trials: trials.len(),
+                cached: trials.iter().filter(|t| cached.contains(&t.key)).count(),
+                without_race: h.cells.len() * (race.max_seeds as usize).max(h.first as usize),
+            }
+        })
+        .collect();
+    Ok(Raced { plan: out, heats })
+}
+
+/// A contender's sample: the counted episodes of its trials and how many reached the goal.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    /// Episodes counted per trial ([`episodes_counted`]).
+    pub values: Vec<f64>,
+    /// Trials that reached the goal.
+    pub successes: usize,
+}
+
+/// One round's decision over a heatmap's cells (`None`: already out of the race): which stay. The
+/// best contender by Table III's rule stays; every other contender is tested against it
+/// ([`welch::welch_p_greater`]) and the ones Holm's procedure rejects at `alpha` leave.
+pub fn decide(samples: &[Option<Sample>], alpha: f64) -> Vec<bool> {
+    let candidates = samples.iter().enumerate().filter_map(|(i, s)| {
+        s.as_ref().map(|s| Candidate {
+            index: i,
+            n: s.values.len(),
+            successes: s.successes,
+            mean: (!s.values.is_empty()).then(|| crate::analysis::mean(&s.values)),
+        })
+    });
+    let mut keep: Vec<bool> = samples.iter().map(Option::is_some).collect();
+    let Some(best) = best_cell(candidates) else { return keep };
+    let best_values = &samples[best.cell].as_ref().expect("the best is a contender").values;
+    let tested: Vec<usize> = (0..samples.len()).filter(|&i| keep[i] && i != best.cell).collect();
+    let p: Vec<f64> = tested
+        .iter()
+        .map(|&i| welch::welch_p_greater(&samples[i].as_ref().expect("a contender").values, best_values))
+        .collect();
+    for (&i, drop) in tested.iter().zip(welch::holm_reject(&p, alpha)) {
+        keep[i] = !drop;
+    }
+    keep
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::load_str;
+    use qsweep_engine::trial::StopReason;
+
+    fn sample(values: &[f64], cap: f64) -> Option<Sample> {
+        Some(Sample { values: values.to_vec(), successes: values.iter().filter(|&&v| v < cap).count() })
+    }
+
+    #[test]
+    fn a_clearly_worse_cell_leaves_and_the_best_and_ties_stay() {
+        let s = [
+            sample(&[5.0, 6.0, 4.0, 5.0], 30.0),
+            sample(&[30.0; 4], 30.0),            // censored everywhere: far worse
+            sample(&[5.0, 6.0, 4.0, 5.0], 30.0), // the same as the best: a tie
+            sample(&[6.0, 7.0, 5.0, 6.0], 30.0), // a little worse: not significantly at n = 4
+            None,                                // left in an earlier round: stays out
+        ];
+        assert_eq!(decide(&s, 0.05), vec![true, false, true, true, false]);
+        // Nothing is dropped at a confidence that demands more than 4 seeds can give.
+        assert_eq!(decide(&s[..4], 1e-12), vec![true, true, true, true]);
+    }
+
+    #[test]
+    fn holm_protects_the_family_of_a_round() {
+        // Each of these alone is worse at 5 % one-sided (p ≈ 0.03), but not after Holm over 3.
+        let best = [10.0, 11.0, 9.0, 10.0, 10.0];
+        let worse = [10.5, 12.5, 10.5, 11.5, 11.0];
+        let p = welch::welch_p_greater(&worse, &best);
+        assert!(p < 0.05 && p > 0.05 / 3.0, "{p}");
+        let s = [sample(&best, 1e9), sample(&worse, 1e9), sample(&worse, 1e9), sample(&worse, 1e9)];
+        assert_eq!(decide(&s, 0.05), vec![true; 4]);
+        assert_eq!(decide(&s[..2], 0.05), vec![true, false], "alone it leaves");
+    }
+
+    /// A plan of one raced heatmap of three cells, and outcomes made up per (cell, seed).
+    fn plan(race: &str) -> Plan {
+        let text = format!(
+            "name: t\nseeds: 3\nrace: {race}\nsystems:\n  cart-pole:\n    settings: {{ max_episodes: 50 }}\n    experiments:\n      - {{ id: a, repr: crisp, algorithms: [q0], vary: {{ actions: [2, 3, 4] }}, fixed: {{ x == x_dot == theta == theta_dot: 2 }} }}\n"
+        );
+        let spec = load_str(&text, "t.yaml", &[]).unwrap();
+        let loaded = crate::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() };
+        crate::plan::plan(&loaded, None).unwrap()
+    }
+
+    fn outcome(episodes: u32) -> Outcome {
+        Outcome {
+            converged: episodes < 50,
+            episodes_to_goal: (episodes < 50).then_some(episodes),
+            episodes,
+            total_steps: 0,
+            stop: StopReason::Goal,
+            failure: None,
+            episode_lengths: Vec::new(),
+        }
+    }
+
+    /// Resolve against a cache that holds every planned trial the closure gives an outcome for,
+    /// running "trials" until the race is over; returns the rounds' trial counts.
+    fn race_to_the_end(plan: &Plan, value: impl Fn(usize, u64) -> u32) -> (Raced, Vec<usize>) {
+        let mut store: HashMap<Key, Outcome> = HashMap::new();
+        let mut per_round = Vec::new();
+        loop {
+            let cached: HashSet<Key> = store.keys().copied().collect();
+            let raced = replay(plan, &cached, &mut |w| {
+                Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+            })
+            .unwrap();
+            let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
+                .cells
+                .iter()
+                .enumerate()
+                .flat_map(|(i, c)| c.trials.iter().map(move |t| (i, t.seed, t.key)))
+                .filter(|(_, _, k)| !cached.contains(k))
+                .collect();
+            if missing.is_empty() {
+                return (raced, per_round);
+            }
+            per_round.push(missing.len());
+            for (i, seed, key) in missing {
+                store.insert(key, outcome(value(i, seed)));
+            }
+        }
+    }
+
+    #[test]
+    fn a_worse_cell_leaves_after_round_0_and_a_tie_runs_to_max_seeds() {
+        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
+        // Cells 0 and 2 alternate 4 and 6 episodes (a tie); cell 1 always fails (50).
+        let (raced, rounds) =
+            race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
+        assert_eq!(rounds, vec![9, 4, 4, 2], "round 0: 3 cells × 3 seeds; then 2 contenders × 2, 2, 1 seeds");
+        let cells = &raced.plan.experiments[0].cells;
+        let n: Vec<usize> = cells.iter().map(|c| c.trials.len()).collect();
+        assert_eq!(n, vec![8, 3, 8]);
+        assert_eq!(
+            cells.iter().map(|c| c.contender).collect::<Vec<_>>(),
+            vec![Some(true), Some(false), Some(true)]
+        );
+        let seeds: Vec<u64> = cells[0].trials.iter().map(|t| t.seed).collect();
+        assert_eq!(seeds, (0..8).collect::<Vec<_>>(), "extra seeds continue the numbering");
+        let h = &raced.heats[0];
+        assert_eq!((h.rounds_done, h.rounds_max, h.finished, h.contenders), (4, 4, true, 2));
+        assert_eq!((h.trials, h.cached, h.without_race), (19, 19, 24));
+    }
+
+    /// Each cell's trials, race state and fresh trials.
+    type CellState = (Vec<PlannedTrial>, Option<bool>, Vec<PlannedTrial>);
+
+    fn cells(p: &Plan) -> Vec<CellState> {
+        p.experiments
+            .iter()
+            .flat_map(|e| &e.cells)
+            .map(|c| (c.trials.clone(), c.contender, c.fresh.clone()))
+            .collect()
+    }
+
+    #[test]
+    fn an_undone_replay_is_the_plan_as_planned() {
+        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
+        let (raced, _) = race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
+        assert_ne!(cells(&raced.plan), cells(&p), "the replay added rounds and decided the race");
+        let undo = Unreplay::of(&p).expect("nothing to replace");
+        assert_eq!(cells(&undo.undo(raced.plan)), cells(&p));
+        // A plan whose cells already have fresh trials is not undone (a replay replaces them).
+        let mut with_fresh = p.clone();
+        with_fresh.experiments[0].fresh = Some(vec![100]);
+        with_fresh.experiments[0].cells[0].fresh = with_fresh.experiments[0].cells[1].trials.clone();
+        assert!(Unreplay::of(&with_fresh).is_none());
+    }
+
+    #[test]
+    fn raising_max_seeds_adds_rounds_and_keeps_the_earlier_ones() {
+        let value = |i: usize, seed: u64| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 };
+        let (short, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 5 }"), value);
+        let (long, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 9 }"), value);
+        for (a, b) in short.plan.experiments[0].cells.iter().zip(&long.plan.experiments[0].cells) {
+            assert_eq!(a.trials[..], b.trials[..a.trials.len()], "the short race's trials are a prefix");
+        }
+        assert_eq!(long.plan.experiments[0].cells[0].trials.len(), 9);
+    }
+
+    #[test]
+    fn a_race_stops_where_the_cache_stops_and_plans_the_next_round() {
+        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
+        let none = replay(&p, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
+        let h = &none.heats[0];
+        assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.cached), (0, false, 3, 9, 0));
+        assert!(none.plan.experiments[0]
+            .cells
+            .iter()
+            .all(|c| c.contender == Some(true) && c.trials.len() == 3));
+        // Without a race the plan comes back untouched.
+        let mut plain = p.clone();
+        plain.experiments[0].race = None;
+        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
+        assert!(r.heats.is_empty() && r.plan.experiments[0].cells.iter().all(|c| c.contender.is_none()));
+    }
+}
