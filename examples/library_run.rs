@@ -4,7 +4,7 @@
 
 use qsweep_pipeline::exec::{Event, ExecOptions};
 use qsweep_pipeline::run::{run_trials, scan, Selection};
-use qsweep_report::formats::{Format, Formats};
+use qsweep_report::kinds::{Format, Formats};
 use qsweep_report::ReportOptions;
 
 fn main() -> anyhow::Result<()> {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tables and reference values for the engine's own math (src/sim/math.rs), computed once with
+"""Tables and reference values for the engine's own math (crates/qsweep-engine/src/math.rs), computed once with
 Python's decimal module at 420 significant digits (no third-party package).
 
     python3 scripts/math_reference.py tables      # Rust source of exp's 2^(j/32) table (hi, lo)

@@ -33,7 +33,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     };
     let r = store.gc(keep.as_ref(), a.dry_run)?;
     let version = qsweep_report::memo::ANALYSIS_VERSION;
-    let memos = qsweep_report::derived::gc(store.dir(), names.as_ref(), version, a.dry_run)?;
+    let memos = qsweep_report::memo::stats::gc(store.dir(), names.as_ref(), version, a.dry_run)?;
     for s in &r.skipped {
         eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");
     }

@@ -7,7 +7,7 @@ use qsweep_pipeline::cache::store::Store;
 use qsweep_pipeline::error::user_error;
 use qsweep_pipeline::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
 use qsweep_pipeline::spec::{load, Override};
-use qsweep_report::formats::{Format, Formats, DEFAULT_FORMATS};
+use qsweep_report::kinds::{Format, Formats, DEFAULT_FORMATS};
 use qsweep_report::{ReportOptions, ReportOutcome};
 use std::path::{Path, PathBuf};
 

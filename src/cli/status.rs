@@ -80,7 +80,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     if let (Some(plan), Some(store)) = (planned, &store) {
         let dir = qsweep_report::default_dir(&plan);
         let keys = store.keys()?;
-        let formats = qsweep_report::formats::Formats::default();
+        let formats = qsweep_report::kinds::Formats::default();
         let explained = qsweep_report::staleness(plan, store, &keys, &dir, formats)?;
         let folders = &explained.folders;
         let stale = folders.iter().filter(|(_, why)| why.is_some()).count();

@@ -55,13 +55,13 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     let mut ok = report.damaged.is_empty();
     // The statistics' memos: a damaged one loses nothing (the next report recomputes it), but it
     // is damage all the same, like a damaged segment.
-    let d = qsweep_report::derived::check(store.dir());
+    let d = qsweep_report::memo::stats::check(store.dir());
     for (p, why) in &d.damaged {
         println!("damaged statistics' memo: {} ({why}; the next report recomputes it)", p.display());
     }
     println!("statistics' memos: {} intact ({} entries), {} damaged", d.intact, d.entries, d.damaged.len());
     ok &= d.damaged.is_empty();
-    let parts = qsweep_report::trials::check(store.dir());
+    let parts = qsweep_report::memo::parts::check(store.dir());
     for p in &parts.damaged {
         println!("damaged trial part: {} (the next report encodes it again)", p.display());
     }
@@ -74,7 +74,7 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     ok &= parts.damaged.is_empty();
     let reports = a.reports.clone().unwrap_or_else(|| std::path::PathBuf::from("reports"));
     if reports.is_dir() {
-        let m = qsweep_report::memo::check_tree(&reports);
+        let m = qsweep_report::memo::folders::check_tree(&reports);
         for (p, why) in &m.damaged {
             println!("damaged memo: {} ({why})", p.display());
         }

@@ -205,6 +205,18 @@ fn forbidden(src: &str, from: &str, to: &str) -> Vec<String> {
 }
 
 #[test]
+fn the_report_derives_before_it_renders() {
+    let src = "crates/qsweep-report/src";
+    let wrong = [
+        forbidden(src, "derive", "render"),
+        forbidden(src, "derive", "stage"),
+        forbidden(src, "render", "stage"),
+    ]
+    .concat();
+    assert!(wrong.is_empty(), "derive < render < stage: {wrong:?}");
+}
+
+#[test]
 fn representations_never_import_the_learner() {
     let wrong = forbidden("crates/qsweep-engine/src", "repr", "learner");
     assert!(
@@ -289,7 +301,7 @@ fn the_import_scan_sees_known_imports() {
     let g = graph("crates/qsweep-pipeline/src");
     assert!(g["race"].contains("analysis"), "{:?}", g["race"]);
     let g = graph("crates/qsweep-report/src");
-    assert!(g["stage"].contains("folder"), "{:?}", g["stage"]);
+    assert!(g["stage"].contains("render::folder"), "{:?}", g["stage"]);
     let g = graph("crates/qsweep-engine/src");
     assert!(g["repr::fuzzy"].contains("repr::activation"), "{:?}", g["repr::fuzzy"]);
     assert!(g["repr"].contains("repr::crisp"), "re-exports count: {:?}", g["repr"]);

@@ -217,7 +217,7 @@ fn analysis_golden_outputs_change_only_with_analysis_version() {
         (got.0, got.1.as_str()),
         GOLDEN,
         "the report of a fixed input changed: if a definition or a file's layout changed on purpose, \
-         bump ANALYSIS_VERSION (src/report/memo.rs) so that no memo keeps the old files, and record \
+         bump ANALYSIS_VERSION (crates/qsweep-report/src/memo/mod.rs) so that no memo keeps the old files, and record \
          the new pair here"
     );
 }
@@ -428,7 +428,8 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
 
 #[test]
 fn memos_of_an_older_analysis_version_are_recomputed() {
-    use qsweep_report::memo::{Memo, ANALYSIS_VERSION};
+    use qsweep_report::memo::folders::Memo;
+    use qsweep_report::memo::ANALYSIS_VERSION;
     let sb = Sandbox::new();
     let p = sb.fixture("variants.yaml");
     let inc = sb.path("rep");

@@ -11,8 +11,9 @@ use qsweep_pipeline::cache::store::Store;
 use qsweep_pipeline::cache::{Key, TrialRecord};
 use qsweep_pipeline::plan::Plan;
 use qsweep_pipeline::spec::Reference;
-use qsweep_report::formats::{Format, Formats};
-use qsweep_report::{curves, figures, ReportOptions, ReportSummary};
+use qsweep_report::kinds::{Format, Formats};
+use qsweep_report::render::{curves, figures};
+use qsweep_report::{ReportOptions, ReportSummary};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 

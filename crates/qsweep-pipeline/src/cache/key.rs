@@ -195,7 +195,7 @@ mod tests {
             (ENGINE_VERSION, got.as_str()),
             SEMANTICS_FINGERPRINT,
             "the simulation's outcomes changed: if intended, bump ENGINE_VERSION and set \
-             SEMANTICS_FINGERPRINT to ({}, \"{got}\") in src/cache/key.rs",
+             SEMANTICS_FINGERPRINT to ({}, \"{got}\") in crates/qsweep-pipeline/src/cache/key.rs",
             ENGINE_VERSION + 1
         );
     }

@@ -1,0 +1,168 @@
+//! `index.html`: one page (inline CSS, no script, no network) with the report's identity (the
+//! pipeline, and for a variant its id, title, `set` overrides and a link back to the comparison),
+//! trial counts, Table III, each system's figures (linked from `figures/`, so every figure is
+//! stored once) and a cell table per experiment, plus links to the data files.
+
+use crate::derive::model::{ExpData, ReportData};
+use crate::derive::table::{cell_table, table3_parts, TABLE3_PARTS};
+use crate::kinds::{Format, Formats};
+use crate::render::curves::CURVE_RULE;
+use crate::render::table::html::escape_html as esc;
+use crate::render::table::{render, Html};
+use qsweep_pipeline::analysis::{BEST_RULE, CENSORING};
+
+/// The pages' stylesheet (`.aK`: the tables whose number columns follow the first K, see
+/// [`crate::render::table::html`]).
+pub(crate) const STYLE: &str = "\
+body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:2em auto;max-width:1200px;color:#1e1e1e;line-height:1.4;padding:0 1em}
+h1{margin-bottom:.2em}h2{margin-top:2em;border-bottom:1px solid #ccc}
+table{border-collapse:collapse;margin:1em 0;font-size:.9em}
+caption{caption-side:top;text-align:left;padding:.3em 0;color:#444}
+th,td{border-bottom:1px solid #ddd;padding:.25em .5em;text-align:left;white-space:nowrap}
+th{white-space:normal;vertical-align:bottom}
+th{background:#f3f3f3}td.r,th.r{text-align:right;font-variant-numeric:tabular-nums}
+tr.best td{background:#ffecec;font-weight:600}
+figure{margin:1em 0}figure svg{display:block;max-width:100%;height:auto;border:1px solid #eee}
+.meta{color:#555}nav a{margin-right:1em}code{background:#f3f3f3;padding:0 .2em}
+.scroll{overflow-x:auto}
+img{max-width:100%;height:auto;border:1px solid #eee}
+.a1 :is(td,th):nth-child(n+2),.a2 :is(td,th):nth-child(n+3),.a3 :is(td,th):nth-child(n+4),.a4 :is(td,th):nth-child(n+5){text-align:right;font-variant-numeric:tabular-nums}
+.caption{color:#444;max-width:100%}.fit td{white-space:normal}.fit td:nth-child(3){min-width:9em}
+";
+
+/// Which report a page belongs to, as its heading and first paragraph say: the pipeline, and for
+/// a variant's folder the variant's id, title and `set` overrides, with a link back to the
+/// comparison of all variants.
+pub(crate) fn identity(data: &ReportData) -> (String, Vec<String>) {
+    let plan = data.plan;
+    let mut notes = Vec::new();
+    if let Some(v) = plan.report_variant() {
+        let title = v.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
+        notes.push(format!("Variant {}{title} of pipeline {}.", v.id, plan.name));
+        if v.set.is_empty() {
+            notes.push("Its settings: the pipeline as written (no `set`).".into());
+        } else {
+            notes.push(format!("Its settings: the pipeline with {}.", v.set.join(", ")));
+        }
+    }
+    (plan.report_name(), notes)
+}
+
+/// The page of one report: tables inline, figures linked as `figures/<system>.<ext>` (the SVG
+/// when written, else the PNG; none without either).
+pub fn page(data: &ReportData, formats: Formats) -> String {
+    let plan = data.plan;
+    let (name, notes) = identity(data);
+    let mut h = String::new();
+    h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+    h.push_str(&format!("<title>qsweep report: {}</title>\n", esc(&name)));
+    h.push_str(&format!("<style>\n{STYLE}</style>\n</head>\n<body>\n"));
+    h.push_str(&format!("<h1>qsweep report: {}</h1>\n", esc(&name)));
+    if plan.report_variant().is_some() {
+        h.push_str(&format!(
+            "<p class=\"variant\">{} <a href=\"../index.html\">All variants compared</a></p>\n",
+            esc(&notes.join(" "))
+        ));
+    }
+    if let Some(d) = &plan.description {
+        h.push_str(&format!("<p>{}</p>\n", esc(d)));
+    }
+    let cells: usize = data.experiments.iter().map(|e| e.cells.len()).sum();
+    let missing = data.trials_planned - data.trials_cached;
+    h.push_str(&format!(
+        "<p class=\"meta\">Pipeline <code>{}</code>: {} experiments, {} cells, {} seeds per cell. \
+         Trials present: {} of {} planned{}.",
+        esc(&plan.source.display().to_string()),
+        data.experiments.len(),
+        cells,
+        plan.seeds.len(),
+        data.trials_cached,
+        data.trials_planned,
+        if missing > 0 {
+            format!(" ({missing} missing: their cells show what is present)")
+        } else {
+            String::new()
+        }
+    ));
+    if let Some(src) = &plan.reference_source {
+        h.push_str(&format!(" Reference values: {}.", esc(src)));
+    }
+    h.push_str("</p>\n");
+    // Only the files this report writes (`--formats`).
+    let mut links = Vec::new();
+    for (f, file, note) in [
+        (Format::Csv, "table3.csv", ""),
+        (Format::Md, "table3.md", ""),
+        (Format::Tex, "table3.tex", ""),
+        (Format::Cells, "cells.parquet", " (one row per cell)"),
+    ] {
+        if formats.has(f) {
+            links.push(format!("<a href=\"{file}\">{file}</a>{note}"));
+        }
+    }
+    if formats.has(Format::Trials) {
+        links.push(if plan.report_variant().is_some() {
+            "<a href=\"../trials.parquet\">../trials.parquet</a> (one row per trial of every variant, with a \
+             <code>variant</code> column; written by <code>qsweep report</code>, not committed)"
+                .to_string()
+        } else {
+            "<a href=\"trials.parquet\">trials.parquet</a> (one row per trial)".to_string()
+        });
+    }
+    if !links.is_empty() {
+        h.push_str(&format!("<p>Data: {}</p>\n", links.join(" · ")));
+    }
+    let systems = data.systems();
+    h.push_str("<nav><a href=\"#table3\">Table III</a>");
+    for s in &systems {
+        h.push_str(&format!("<a href=\"#{}\">{}</a>", s.name(), esc(s.title())));
+    }
+    h.push_str("</nav>\n");
+
+    h.push_str("<h2 id=\"table3\">Table III: best configurations</h2>\n<div class=\"scroll\">\n");
+    let parts = table3_parts(data);
+    h.push_str(&render(&parts[0], &Html));
+    for (t, (id, _)) in parts[1..].iter().zip(TABLE3_PARTS) {
+        h.push_str(&format!("</div>\n<div class=\"scroll\" id=\"{id}\">\n"));
+        h.push_str(&render(t, &Html));
+    }
+    h.push_str("</div>\n");
+
+    for s in systems {
+        h.push_str(&format!("<h2 id=\"{}\">{}</h2>\n", s.name(), esc(s.title())));
+        let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == s).collect();
+        if let Some(ext) = formats.figure_ext() {
+            let (w, ht) = crate::render::figures::figure_size(&exps);
+            h.push_str(&format!(
+                "<figure><img src=\"figures/{0}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
+                 <figcaption>Mean episodes to the learning goal per cell; \
+                 red outline: the best cell (Table III); hatched with *: some trials never reached the goal; \
+                 grey: no trials. {2}</figcaption></figure>\n",
+                s.name(),
+                esc(&format!(
+                    "{}: heatmaps of mean episodes per experiment and algorithm ({name})",
+                    s.title()
+                )),
+                esc(BEST_RULE),
+            ));
+            let (w, ht) = crate::render::curves::figure_size(exps.len());
+            h.push_str(&format!(
+                "<figure><img src=\"figures/{0}-curves.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
+                 <figcaption>Learning curves of the best cell of each experiment and \
+                 algorithm (the Table III rows): episode length against episode, log scale; dashed red line: the \
+                 learning goal. {2}</figcaption></figure>\n",
+                s.name(),
+                esc(&format!("{}: learning curves of the best cells ({name})", s.title())),
+                esc(CURVE_RULE)
+            ));
+        }
+        for e in data.experiments.iter().filter(|e| e.exp.system == s) {
+            let title = e.exp.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
+            h.push_str(&format!("<h3>Exp. {}{}</h3>\n<div class=\"scroll\">\n", esc(&e.exp.id), esc(&title)));
+            h.push_str(&render(&cell_table(e), &Html));
+            h.push_str("</div>\n");
+        }
+    }
+    h.push_str(&format!("<p class=\"meta\">{}</p>\n</body>\n</html>\n", esc(CENSORING)));
+    h
+}

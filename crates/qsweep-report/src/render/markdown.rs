@@ -1,0 +1,62 @@
+//! `README.md` of a report folder: what a repository web page shows of it (such pages render
+//! Markdown and SVG images, not HTML pages). The same identity as `index.html` (pipeline,
+//! variant, its `set` overrides), Table III, and each system's figures.
+
+use crate::derive::model::ReportData;
+use crate::kinds::{Format, Formats};
+use crate::render::html::identity;
+use crate::render::table::{render, Markdown, Table};
+use qsweep_pipeline::analysis::CENSORING;
+
+/// The Markdown page of one report; `t3` is its Table III in its parts
+/// ([`crate::render::table::table3_parts`]).
+pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
+    let (name, notes) = identity(data);
+    let mut m = format!("# qsweep report: {name}\n\n");
+    if data.plan.report_variant().is_some() {
+        m.push_str(&format!("{} [All variants compared](../README.md).\n\n", notes.join(" ")));
+    }
+    if let Some(d) = &data.plan.description {
+        m.push_str(&format!("{}\n\n", d.trim()));
+    }
+    // Only the files this report writes (`--formats`).
+    let links: Vec<String> =
+        [(Format::Csv, "table3.csv"), (Format::Tex, "table3.tex"), (Format::Cells, "cells.parquet")]
+            .into_iter()
+            .filter(|(f, _)| formats.has(*f))
+            .map(|(_, file)| format!("[{file}]({file})"))
+            .collect();
+    m.push_str(&format!("Trials present: {} of {} planned.", data.trials_cached, data.trials_planned));
+    if !links.is_empty() {
+        m.push_str(&format!(" Data: {}", links.join(", ")));
+    }
+    if formats.has(Format::Html) {
+        m.push_str(if links.is_empty() {
+            " `index.html` shows every cell."
+        } else {
+            "; `index.html` shows every cell."
+        });
+    } else if !links.is_empty() {
+        m.push('.');
+    }
+    m.push_str("\n\n");
+    let parts: Vec<String> = t3.iter().map(|t| render(t, &Markdown)).collect();
+    m.push_str(&parts.join("\n"));
+    if let Some(ext) = formats.figure_ext() {
+        for s in data.systems() {
+            m.push_str(&format!("\n## {}\n\n", s.title()));
+            m.push_str(&format!(
+                "![{0}: mean episodes per cell ({name})](figures/{1}.{ext})\n\n",
+                s.title(),
+                s.name()
+            ));
+            m.push_str(&format!(
+                "![{0}: learning curves of the best cells ({name})](figures/{1}-curves.{ext})\n",
+                s.title(),
+                s.name()
+            ));
+        }
+    }
+    m.push_str(&format!("\n{CENSORING}\n"));
+    m
+}

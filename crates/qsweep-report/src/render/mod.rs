@@ -1,0 +1,17 @@
+//! From derived numbers to files: tables in CSV, Markdown, LaTeX and HTML ([`table`]), Figures 5–7
+//! and learning curves as SVG or PNG ([`figures`], [`curves`]), the pages (`index.html`,
+//! `README.md`), the Parquet datasets, one report folder written atomically ([`folder`]) and the
+//! comparison's pages and figures ([`compare`]). Pure functions of what [`crate::derive`] computed:
+//! the same numbers give the same bytes.
+
+pub mod compare;
+pub mod curves;
+pub mod datasets;
+pub mod figures;
+pub mod folder;
+pub mod glyphs;
+pub mod html;
+pub mod markdown;
+pub mod svg;
+pub mod svg_grid;
+pub mod table;

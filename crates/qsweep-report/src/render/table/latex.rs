@@ -1,0 +1,130 @@
+//! LaTeX (booktabs): a `table` float with the caption on top and a `tabular`; Unicode symbols
+//! of the report (λ, θ, ẋ, ±, —, †, Δ) become math or TeX ligatures so pdflatex needs nothing
+//! beyond `\usepackage{booktabs}`.
+
+use crate::derive::table::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
+
+/// LaTeX exporter.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Latex;
+
+const SYMBOLS: Symbols = Symbols { dash: "---", pm: " $\\pm$ ", dagger: "$^\\dagger$", escape };
+
+fn math(c: char) -> Option<&'static str> {
+    Some(match c {
+        'α' => "\\alpha",
+        'γ' => "\\gamma",
+        'ε' => "\\varepsilon",
+        'θ' => "\\theta",
+        'λ' => "\\lambda",
+        'σ' => "\\sigma",
+        'Δ' => "\\Delta",
+        '±' => "\\pm",
+        '×' => "\\times",
+        '≥' => "\\geq",
+        '≤' => "\\leq",
+        '≈' => "\\approx",
+        '−' => "-",
+        '†' => "^\\dagger",
+        _ => return None,
+    })
+}
+
+/// Escape text for LaTeX's text mode.
+pub(crate) fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars().peekable();
+    while let Some(c) = chars.next() {
+        if chars.peek() == Some(&'\u{307}') {
+            chars.next();
+            let base = math(c).map_or_else(|| c.to_string(), str::to_string);
+            out.push_str(&format!("$\\dot{{{base}}}$"));
+            continue;
+        }
+        match c {
+            '\\' => out.push_str("\\textbackslash{}"),
+            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
+                out.push('\\');
+                out.push(c);
+            }
+            '~' => out.push_str("\\textasciitilde{}"),
+            '^' => out.push_str("\\textasciicircum{}"),
+            '|' => out.push_str("\\textbar{}"),
+            '<' => out.push_str("\\textless{}"),
+            '>' => out.push_str("\\textgreater{}"),
+            '—' => out.push_str("---"),
+            '–' => out.push_str("--"),
+            '\n' => out.push(' '),
+            _ => match math(c) {
+                Some(m) => out.push_str(&format!("${m}$")),
+                None => out.push(c),
+            },
+        }
+    }
+    out
+}
+
+impl TableWriter for Latex {
+    fn begin(&self, table: &Table, out: &mut String) {
+        let spec: String = table
+            .columns
+            .iter()
+            .map(|c| match c.align {
+                Align::Left => 'l',
+                Align::Right => 'r',
+            })
+            .collect();
+        out.push_str(&format!(
+            "% {}: written by qsweep; needs \\usepackage{{booktabs}}.\n\\begin{{table}}[htbp]\n\\centering\n\\small\n\\caption{{{}}}\n\\begin{{tabular}}{{{spec}}}\n\\toprule\n",
+            table.title,
+            escape(&table.caption)
+        ));
+    }
+
+    fn header(&self, columns: &[Column], out: &mut String) {
+        let titles: Vec<String> =
+            columns.iter().map(|c| c.latex.clone().unwrap_or_else(|| escape(&c.title))).collect();
+        out.push_str(&format!("{} \\\\\n\\midrule\n", titles.join(" & ")));
+    }
+
+    fn row(&self, _columns: &[Column], row: &Row, out: &mut String) {
+        let cells: Vec<String> = row.values.iter().map(|v| display(v, &SYMBOLS)).collect();
+        out.push_str(&format!("{} \\\\\n", cells.join(" & ")));
+    }
+
+    fn end(&self, _table: &Table, out: &mut String) {
+        out.push_str("\\bottomrule\n\\end{tabular}\n\\end{table}\n");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::derive::table::{render, tests::sample};
+
+    #[test]
+    fn golden() {
+        let expected = r#"% Table T: written by qsweep; needs \usepackage{booktabs}.
+\begin{table}[htbp]
+\centering
+\small
+\caption{Mean $\pm$ std of Q($\lambda$) runs; 50\% \& more.}
+\begin{tabular}{lrrlr}
+\toprule
+Algorithm & $\dot{x}$ & Performance & Config & $\Delta$ \\
+\midrule
+Q($\lambda$)-learning & 3 & 2.13 $\pm$ 1.00 & 5, --- & +0.50 \\
+a\textbar{}b, "c" & --- & 200.00 $\pm$ ---$^\dagger$ & --- & --- \\
+\bottomrule
+\end{tabular}
+\end{table}
+"#;
+        assert_eq!(render(&sample(), &Latex), expected);
+    }
+
+    #[test]
+    fn escapes_combining_dots_and_specials() {
+        assert_eq!(escape("θ\u{307} & x\u{307}"), "$\\dot{\\theta}$ \\& $\\dot{x}$");
+        assert_eq!(escape("x_dot 5% ~"), "x\\_dot 5\\% \\textasciitilde{}");
+    }
+}
