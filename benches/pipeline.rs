@@ -4,7 +4,7 @@
 //! Targets: planning, `status` and a no-op `run` each under 1 s on the full paper grid with all
 //! of its variants (8 readings of the paper, 79,560 distinct trials) and a warm cache; the report
 //! for that grid (every variant's report and the comparison) measured; planning + hashing +
-//! storing under 1% of trial compute on the quick pipeline, and so claiming each trial in the cache
+//! storing under 1% of trial compute on the quick pipeline, and so leasing each trial in the cache
 //! (what lets concurrent runs share it, `docs/sharing-a-cache.md`); the real report of `paper.yaml` from
 //! the committed cache (every variant, real trials): the no-op `run` (≤ 1 s, ≤ 1.3× the CPU of
 //! `status`, ≤ 120 MB) and the report recomputed with and without the statistics' memo; the paper
@@ -229,30 +229,30 @@ fn main() {
         "quick.yaml --jobs 1: {wall:.2} s wall, {trial_secs:.2} s in trials, overhead {overhead:.3} s = {:.2}% of trial compute (target < 1%)",
         100.0 * overhead / trial_secs
     );
-    claim_overhead(&Store::open(qdir.path()).unwrap().read_all().unwrap());
+    lease_overhead(&Store::open(qdir.path()).unwrap().read_all().unwrap());
 }
 
-/// What claiming costs per trial (make the claim, check the trial is not stored meanwhile,
+/// What leasing costs per trial (make the lease, check the trial is not stored meanwhile,
 /// release it once stored, as a run does), against the CPU time of `records`' trials.
-fn claim_overhead(records: &[TrialRecord]) {
+fn lease_overhead(records: &[TrialRecord]) {
     let trial_cpu: f64 = records.iter().map(|r| r.cpu_seconds.unwrap_or(r.seconds)).sum();
     let dir = tempfile::tempdir().unwrap();
     let store = Store::open(dir.path()).unwrap();
-    let claims = qsweep_pipeline::cache::claims::Claims::open(&store).unwrap();
+    let leases = qsweep_pipeline::cache::leases::Leases::open(&store).unwrap();
     let keys: Vec<_> = records.iter().map(|r| r.key).collect();
     let rounds = 20;
     let start = Instant::now();
     for _ in 0..rounds {
         for &k in &keys {
-            assert_eq!(claims.try_take(k).unwrap(), qsweep_pipeline::cache::claims::Take::Taken);
+            assert_eq!(leases.try_take(k).unwrap(), qsweep_pipeline::cache::leases::Take::Taken);
         }
-        claims.heartbeat();
-        claims.release(&keys);
+        leases.heartbeat();
+        leases.release(&keys);
     }
     let per_trial = start.elapsed().as_secs_f64() / (rounds * keys.len()) as f64;
     let per_trial_cpu = trial_cpu / keys.len() as f64;
     println!(
-        "claims: {:.1} µs per trial (claim, stored check, heartbeat, release) = {:.3}% of quick.yaml's mean trial CPU {:.1} ms (target ≤ 1%)",
+        "leases: {:.1} µs per trial (lease, stored check, heartbeat, release) = {:.3}% of quick.yaml's mean trial CPU {:.1} ms (target ≤ 1%)",
         per_trial * 1e6,
         100.0 * per_trial / per_trial_cpu,
         per_trial_cpu * 1e3

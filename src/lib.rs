@@ -3,11 +3,11 @@
 //! resolution".
 //!
 //! This crate is the command line ([`cli`]) and its stable machine-readable outputs
-//! ([`formats`]); the work is done by three library crates, each built only on those below it:
+//! ([`json`]); the work is done by three library crates, each built only on those below it:
 //! `qsweep-engine` (one trial), `qsweep-pipeline` (specs, plans, the cache, racing, execution,
 //! statistics) and `qsweep-report` (derived numbers, then tables, figures and pages).
 
 #![allow(clippy::disallowed_methods)]
 
 pub mod cli;
-pub mod formats;
+pub mod json;

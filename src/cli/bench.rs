@@ -73,10 +73,8 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
     }
     let results = bench::run_cases(&cases, &a.filter, a.steps, a.repeat, print_row);
     if a.json {
-        let v = crate::formats::BenchReport {
-            format_version: crate::formats::BenchReport::FORMAT_VERSION,
-            results,
-        };
+        let v =
+            crate::json::BenchReport { format_version: crate::json::BenchReport::FORMAT_VERSION, results };
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
     Ok(qsweep_pipeline::error::exit::OK)
@@ -122,8 +120,8 @@ fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
         results.push(r);
     }
     if a.json {
-        let v = crate::formats::PipelineBenchReport {
-            format_version: crate::formats::PipelineBenchReport::FORMAT_VERSION,
+        let v = crate::json::PipelineBenchReport {
+            format_version: crate::json::PipelineBenchReport::FORMAT_VERSION,
             pipeline: plan.name.clone(),
             basis,
             cells: cells.len(),

@@ -3,7 +3,7 @@
 
 use super::args;
 use super::simulate::env_params;
-use crate::formats::FeasibleReport as Report;
+use crate::json::FeasibleReport as Report;
 use clap::Args;
 use qsweep_engine::config::TrialConfig;
 use qsweep_engine::env::{BeamControl, EnvParams, StartKind, State, SystemKind};

@@ -49,7 +49,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         )
     };
     println!(
-        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files, {} dead runs' claims, {} statistics' memos and trial parts; {sizes}",
+        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files, {} dead runs' leases, {} statistics' memos and trial parts; {sizes}",
         if a.dry_run { "dry run: " } else { "" },
         r.segments_before,
         r.segments_after,
@@ -57,7 +57,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         r.rows_removed,
         r.duplicates,
         r.stale_temps,
-        r.stale_claims,
+        r.stale_leases,
         memos,
     );
     Ok(exit::OK)

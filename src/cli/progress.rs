@@ -47,7 +47,7 @@ struct Progress {
     total: usize,
     done: usize,
     failed: usize,
-    /// Trials another run on the cache has claimed and not stored yet, and those it stored.
+    /// Trials another run on the cache has leased and not stored yet, and those it stored.
     running_elsewhere: usize,
     stored_elsewhere: usize,
     start: Instant,

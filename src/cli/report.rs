@@ -38,8 +38,8 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
     let opts = a.report.options(&plan, a.force);
     let outcome = qsweep_report::write(plan, &store, &scan.stored, &opts)?;
     if a.json {
-        let v = crate::formats::ReportJson {
-            format_version: crate::formats::ReportJson::FORMAT_VERSION,
+        let v = crate::json::ReportJson {
+            format_version: crate::json::ReportJson::FORMAT_VERSION,
             pipeline,
             dir: opts.dir.display().to_string(),
             cells_recomputed: outcome.cells_recomputed,

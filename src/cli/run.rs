@@ -54,7 +54,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
         batch_trials: a.batch_trials.max(1),
         batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
-        claims: Some(claims(&store)?),
+        leases: Some(leases(&store)?),
     };
     let sel = qsweep_pipeline::run::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();
@@ -65,8 +65,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
     if a.json {
-        let v = crate::formats::RunSummary {
-            format_version: crate::formats::RunSummary::FORMAT_VERSION,
+        let v = crate::json::RunSummary {
+            format_version: crate::json::RunSummary::FORMAT_VERSION,
             pipeline: name,
             executed: report.executed,
             cached: done.cached,
@@ -124,22 +124,22 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     Ok(qsweep_pipeline::error::exit::OK)
 }
 
-/// This run's claims on the cache, released at once by Ctrl-C / SIGTERM.
-fn claims(
+/// This run's leases on the cache, released at once by Ctrl-C / SIGTERM.
+fn leases(
     store: &qsweep_pipeline::cache::Store,
-) -> anyhow::Result<std::sync::Arc<qsweep_pipeline::cache::claims::Claims>> {
-    let dir = store.dir().join(qsweep_pipeline::cache::claims::CLAIMS_DIR);
-    let claims = qsweep_pipeline::cache::claims::Claims::open(store)
+) -> anyhow::Result<std::sync::Arc<qsweep_pipeline::cache::leases::Leases>> {
+    let dir = store.dir().join(qsweep_pipeline::cache::leases::LEASES_DIR);
+    let leases = qsweep_pipeline::cache::leases::Leases::open(store)
         .map_err(|e| super::pipeline_args::unwritable(&dir, &e))?;
-    qsweep_pipeline::cache::claims::register(&claims);
-    Ok(claims)
+    qsweep_pipeline::cache::leases::register(&leases);
+    Ok(leases)
 }
 
 fn install_ctrlc() {
     // A second Ctrl-C exits at once; finished trials are already in renamed segments.
     let _ = ctrlc::set_handler(|| {
         // Other runs on the cache may take this run's unfinished trials now.
-        qsweep_pipeline::cache::claims::release_registered();
+        qsweep_pipeline::cache::leases::release_registered();
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(i32::from(qsweep_pipeline::error::exit::INTERRUPTED));
         }

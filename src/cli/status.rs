@@ -3,7 +3,7 @@
 //! [`qsweep_pipeline::status`]).
 
 use super::pipeline_args::PipelineArgs;
-use crate::formats::{StatusRace, StatusReport};
+use crate::json::{StatusRace, StatusReport};
 use clap::Args;
 use qsweep_pipeline::status::{reason_counts, MissingCell};
 

@@ -3,7 +3,7 @@
 
 use super::trial_args::TrialArgs;
 use super::trial_config::config;
-use crate::formats::TrialReport;
+use crate::json::TrialReport;
 use qsweep_engine::run_trial;
 
 /// Run `qsweep trial`.

@@ -231,7 +231,7 @@ fn a_full_disk_is_a_clear_error_and_keeps_what_was_stored() {
             "--no-report",
             "--set",
             "seeds=60",
-            // Small batches: each trial's claim holds a page of the tmpfs until its batch is stored.
+            // Small batches: each trial's lease holds a page of the tmpfs until its batch is stored.
             "--batch-trials",
             "10",
         ])

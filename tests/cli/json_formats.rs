@@ -3,7 +3,7 @@
 //! struct for it.
 
 use crate::helpers::{qsweep, stdout, Sandbox};
-use qsweep::formats::{BenchReport, RunSummary, StatusReport, TrialReport};
+use qsweep::json::{BenchReport, RunSummary, StatusReport, TrialReport};
 use serde_json::Value;
 
 /// The object's keys, sorted.

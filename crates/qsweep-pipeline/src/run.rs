@@ -135,7 +135,7 @@ pub fn run_trials_replayed(
     };
     if !plan.is_staged() {
         let (unique, jobs) = select(&plan, scan, sel);
-        if let Some(c) = &opts.claims {
+        if let Some(c) = &opts.leases {
             c.reset_view(scan, sel.force);
         }
         let exec = execute(&jobs, opts, flush, reporter)?;
@@ -178,7 +178,7 @@ pub fn run_trials_replayed(
             };
             return Ok((done, after));
         }
-        if let Some(c) = &opts.claims {
+        if let Some(c) = &opts.leases {
             c.reset_view(scan, sel.force);
         }
         let exec = execute(&jobs, opts, flush, reporter)?;

@@ -44,7 +44,7 @@ pub struct Status {
     pub heats: Option<Vec<HeatRace>>,
     /// Cache segments that could not be read (their trials count as missing).
     pub damaged: Vec<Damaged>,
-    /// Of the missing trials, how many another run is computing now (a live claim in the cache).
+    /// Of the missing trials, how many another run is computing now (a live lease in the cache).
     pub running_elsewhere: usize,
     /// Why missing cells are missing: only when asked for and some trial is missing.
     pub explanation: Option<Vec<MissingCell>>,
@@ -126,7 +126,7 @@ pub fn status(plan: Plan, store: Option<&Store>, explain: bool) -> anyhow::Resul
         None => Some(missing_cells(&plan, &[], cached)),
     };
     let running_elsewhere = match store {
-        Some(store) if total.missing() > 0 => crate::cache::claims::running_elsewhere(
+        Some(store) if total.missing() > 0 => crate::cache::leases::running_elsewhere(
             store,
             plan.trials().map(|(_, _, t)| &t.key).filter(|k| !cached.contains(k)),
         ),

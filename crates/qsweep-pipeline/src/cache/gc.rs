@@ -35,9 +35,9 @@ pub struct GcReport {
     pub skipped: Vec<String>,
     /// Temp files left by killed writers (older than [`STALE_TEMP`]), removed.
     pub stale_temps: usize,
-    /// Claims of dead holders (and their stray temp files) in `_claims/`, removed; live runs'
-    /// claims are left alone ([`super::claims::sweep`]).
-    pub stale_claims: usize,
+    /// Leases of dead holders (and their stray temp files) in `_leases/`, removed; live runs'
+    /// leases are left alone ([`super::leases::sweep`]).
+    pub stale_leases: usize,
 }
 
 /// A temp file this old cannot belong to a live writer (writing a segment takes milliseconds).
@@ -79,7 +79,7 @@ impl Store {
                 }
             }
         }
-        report.stale_claims = super::claims::sweep(self, dry_run)?.removed;
+        report.stale_leases = super::leases::sweep(self, dry_run)?.removed;
         report.rows_kept = kept.len();
         let unreadable = report.segments_before - read.len();
         report.segments_after = kept.len().div_ceil(ROWS_PER_SEGMENT) + unreadable;

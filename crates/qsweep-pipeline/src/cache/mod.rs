@@ -1,8 +1,8 @@
 //! The content-addressed trial cache: keys, records and the append-only Parquet store.
 
-pub mod claims;
 pub mod gc;
 pub mod key;
+pub mod leases;
 pub mod record;
 pub mod rows;
 pub mod store;

@@ -28,7 +28,7 @@ pub enum Event {
         /// Trials in the batch.
         trials: usize,
     },
-    /// Trials another run sharing the cache has claimed: set aside, then waited for.
+    /// Trials another run sharing the cache has leased: set aside, then waited for.
     Elsewhere {
         /// Set aside and not stored yet.
         running: usize,

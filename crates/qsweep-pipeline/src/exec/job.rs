@@ -1,4 +1,4 @@
-//! One trial to run ([`Job`]): what the executor and its claim-aware scheduler ([`super::claimed`])
+//! One trial to run ([`Job`]): what the executor and its lease-aware scheduler ([`super::leased`])
 //! both take, in a module of its own so that neither imports the other back.
 
 use crate::cache::Key;

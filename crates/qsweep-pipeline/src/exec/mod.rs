@@ -3,24 +3,24 @@
 //! bounded by count and by time (so an interrupted run keeps them), and reports [`Event`]s to the
 //! caller's [`Reporter`].
 //!
-//! With claims ([`ExecOptions::claims`]) a run that shares its cache with others claims each trial
+//! With leases ([`ExecOptions::leases`]) a run that shares its cache with others leases each trial
 //! before running it, sets aside those another run is computing, and waits for them at the end
-//! ([`claimed`]).
+//! ([`leased`]).
 //!
 //! Results never depend on the number of threads: each trial is a pure function of its config and
 //! seed, and batches are written in completion order, which only affects segment layout.
 
-pub mod claimed;
 mod events;
 mod job;
+pub mod leased;
 pub mod shard;
 
 pub use events::{Event, Reporter};
 
-use crate::cache::claims::{lease::HEARTBEAT, Claims};
+use crate::cache::leases::{lease::HEARTBEAT, Leases};
 use crate::cache::TrialRecord;
-use claimed::{Pick, Scheduler, POLL};
 pub use job::{jobs, Job};
+use leased::{Pick, Scheduler, POLL};
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{run_trial, TrialConfig};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -39,9 +39,9 @@ pub struct ExecOptions {
     pub batch_trials: usize,
     /// ...or after this long since the last flush, whichever comes first.
     pub batch_interval: Duration,
-    /// Claim each trial in the cache before running it, so that concurrent runs on the cache
+    /// Lease each trial in the cache before running it, so that concurrent runs on the cache
     /// never compute one twice (`None`: run every job, as a library user without a shared cache).
-    pub claims: Option<Arc<Claims>>,
+    pub leases: Option<Arc<Leases>>,
 }
 
 impl Default for ExecOptions {
@@ -50,7 +50,7 @@ impl Default for ExecOptions {
             jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
             batch_trials: 500,
             batch_interval: Duration::from_secs(10),
-            claims: None,
+            leases: None,
         }
     }
 }
@@ -97,8 +97,8 @@ pub fn estimated_cost(c: &TrialConfig) -> f64 {
 }
 
 /// Run `jobs` and hand finished records to `sink` in batches; stops early (after flushing) when
-/// [`INTERRUPTED`] is set. With claims, a job another run holds is left to it and waited for, and
-/// each claim is released once its trial is handed to the sink. A sink error stops the run and is
+/// [`INTERRUPTED`] is set. With leases, a job another run holds is left to it and waited for, and
+/// each lease is released once its trial is handed to the sink. A sink error stops the run and is
 /// returned; records already handed to the sink are kept. Every step is reported to `reporter`.
 pub fn execute(
     jobs: &[Job<'_>],
@@ -111,8 +111,8 @@ pub fn execute(
     order.sort_by(|&a, &b| estimated_cost(jobs[b].config).total_cmp(&estimated_cost(jobs[a].config)));
     let threads = opts.jobs.max(1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let claims = opts.claims.as_deref();
-    let sched = Scheduler::new(jobs, order, claims);
+    let leases = opts.leases.as_deref();
+    let sched = Scheduler::new(jobs, order, leases);
     let stop = AtomicBool::new(false);
     let (tx, rx) = mpsc::channel::<TrialRecord>();
     let mut report = ExecReport::default();
@@ -166,7 +166,7 @@ pub fn execute(
          -> anyhow::Result<()> {
             if !batch.is_empty() {
                 sink(batch)?;
-                if let Some(c) = claims {
+                if let Some(c) = leases {
                     c.release(&batch.iter().map(|r| r.key).collect::<Vec<_>>());
                 }
                 reporter.event(&Event::Flushed { trials: batch.len() });
@@ -187,7 +187,7 @@ pub fn execute(
                     break flush(&mut batch, &mut report, &mut *reporter)
                 }
             }
-            if let Some(c) = claims {
+            if let Some(c) = leases {
                 if last_beat.elapsed() >= HEARTBEAT {
                     c.heartbeat();
                     last_beat = Instant::now();
@@ -204,11 +204,11 @@ pub fn execute(
             // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
             // SIGKILL soon after) store what is finished at once rather than at the next batch.
             // So in the tail of a run that shares the cache: other runs may be waiting for
-            // exactly these trials, which their claims keep from them until they are stored.
+            // exactly these trials, which their leases keep from them until they are stored.
             if batch.len() >= opts.batch_trials
                 || last_flush.elapsed() >= opts.batch_interval
                 || INTERRUPTED.load(Ordering::Relaxed)
-                || (!batch.is_empty() && sched.exhausted() && claims.is_some_and(|c| c.others_present()))
+                || (!batch.is_empty() && sched.exhausted() && leases.is_some_and(|c| c.others_present()))
             {
                 if let Err(e) = flush(&mut batch, &mut report, &mut *reporter) {
                     break Err(e);
@@ -223,8 +223,8 @@ pub fn execute(
         }
         result
     });
-    // Nothing is held between executions: claims of trials a failing sink did not store go now.
-    if let Some(c) = claims {
+    // Nothing is held between executions: leases of trials a failing sink did not store go now.
+    if let Some(c) = leases {
         c.release_all();
     }
     report.elsewhere = sched.stored_elsewhere.load(Ordering::Relaxed);

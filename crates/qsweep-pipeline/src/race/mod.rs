@@ -137,11 +137,6 @@ impl Replayed {
     pub fn plan(&self) -> &Plan {
         &self.0
     }
-
-    /// The replayed plan, given up.
-    pub fn into_plan(self) -> Plan {
-        self.0
-    }
 }
 
 impl Raced {

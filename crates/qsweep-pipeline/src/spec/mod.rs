@@ -24,8 +24,8 @@
 //! fresh: { first_seed: 1000, seeds: 20 }  # optional: best cells re-estimated on fresh seeds
 //! ```
 
-// Files from the bottom up: each imports only the ones above it in this list (a test checks
-// that no file imports one that imports it back).
+// No file imports one that imports it back (tests/cli/layering.rs checks it); rustfmt keeps
+// the list in alphabetical order.
 mod check;
 mod experiment;
 pub mod explore;

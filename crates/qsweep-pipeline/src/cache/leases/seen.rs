@@ -1,4 +1,4 @@
-//! What a run knows is stored, kept current cheaply: a claim just taken must not run a trial that
+//! What a run knows is stored, kept current cheaply: a lease just taken must not run a trial that
 //! another run stored after this run scanned the cache. Segments are immutable and only ever
 //! added (or compacted by `gc`), so only the segments not seen before are read, and only when the
 //! cache directory's modification time says something changed.

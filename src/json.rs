@@ -24,7 +24,7 @@ pub struct RunSummary {
     pub executed: usize,
     /// Distinct trials of the plan (or shard) found in the cache and not run.
     pub cached: usize,
-    /// Distinct trials another run on the same cache computed while this one ran (claimed by it,
+    /// Distinct trials another run on the same cache computed while this one ran (leased by it,
     /// waited for, not run here); an addition, not a new version.
     #[serde(default)]
     pub elsewhere: usize,
@@ -85,7 +85,7 @@ pub struct StatusReport {
     pub cached: usize,
     /// Of those, not in the cache.
     pub missing: usize,
-    /// Of the missing, being computed now by another run on the cache (a live claim); an
+    /// Of the missing, being computed now by another run on the cache (a live lease); an
     /// addition, not a new version.
     #[serde(default)]
     pub running_elsewhere: usize,

@@ -1,16 +1,16 @@
-//! Claims: how several runs sharing one cache avoid computing a trial twice, and how a run that
+//! Leases: how several runs sharing one cache avoid computing a trial twice, and how a run that
 //! dies strands nothing.
 //!
-//! Before a run computes a trial it claims the trial's key: a small file `_claims/<key>` in the
+//! Before a run computes a trial it leases the trial's key: a small file `_leases/<key>` in the
 //! cache directory, made atomically (written and locked under a temporary name, then hard-linked
-//! into place, which fails if the key is claimed already) and holding the holder's host and pid.
-//! Another run that meets the claim skips the trial, does its other work, and at the end waits
-//! for the key to be stored (see [`crate::exec`]). The holder removes its claims once their trials
+//! into place, which fails if the key is leased already) and holding the holder's host and pid.
+//! Another run that meets the lease skips the trial, does its other work, and at the end waits
+//! for the key to be stored (see [`crate::exec`]). The holder removes its leases once their trials
 //! are stored, and at once on Ctrl-C / SIGTERM ([`release_registered`]).
 //!
-//! A claim is live while its holder keeps an advisory lock on it ([`lock`]: dropped by the
+//! A lease is live while its holder keeps an advisory lock on it ([`lock`]: dropped by the
 //! kernel when the process dies, so on one machine a dead holder is seen at once) and refreshes it
-//! within its lease ([`lease`]: for machines that do not share locks). A dead holder's claim is
+//! within its lease ([`lease`]: for machines that do not share locks). A dead holder's lease is
 //! removed and taken by whoever meets it next. Older builds ignore the folder, and the segments
 //! stay the only truth: a trial stored twice (only possible where neither layer can see a live
 //! holder) is identical and dropped on read. `docs/sharing-a-cache.md` is the user's account.
@@ -32,15 +32,15 @@ use std::time::SystemTime;
 
 pub use seen::Seen;
 
-/// The folder inside the cache that holds the claims. Its leading `_` (like `_quarantine`'s)
+/// The folder inside the cache that holds the leases. Its leading `_` (like `_quarantine`'s)
 /// makes readers that take the cache folder as a Parquet dataset (pyarrow, pandas, polars) skip
 /// it, and older builds only ever list `seg-*.parquet`.
-pub const CLAIMS_DIR: &str = "_claims";
+pub const LEASES_DIR: &str = "_leases";
 
-/// What claiming a key found.
+/// What leasing a key found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Take {
-    /// This run now holds the claim: compute the trial.
+    /// This run now holds the lease: compute the trial.
     Taken,
     /// A live holder is computing it.
     Busy,
@@ -48,16 +48,16 @@ pub enum Take {
     Stored,
 }
 
-/// What a claim file found in the cache says about its holder.
+/// What a lease file found in the cache says about its holder.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Liveness {
     /// Its holder is alive (or may be: its lease has not run out).
     Live,
-    /// Its holder is gone: the claim is debris, free to remove or take over.
+    /// Its holder is gone: the lease is debris, free to remove or take over.
     Dead,
 }
 
-/// Judge a claim from what its file shows: the lock, its holder, and whether its lease ran out.
+/// Judge a lease from what its file shows: the lock, its holder, and whether its lease ran out.
 /// A lock someone holds means a live holder unless the lease ran out (a lost machine whose lock
 /// the file server has not yet dropped). A lock this process could take means the holder is dead
 /// if it was on this machine (the kernel dropped its lock); on another machine, whose lock may
@@ -77,7 +77,7 @@ pub fn judge(lock: Lock, holder: Option<&Holder>, me: &Holder, stale: bool) -> L
     }
 }
 
-/// One claim file as found: its handle (kept open while judged, so its lock means something) and
+/// One lease file as found: its handle (kept open while judged, so its lock means something) and
 /// how live it is.
 fn inspect(path: &Path, me: &Holder) -> std::io::Result<(File, Liveness)> {
     let mut file = File::open(path)?;
@@ -90,19 +90,19 @@ fn inspect(path: &Path, me: &Holder) -> std::io::Result<(File, Liveness)> {
     Ok((file, judge(lock, Holder::parse(&text).as_ref(), me, stale)))
 }
 
-/// This run's claims in one cache.
+/// This run's leases in one cache.
 #[derive(Debug)]
-pub struct Claims {
+pub struct Leases {
     dir: PathBuf,
     me: Holder,
     held: Mutex<HashMap<Key, File>>,
     seen: Mutex<Seen>,
 }
 
-impl Claims {
-    /// The claims of a run on `store` (creating the claims folder).
+impl Leases {
+    /// The leases of a run on `store` (creating the leases folder).
     pub fn open(store: &Store) -> std::io::Result<Arc<Self>> {
-        let dir = store.dir().join(CLAIMS_DIR);
+        let dir = store.dir().join(LEASES_DIR);
         std::fs::create_dir_all(&dir)?;
         Ok(Arc::new(Self {
             dir,
@@ -123,15 +123,15 @@ impl Claims {
         self.dir.join(key.hex())
     }
 
-    /// Claim `key`: [`Take::Taken`] when this run now holds it, [`Take::Busy`] when a live holder
-    /// does, [`Take::Stored`] when it turns out to be stored already. A dead holder's claim is
+    /// Lease `key`: [`Take::Taken`] when this run now holds it, [`Take::Busy`] when a live holder
+    /// does, [`Take::Stored`] when it turns out to be stored already. A dead holder's lease is
     /// taken over.
     pub fn try_take(&self, key: Key) -> std::io::Result<Take> {
         let path = self.path(&key);
         for _ in 0..4 {
             match self.create(&path) {
                 Ok(file) => {
-                    // Whoever stored the key removed its claim after storing it: look again.
+                    // Whoever stored the key removed its lease after storing it: look again.
                     if lock_ok(&self.seen).contains(&key) {
                         remove_own(&file, &path);
                         return Ok(Take::Stored);
@@ -155,14 +155,14 @@ impl Claims {
             if liveness == Liveness::Live {
                 return Ok(Take::Busy);
             }
-            // Take over: remove the dead claim (only if it is still the file judged) and make ours.
+            // Take over: remove the dead lease (only if it is still the file judged) and make ours.
             remove_own(&file, &path);
         }
         // Others keep making and removing it: treat it as busy and look again later.
         Ok(Take::Busy)
     }
 
-    /// Make the claim file at `path` with this process as holder, locked; fails with
+    /// Make the lease file at `path` with this process as holder, locked; fails with
     /// `AlreadyExists` if there is one.
     fn create(&self, path: &Path) -> std::io::Result<File> {
         let nanos = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
@@ -179,7 +179,7 @@ impl Claims {
         match made {
             Err(e) if e.kind() == ErrorKind::Unsupported || e.raw_os_error() == Some(libc::EPERM) => {
                 // No hard links on this file system: create the file in place (the holder's line
-                // follows a moment later; an empty claim counts as live within its lease).
+                // follows a moment later; an empty lease counts as live within its lease).
                 let mut file = File::options().read(true).write(true).create_new(true).open(path)?;
                 try_lock(&file)?;
                 file.write_all(self.me.to_text().as_bytes())?;
@@ -189,7 +189,7 @@ impl Claims {
         }
     }
 
-    /// Release the claims of `keys` (their trials are stored).
+    /// Release the leases of `keys` (their trials are stored).
     pub fn release(&self, keys: &[Key]) {
         let mut held = lock_ok(&self.held);
         for k in keys {
@@ -199,7 +199,7 @@ impl Claims {
         }
     }
 
-    /// Release every claim this run holds (the run ends, or was interrupted).
+    /// Release every lease this run holds (the run ends, or was interrupted).
     pub fn release_all(&self) {
         let mut held = lock_ok(&self.held);
         for (k, file) in held.drain() {
@@ -207,7 +207,7 @@ impl Claims {
         }
     }
 
-    /// Renew the lease of every claim held (call every [`lease::HEARTBEAT`]).
+    /// Renew the lease of every lease held (call every [`lease::HEARTBEAT`]).
     pub fn heartbeat(&self) {
         let now = SystemTime::now();
         for file in lock_ok(&self.held).values() {
@@ -215,7 +215,7 @@ impl Claims {
         }
     }
 
-    /// Whether another run holds claims in this cache now (live or not): someone may be waiting
+    /// Whether another run holds leases in this cache now (live or not): someone may be waiting
     /// for this run's trials.
     pub fn others_present(&self) -> bool {
         let Ok(entries) = std::fs::read_dir(&self.dir) else { return false };
@@ -226,13 +226,13 @@ impl Claims {
         theirs > self.held()
     }
 
-    /// How many claims this run holds.
+    /// How many leases this run holds.
     pub fn held(&self) -> usize {
         lock_ok(&self.held).len()
     }
 }
 
-impl Drop for Claims {
+impl Drop for Leases {
     fn drop(&mut self) {
         self.release_all();
         // The cache looks as before once no run is on it; a run that just made the folder and
@@ -241,7 +241,7 @@ impl Drop for Claims {
     }
 }
 
-/// Remove the claim at `path` if `file` is still it (a claim taken over meanwhile is not ours).
+/// Remove the lease at `path` if `file` is still it (a lease taken over meanwhile is not ours).
 fn remove_own(file: &File, path: &Path) {
     if is_at(file, path) {
         let _ = std::fs::remove_file(path);
@@ -253,53 +253,53 @@ fn lock_ok<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
-static REGISTERED: Mutex<Option<Weak<Claims>>> = Mutex::new(None);
+static REGISTERED: Mutex<Option<Weak<Leases>>> = Mutex::new(None);
 
-/// Let [`release_registered`] (the Ctrl-C / SIGTERM handler) release `claims`.
-pub fn register(claims: &Arc<Claims>) {
-    *lock_ok(&REGISTERED) = Some(Arc::downgrade(claims));
+/// Let [`release_registered`] (the Ctrl-C / SIGTERM handler) release `leases`.
+pub fn register(leases: &Arc<Leases>) {
+    *lock_ok(&REGISTERED) = Some(Arc::downgrade(leases));
 }
 
-/// Release the registered run's claims now: an interrupted run gives its trials to the other
+/// Release the registered run's leases now: an interrupted run gives its trials to the other
 /// runs at once instead of making them wait for a lease (or for its exit).
 pub fn release_registered() {
-    let claims = lock_ok(&REGISTERED).as_ref().and_then(Weak::upgrade);
-    if let Some(c) = claims {
+    let leases = lock_ok(&REGISTERED).as_ref().and_then(Weak::upgrade);
+    if let Some(c) = leases {
         c.release_all();
     }
 }
 
-/// Of `keys`, how many another run is computing now (a live claim): `status`'s
-/// `running_elsewhere`. Reads the claims folder once.
+/// Of `keys`, how many another run is computing now (a live lease): `status`'s
+/// `running_elsewhere`. Reads the leases folder once.
 pub fn running_elsewhere<'a>(store: &Store, keys: impl IntoIterator<Item = &'a Key>) -> usize {
-    let dir = store.dir().join(CLAIMS_DIR);
+    let dir = store.dir().join(LEASES_DIR);
     let Ok(entries) = std::fs::read_dir(&dir) else { return 0 };
-    let claimed: std::collections::HashSet<Key> =
+    let leased: std::collections::HashSet<Key> =
         entries.flatten().filter_map(|e| Key::parse_hex(&e.file_name().to_string_lossy())).collect();
-    if claimed.is_empty() {
+    if leased.is_empty() {
         return 0;
     }
     let me = Holder::me();
-    let wanted: std::collections::HashSet<&Key> = keys.into_iter().filter(|k| claimed.contains(k)).collect();
+    let wanted: std::collections::HashSet<&Key> = keys.into_iter().filter(|k| leased.contains(k)).collect();
     wanted
         .into_iter()
         .filter(|k| inspect(&dir.join(k.hex()), &me).is_ok_and(|(_, liveness)| liveness == Liveness::Live))
         .count()
 }
 
-/// What [`sweep`] found in the claims folder.
+/// What [`sweep`] found in the leases folder.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct Swept {
-    /// Claims of dead holders (and stray temporary files), removed.
+    /// Leases of dead holders (and stray temporary files), removed.
     pub removed: usize,
-    /// Claims of live holders, left alone.
+    /// Leases of live holders, left alone.
     pub live: usize,
 }
 
-/// Remove the claims folder's debris: claims whose holder is dead, and temporary files left by
-/// a holder killed while making a claim. With `dry_run`, only count them.
+/// Remove the leases folder's debris: leases whose holder is dead, and temporary files left by
+/// a holder killed while making a lease. With `dry_run`, only count them.
 pub fn sweep(store: &Store, dry_run: bool) -> std::io::Result<Swept> {
-    let dir = store.dir().join(CLAIMS_DIR);
+    let dir = store.dir().join(LEASES_DIR);
     let mut out = Swept::default();
     let entries = match std::fs::read_dir(&dir) {
         Ok(e) => e,

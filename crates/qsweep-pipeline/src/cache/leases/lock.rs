@@ -1,4 +1,4 @@
-//! The first layer of a claim's liveness: an advisory `flock` the holder keeps on its claim file.
+//! The first layer of a lease's liveness: an advisory `flock` the holder keeps on its lease file.
 //! The kernel drops it when the holder dies however it dies (SIGKILL included), so on one machine
 //! a dead holder is seen at once. Linux NFS clients map `flock` to the server's byte-range locks
 //! (NFS v4, and v3 with lockd), so there it covers several machines too; on a `nolock` mount the
@@ -7,7 +7,7 @@
 use std::fs::File;
 use std::path::Path;
 
-/// What trying to lock a claim file found.
+/// What trying to lock a lease file found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Lock {
     /// This file handle now holds the lock: no live holder on a machine that shares our locks.
@@ -43,7 +43,7 @@ pub fn try_lock(file: &File) -> std::io::Result<Lock> {
 }
 
 /// Whether `file` is still the file at `path` (not unlinked or replaced since it was opened):
-/// a claim released or taken over meanwhile must not be judged, or removed, by its old handle.
+/// a lease released or taken over meanwhile must not be judged, or removed, by its old handle.
 pub fn is_at(file: &File, path: &Path) -> bool {
     #[cfg(unix)]
     {
@@ -79,6 +79,6 @@ mod tests {
         std::fs::remove_file(&path).unwrap();
         assert!(!is_at(&b, &path));
         std::fs::write(&path, "y").unwrap();
-        assert!(!is_at(&b, &path), "a new file at the path is another claim");
+        assert!(!is_at(&b, &path), "a new file at the path is another lease");
     }
 }

@@ -1,18 +1,18 @@
-//! The second layer of a claim's liveness: who holds it, written in the claim file, and a lease
+//! The second layer of a lease's liveness: who holds it, written in the lease file, and a lease
 //! renewed by a heartbeat on the file's modification time. It covers what the first layer
 //! ([`super::lock`]) cannot see: a holder on another machine whose lock the file system does not
 //! share (NFS mounted `nolock`), or whose lock the server keeps after the machine was lost.
 
 use std::time::{Duration, SystemTime};
 
-/// A claim whose file was not refreshed for this long has lost its holder (died, machine lost).
+/// A lease whose file was not refreshed for this long has lost its holder (died, machine lost).
 pub const LEASE: Duration = Duration::from_secs(30);
 
-/// How often a live holder refreshes its claims; a third of [`LEASE`], so two missed beats
-/// (a long pause, a slow file server) do not yet lose a live holder's claims.
+/// How often a live holder refreshes its leases; a third of [`LEASE`], so two missed beats
+/// (a long pause, a slow file server) do not yet lose a live holder's leases.
 pub const HEARTBEAT: Duration = Duration::from_secs(10);
 
-/// The process holding a claim: its machine and process id.
+/// The process holding a lease: its machine and process id.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Holder {
     /// The machine's host name.
@@ -27,12 +27,12 @@ impl Holder {
         Self { host: hostname(), pid: std::process::id() }
     }
 
-    /// The claim file's text: `host pid`, one line.
+    /// The lease file's text: `host pid`, one line.
     pub fn to_text(&self) -> String {
         format!("{} {}\n", self.host, self.pid)
     }
 
-    /// Parse a claim file's text; `None` for an empty or garbled file (a holder that died while
+    /// Parse a lease file's text; `None` for an empty or garbled file (a holder that died while
     /// writing it, or a file of some other program).
     pub fn parse(text: &str) -> Option<Self> {
         let mut words = text.split_whitespace();
@@ -42,7 +42,7 @@ impl Holder {
     }
 }
 
-/// This machine's host name (`unknown` when it cannot be read: then every claim looks remote
+/// This machine's host name (`unknown` when it cannot be read: then every lease looks remote
 /// and only the lease decides, which is slower but still safe).
 pub fn hostname() -> String {
     #[cfg(unix)]
@@ -61,7 +61,7 @@ pub fn hostname() -> String {
     "unknown".into()
 }
 
-/// Whether a claim last refreshed at `modified` has outlived its lease at `now`. A time in the
+/// Whether a lease last refreshed at `modified` has outlived its lease at `now`. A time in the
 /// future (clocks of two machines apart) is fresh: the lease then errs towards waiting.
 pub fn is_stale(modified: SystemTime, now: SystemTime, lease: Duration) -> bool {
     now.duration_since(modified).is_ok_and(|age| age > lease)

@@ -1,4 +1,4 @@
-//! Claims between runs, played by several [`Claims`] in one process: each holds its own open
+//! Leases between runs, played by several [`Leases`] in one process: each holds its own open
 //! files, so their locks exclude each other as two processes' do.
 
 use super::lease::{Holder, LEASE};
@@ -21,13 +21,13 @@ fn store() -> (tempfile::TempDir, Store) {
     (dir, store)
 }
 
-fn claim_file(store: &Store, k: &Key) -> PathBuf {
-    store.dir().join(CLAIMS_DIR).join(k.hex())
+fn lease_file(store: &Store, k: &Key) -> PathBuf {
+    store.dir().join(LEASES_DIR).join(k.hex())
 }
 
-/// A claim file as a holder that is not running would have left it.
-fn fake_claim(store: &Store, k: &Key, holder: &Holder, age: Duration) -> PathBuf {
-    let path = claim_file(store, k);
+/// A lease file as a holder that is not running would have left it.
+fn fake_lease(store: &Store, k: &Key, holder: &Holder, age: Duration) -> PathBuf {
+    let path = lease_file(store, k);
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
     std::fs::write(&path, holder.to_text()).unwrap();
     let f = File::options().write(true).open(&path).unwrap();
@@ -36,53 +36,53 @@ fn fake_claim(store: &Store, k: &Key, holder: &Holder, age: Duration) -> PathBuf
 }
 
 #[test]
-fn a_live_claim_is_busy_for_others_until_released() {
+fn a_live_lease_is_busy_for_others_until_released() {
     let (_d, store) = store();
-    let a = Claims::open(&store).unwrap();
-    let b = Claims::open(&store).unwrap();
+    let a = Leases::open(&store).unwrap();
+    let b = Leases::open(&store).unwrap();
     assert_eq!(a.try_take(key(1)).unwrap(), Take::Taken);
-    assert!(claim_file(&store, &key(1)).exists());
+    assert!(lease_file(&store, &key(1)).exists());
     assert_eq!(b.try_take(key(1)).unwrap(), Take::Busy);
     assert_eq!(running_elsewhere(&store, &[key(1), key(2)]), 1);
     a.release(&[key(1)]);
-    assert!(!claim_file(&store, &key(1)).exists());
+    assert!(!lease_file(&store, &key(1)).exists());
     assert_eq!(running_elsewhere(&store, &[key(1)]), 0);
     assert_eq!(b.try_take(key(1)).unwrap(), Take::Taken);
     assert_eq!(a.try_take(key(1)).unwrap(), Take::Busy);
     // The holder's file names it.
-    let text = std::fs::read_to_string(claim_file(&store, &key(1))).unwrap();
+    let text = std::fs::read_to_string(lease_file(&store, &key(1))).unwrap();
     assert_eq!(Holder::parse(&text), Some(Holder::me()));
     // No temporary files are left in the folder.
-    let names: Vec<_> = std::fs::read_dir(store.dir().join(CLAIMS_DIR)).unwrap().flatten().collect();
+    let names: Vec<_> = std::fs::read_dir(store.dir().join(LEASES_DIR)).unwrap().flatten().collect();
     assert_eq!(names.len(), 1);
 }
 
 #[test]
-fn dropping_the_claims_removes_every_file() {
+fn dropping_the_leases_removes_every_file() {
     let (_d, store) = store();
-    let a = Claims::open(&store).unwrap();
+    let a = Leases::open(&store).unwrap();
     for i in 0..5 {
         assert_eq!(a.try_take(key(i)).unwrap(), Take::Taken);
     }
     assert_eq!(a.held(), 5);
-    // Another run on the cache keeps the folder while it has a claim.
-    let b = Claims::open(&store).unwrap();
+    // Another run on the cache keeps the folder while it has a lease.
+    let b = Leases::open(&store).unwrap();
     assert_eq!(b.try_take(key(9)).unwrap(), Take::Taken);
     drop(a);
-    assert_eq!(std::fs::read_dir(store.dir().join(CLAIMS_DIR)).unwrap().count(), 1);
+    assert_eq!(std::fs::read_dir(store.dir().join(LEASES_DIR)).unwrap().count(), 1);
     drop(b);
-    assert!(!store.dir().join(CLAIMS_DIR).exists(), "the last run out removes the folder");
+    assert!(!store.dir().join(LEASES_DIR).exists(), "the last run out removes the folder");
     // A run that meets the folder gone makes it again.
-    let c = Claims::open(&store).unwrap();
-    std::fs::remove_dir(store.dir().join(CLAIMS_DIR)).unwrap();
+    let c = Leases::open(&store).unwrap();
+    std::fs::remove_dir(store.dir().join(LEASES_DIR)).unwrap();
     assert_eq!(c.try_take(key(1)).unwrap(), Take::Taken);
 }
 
 #[test]
-fn release_registered_frees_the_run_claims_at_once() {
+fn release_registered_frees_the_run_leases_at_once() {
     let (_d, store) = store();
-    let a = Claims::open(&store).unwrap();
-    let b = Claims::open(&store).unwrap();
+    let a = Leases::open(&store).unwrap();
+    let b = Leases::open(&store).unwrap();
     register(&a);
     assert_eq!(a.try_take(key(3)).unwrap(), Take::Taken);
     release_registered();
@@ -97,29 +97,29 @@ fn a_dead_holder_on_this_machine_is_taken_over_at_once() {
     let (_d, store) = store();
     // Its lease is fresh, but nobody holds its lock: the kernel dropped it with the process.
     let dead = Holder { host: Holder::me().host, pid: u32::MAX - 1 };
-    fake_claim(&store, &key(4), &dead, Duration::ZERO);
+    fake_lease(&store, &key(4), &dead, Duration::ZERO);
     assert_eq!(running_elsewhere(&store, &[key(4)]), 0);
-    let a = Claims::open(&store).unwrap();
+    let a = Leases::open(&store).unwrap();
     assert_eq!(a.try_take(key(4)).unwrap(), Take::Taken);
-    let text = std::fs::read_to_string(claim_file(&store, &key(4))).unwrap();
+    let text = std::fs::read_to_string(lease_file(&store, &key(4))).unwrap();
     assert_eq!(Holder::parse(&text), Some(Holder::me()));
 }
 
 #[test]
-fn a_claim_from_another_machine_holds_for_its_lease_then_is_taken_over() {
+fn a_lease_from_another_machine_holds_for_its_lease_then_is_taken_over() {
     let (_d, store) = store();
     let other = Holder { host: "another-node-of-the-cluster".into(), pid: 7 };
-    fake_claim(&store, &key(5), &other, Duration::from_secs(5));
-    fake_claim(&store, &key(6), &other, LEASE + Duration::from_secs(1));
-    let a = Claims::open(&store).unwrap();
+    fake_lease(&store, &key(5), &other, Duration::from_secs(5));
+    fake_lease(&store, &key(6), &other, LEASE + Duration::from_secs(1));
+    let a = Leases::open(&store).unwrap();
     assert_eq!(a.try_take(key(5)).unwrap(), Take::Busy);
     assert_eq!(running_elsewhere(&store, &[key(5), key(6)]), 1);
     assert_eq!(a.try_take(key(6)).unwrap(), Take::Taken);
-    // A heartbeat keeps the taken claim fresh.
-    let f = File::options().write(true).open(claim_file(&store, &key(6))).unwrap();
+    // A heartbeat keeps the taken lease fresh.
+    let f = File::options().write(true).open(lease_file(&store, &key(6))).unwrap();
     f.set_modified(SystemTime::now() - LEASE * 2).unwrap();
     a.heartbeat();
-    let age = std::fs::metadata(claim_file(&store, &key(6))).unwrap().modified().unwrap().elapsed().unwrap();
+    let age = std::fs::metadata(lease_file(&store, &key(6))).unwrap().modified().unwrap().elapsed().unwrap();
     assert!(age < Duration::from_secs(5), "{age:?}");
 }
 
@@ -162,40 +162,40 @@ fn a_key_stored_after_the_scan_is_not_taken() {
     let recs = records();
     store.write_segment(&recs[..1]).unwrap();
     let scan = store.keys().unwrap();
-    let a = Claims::open(&store).unwrap();
+    let a = Leases::open(&store).unwrap();
     a.reset_view(&scan, false);
     assert_eq!(a.try_take(recs[0].key).unwrap(), Take::Stored);
     // Another run stores the second trial after this run's scan.
     store.write_segment(&recs[1..2]).unwrap();
     assert_eq!(a.try_take(recs[1].key).unwrap(), Take::Stored);
     assert_eq!(a.try_take(recs[2].key).unwrap(), Take::Taken);
-    assert_eq!(a.held(), 1, "a stored key's claim is not kept");
+    assert_eq!(a.held(), 1, "a stored key's lease is not kept");
     // --force: what the scan held is computed again, what others store meanwhile is not.
-    let b = Claims::open(&store).unwrap();
+    let b = Leases::open(&store).unwrap();
     b.reset_view(&scan, true);
     assert_eq!(b.try_take(recs[0].key).unwrap(), Take::Taken);
     assert_eq!(b.try_take(recs[1].key).unwrap(), Take::Stored);
 }
 
 #[test]
-fn sweep_removes_dead_claims_and_old_temp_files_and_keeps_live_ones() {
+fn sweep_removes_dead_leases_and_old_temp_files_and_keeps_live_ones() {
     let (_d, store) = store();
     assert_eq!(sweep(&store, false).unwrap(), Swept::default(), "no folder, nothing to do");
-    let live = Claims::open(&store).unwrap();
+    let live = Leases::open(&store).unwrap();
     assert_eq!(live.try_take(key(1)).unwrap(), Take::Taken);
     let dead = Holder { host: Holder::me().host, pid: u32::MAX - 1 };
-    fake_claim(&store, &key(2), &dead, Duration::ZERO);
+    fake_lease(&store, &key(2), &dead, Duration::ZERO);
     let other = Holder { host: "elsewhere".into(), pid: 1 };
-    fake_claim(&store, &key(3), &other, LEASE * 3);
-    fake_claim(&store, &key(4), &other, Duration::ZERO);
-    let tmp = store.dir().join(CLAIMS_DIR).join(".tmp-x.1.2");
+    fake_lease(&store, &key(3), &other, LEASE * 3);
+    fake_lease(&store, &key(4), &other, Duration::ZERO);
+    let tmp = store.dir().join(LEASES_DIR).join(".tmp-x.1.2");
     std::fs::write(&tmp, "").unwrap();
     File::options().write(true).open(&tmp).unwrap().set_modified(SystemTime::now() - LEASE * 2).unwrap();
     let dry = sweep(&store, true).unwrap();
     assert_eq!(dry, Swept { removed: 3, live: 2 });
-    assert_eq!(std::fs::read_dir(store.dir().join(CLAIMS_DIR)).unwrap().count(), 5);
+    assert_eq!(std::fs::read_dir(store.dir().join(LEASES_DIR)).unwrap().count(), 5);
     assert_eq!(sweep(&store, false).unwrap(), Swept { removed: 3, live: 2 });
-    let mut left: Vec<String> = std::fs::read_dir(store.dir().join(CLAIMS_DIR))
+    let mut left: Vec<String> = std::fs::read_dir(store.dir().join(LEASES_DIR))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();

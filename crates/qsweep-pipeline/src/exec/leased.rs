@@ -1,11 +1,11 @@
-//! Which trial a worker runs next when the run shares its cache ([`crate::cache::claims`]): the
-//! next one in order that it can claim; a trial another run has claimed is set aside, and once
+//! Which trial a worker runs next when the run shares its cache ([`crate::cache::leases`]): the
+//! next one in order that it can lease; a trial another run has leased is set aside, and once
 //! the order is used up the workers look at the set-aside trials every [`POLL`] until each is
-//! stored (by its holder) or claimable (its holder stopped or died); before that, every
+//! stored (by its holder) or leaseable (its holder stopped or died); before that, every
 //! [`BUSY_POLL`], so a dead holder's trials go to the next free worker.
 
 use super::job::Job;
-use crate::cache::claims::{Claims, Take};
+use crate::cache::leases::{Leases, Take};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -31,7 +31,7 @@ enum Polled {
 /// What a worker does next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pick {
-    /// Run the job at this index (its claim is held, if the run has claims).
+    /// Run the job at this index (its lease is held, if the run has leases).
     Run(usize),
     /// Nothing to run now; trials are running elsewhere: sleep [`POLL`] and ask again.
     Wait,
@@ -45,12 +45,12 @@ struct Waiting {
     last_poll: Option<Instant>,
 }
 
-/// Hands out the jobs of one execution, longest first, claiming each when the run has claims.
+/// Hands out the jobs of one execution, longest first, leasing each when the run has leases.
 pub struct Scheduler<'a> {
     jobs: &'a [Job<'a>],
     order: Vec<usize>,
     next: AtomicUsize,
-    claims: Option<&'a Claims>,
+    leases: Option<&'a Leases>,
     waiting: Mutex<Waiting>,
     /// Trials set aside that are not stored yet.
     pub running_elsewhere: AtomicUsize,
@@ -59,13 +59,13 @@ pub struct Scheduler<'a> {
 }
 
 impl<'a> Scheduler<'a> {
-    /// Jobs in `order`, claimed through `claims` if given.
-    pub fn new(jobs: &'a [Job<'a>], order: Vec<usize>, claims: Option<&'a Claims>) -> Self {
+    /// Jobs in `order`, leased through `leases` if given.
+    pub fn new(jobs: &'a [Job<'a>], order: Vec<usize>, leases: Option<&'a Leases>) -> Self {
         Self {
             jobs,
             order,
             next: AtomicUsize::new(0),
-            claims,
+            leases,
             waiting: Mutex::new(Waiting { jobs: Vec::new(), last_poll: None }),
             running_elsewhere: AtomicUsize::new(0),
             stored_elsewhere: AtomicUsize::new(0),
@@ -81,14 +81,14 @@ impl<'a> Scheduler<'a> {
     pub fn pick(&self) -> Pick {
         // While there is other work, the set-aside trials are looked at now and then too, so a
         // dead holder's trials are taken over by the next free worker, not only in the tail.
-        if self.claims.is_some() && !self.exhausted() {
+        if self.leases.is_some() && !self.exhausted() {
             if let Polled::Run(j) = self.poll_waiting(BUSY_POLL) {
                 return Pick::Run(j);
             }
         }
         while let Some(&j) = self.order.get(self.next.fetch_add(1, Ordering::Relaxed)) {
-            let Some(claims) = self.claims else { return Pick::Run(j) };
-            match claims.try_take(self.jobs[j].key) {
+            let Some(leases) = self.leases else { return Pick::Run(j) };
+            match leases.try_take(self.jobs[j].key) {
                 Ok(Take::Busy) => {
                     self.running_elsewhere.fetch_add(1, Ordering::Relaxed);
                     self.waiting.lock().unwrap_or_else(std::sync::PoisonError::into_inner).jobs.push(j);
@@ -96,11 +96,11 @@ impl<'a> Scheduler<'a> {
                 Ok(Take::Stored) => {
                     self.stored_elsewhere.fetch_add(1, Ordering::Relaxed);
                 }
-                // Claims only save work: a cache whose claims cannot be made still gets its trial.
+                // Leases only save work: a cache whose leases cannot be made still gets its trial.
                 Ok(Take::Taken) | Err(_) => return Pick::Run(j),
             }
         }
-        if self.claims.is_none() {
+        if self.leases.is_none() {
             return Pick::Done;
         }
         match self.poll_waiting(POLL) {
@@ -113,7 +113,7 @@ impl<'a> Scheduler<'a> {
     /// Look at the set-aside trials if the last look is `every` ago: take the first that is free,
     /// drop those stored meanwhile.
     fn poll_waiting(&self, every: Duration) -> Polled {
-        let Some(claims) = self.claims else { return Polled::Empty };
+        let Some(leases) = self.leases else { return Polled::Empty };
         // One worker looks at a time; the others wait for its answer.
         let Ok(mut w) = self.waiting.try_lock() else { return Polled::Wait };
         if w.jobs.is_empty() {
@@ -126,7 +126,7 @@ impl<'a> Scheduler<'a> {
         let mut i = 0;
         while i < w.jobs.len() {
             let j = w.jobs[i];
-            match claims.try_take(self.jobs[j].key) {
+            match leases.try_take(self.jobs[j].key) {
                 Ok(Take::Busy) => i += 1,
                 Ok(Take::Stored) => {
                     w.jobs.remove(i);

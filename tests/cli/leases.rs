@@ -1,9 +1,9 @@
-//! Concurrent runs on one cache (issue 39): claims keep them from computing a trial twice, a run
+//! Concurrent runs on one cache (issue 39): leases keep them from computing a trial twice, a run
 //! that dies strands nothing, and the results do not depend on who ran what.
 
 use crate::helpers::{fails_with, stdout, Sandbox};
-use qsweep_pipeline::cache::claims::lease::{Holder, LEASE};
-use qsweep_pipeline::cache::claims::{Claims, CLAIMS_DIR};
+use qsweep_pipeline::cache::leases::lease::{Holder, LEASE};
+use qsweep_pipeline::cache::leases::{Leases, LEASES_DIR};
 use qsweep_pipeline::cache::{Key, Store};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -21,9 +21,9 @@ fn rows_and_distinct(cache: &Path) -> (usize, usize) {
     (scan.segments.iter().map(|(_, k)| k.len()).sum(), scan.keys.len())
 }
 
-/// Claim files left in the cache (none once every run is over).
-fn claim_files(cache: &Path) -> Vec<String> {
-    let Ok(dir) = std::fs::read_dir(cache.join(CLAIMS_DIR)) else { return Vec::new() };
+/// Lease files left in the cache (none once every run is over).
+fn lease_files(cache: &Path) -> Vec<String> {
+    let Ok(dir) = std::fs::read_dir(cache.join(LEASES_DIR)) else { return Vec::new() };
     dir.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect()
 }
 
@@ -70,8 +70,8 @@ fn concurrent_runs_compute_each_trial_once(n: usize) {
     for i in 1..n {
         assert_eq!(table(i), table(0), "run {i}'s table3.csv");
     }
-    assert_eq!(claim_files(&sb.cache()), Vec::<String>::new());
-    assert!(!sb.cache().join(CLAIMS_DIR).exists(), "the claims folder goes with the last run");
+    assert_eq!(lease_files(&sb.cache()), Vec::<String>::new());
+    assert!(!sb.cache().join(LEASES_DIR).exists(), "the leases folder goes with the last run");
     // The same table as one run alone.
     let alone = Sandbox::new();
     let q = alone.fixture("tiny.yaml");
@@ -103,13 +103,13 @@ fn a_sigkilled_run_strands_nothing_the_other_finishes_and_a_restart_has_nothing_
         assert!(start.elapsed() < Duration::from_secs(120), "no segment was written");
         std::thread::sleep(Duration::from_millis(20));
     }
-    a.kill().unwrap(); // SIGKILL: no handler runs, its claims stay on disk with their locks dropped
+    a.kill().unwrap(); // SIGKILL: no handler runs, its leases stay on disk with their locks dropped
     a.wait().unwrap();
     let killed_at = Instant::now();
     let v = finish(b);
     assert!(killed_at.elapsed() < Duration::from_secs(120));
     assert_eq!(rows_and_distinct(&sb.cache()), (24, 24), "{v}");
-    assert_eq!(claim_files(&sb.cache()), Vec::<String>::new(), "the dead run's claims were taken over");
+    assert_eq!(lease_files(&sb.cache()), Vec::<String>::new(), "the dead run's leases were taken over");
     let again = sb.run_json(&p, &[]);
     assert_eq!((count(&again, "executed"), count(&again, "cached")), (0, 24));
 }
@@ -123,8 +123,8 @@ fn tiny_records() -> Vec<qsweep_pipeline::cache::TrialRecord> {
     r
 }
 
-fn fake_claim(cache: &Path, key: &Key, holder: &Holder, age: Duration) -> PathBuf {
-    let path = cache.join(CLAIMS_DIR).join(key.hex());
+fn fake_lease(cache: &Path, key: &Key, holder: &Holder, age: Duration) -> PathBuf {
+    let path = cache.join(LEASES_DIR).join(key.hex());
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
     std::fs::write(&path, holder.to_text()).unwrap();
     std::fs::File::options().write(true).open(&path).unwrap().set_modified(SystemTime::now() - age).unwrap();
@@ -132,7 +132,7 @@ fn fake_claim(cache: &Path, key: &Key, holder: &Holder, age: Duration) -> PathBu
 }
 
 #[test]
-fn dead_holders_claims_are_taken_over_and_gc_removes_their_debris() {
+fn dead_holders_leases_are_taken_over_and_gc_removes_their_debris() {
     let records = tiny_records();
     let sb = Sandbox::new();
     let p = sb.fixture("tiny.yaml");
@@ -140,7 +140,7 @@ fn dead_holders_claims_are_taken_over_and_gc_removes_their_debris() {
     let there_stale = Holder { host: "node-lost-from-the-cluster".into(), pid: 7 };
     for (i, r) in records.iter().enumerate() {
         let (holder, age) = if i % 2 == 0 { (&here_dead, Duration::ZERO) } else { (&there_stale, LEASE * 2) };
-        fake_claim(&sb.cache(), &r.key, holder, age);
+        fake_lease(&sb.cache(), &r.key, holder, age);
     }
     let status: Value =
         serde_json::from_str(&stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"]))).unwrap();
@@ -149,28 +149,28 @@ fn dead_holders_claims_are_taken_over_and_gc_removes_their_debris() {
     let v = sb.run_json(&p, &[]);
     assert!(start.elapsed() < Duration::from_secs(60));
     assert_eq!((count(&v, "executed"), count(&v, "elsewhere")), (56, 0));
-    assert_eq!(claim_files(&sb.cache()), Vec::<String>::new());
-    // Debris a killed run leaves (as above, and a temp file of a claim being made) goes with gc;
-    // a live run's claim (another machine's, lease fresh) stays.
-    fake_claim(&sb.cache(), &records[0].key, &here_dead, Duration::ZERO);
-    fake_claim(&sb.cache(), &records[1].key, &there_stale, LEASE * 2);
+    assert_eq!(lease_files(&sb.cache()), Vec::<String>::new());
+    // Debris a killed run leaves (as above, and a temp file of a lease being made) goes with gc;
+    // a live run's lease (another machine's, lease fresh) stays.
+    fake_lease(&sb.cache(), &records[0].key, &here_dead, Duration::ZERO);
+    fake_lease(&sb.cache(), &records[1].key, &there_stale, LEASE * 2);
     let live = Holder { host: "node-still-running".into(), pid: 9 };
-    fake_claim(&sb.cache(), &records[2].key, &live, Duration::ZERO);
+    fake_lease(&sb.cache(), &records[2].key, &live, Duration::ZERO);
     let out = stdout(&mut sb.qsweep(&["gc"]));
-    assert!(out.contains("2 dead runs' claims"), "{out}");
-    assert_eq!(claim_files(&sb.cache()), vec![records[2].key.hex()]);
+    assert!(out.contains("2 dead runs' leases"), "{out}");
+    assert_eq!(lease_files(&sb.cache()), vec![records[2].key.hex()]);
     assert!(stdout(&mut sb.qsweep(&["verify"])).contains("56"), "verify is unaffected");
 }
 
 #[test]
-fn a_trial_claimed_by_a_live_run_is_waited_for_and_shown_as_running_elsewhere() {
+fn a_trial_leased_by_a_live_run_is_waited_for_and_shown_as_running_elsewhere() {
     let records = tiny_records();
     let sb = Sandbox::new();
     let p = sb.fixture("tiny.yaml");
-    // This test process is the other run: it holds a claim on the first trial.
+    // This test process is the other run: it holds a lease on the first trial.
     let store = Store::open(&sb.cache()).unwrap();
-    let other = Claims::open(&store).unwrap();
-    assert_eq!(other.try_take(records[0].key).unwrap(), qsweep_pipeline::cache::claims::Take::Taken);
+    let other = Leases::open(&store).unwrap();
+    assert_eq!(other.try_take(records[0].key).unwrap(), qsweep_pipeline::cache::leases::Take::Taken);
     let status = stdout(&mut sb.qsweep(&["status", p.to_str().unwrap(), "--json"]));
     let status: Value = serde_json::from_str(&status).unwrap();
     assert_eq!((count(&status, "missing"), count(&status, "running_elsewhere")), (56, 1));
