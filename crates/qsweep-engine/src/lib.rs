@@ -7,6 +7,8 @@
 //! path `rand_chacha` picks at run time.
 
 #![deny(clippy::disallowed_methods)]
+// The README's example runs as a doctest.
+#![doc = include_str!("../README.md")]
 
 pub mod actions;
 pub mod config;
