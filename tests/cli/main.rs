@@ -5,6 +5,7 @@ mod bench;
 mod cache;
 mod causes;
 mod claims;
+mod concurrent_reports;
 mod error_locations;
 mod exit_codes;
 mod explore;
