@@ -37,6 +37,12 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
     for s in &r.skipped {
         eprintln!("warning: left unreadable segment in place (run `qsweep verify`): {s}");
     }
+    for p in &memos.in_use {
+        eprintln!(
+            "warning: left trial parts in place, a report is reading them (run `qsweep gc` again later): {}",
+            p.display()
+        );
+    }
     let mib = |b: u64| b as f64 / (1 << 20) as f64;
     let sizes = if a.dry_run {
         format!("{:.2} MiB now", mib(r.bytes_before))
@@ -58,7 +64,7 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         r.duplicates,
         r.stale_temps,
         r.stale_leases,
-        memos,
+        memos.removed,
     );
     Ok(exit::OK)
 }

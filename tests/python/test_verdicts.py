@@ -33,7 +33,7 @@ What is checked, each against what qsweep wrote:
   `consistent_but_wide_n10`, `differs_n10`), and the declared readings' order by the fit measure.
 
 Not recomputed: the permutation yardstick's exact numbers (its ChaCha8 stream is qsweep's own); its
-unit tests check its behaviour (crates/qsweep-pipeline/crates/qsweep-pipeline/src/analysis/selection.rs).
+unit tests check its behaviour (crates/qsweep-pipeline/src/analysis/selection.rs).
 """
 
 from __future__ import annotations

@@ -12,10 +12,14 @@
 //! A part is written atomically (temporary file, then rename) with its blake3 beside it
 //! (`<digest>.b3`), and checked before it is reused (its bytes are those written, and it holds the
 //! rows the reading has); anything else is encoded again. `qsweep verify` checks every part.
-//! A full report removes the parts it did not use. The parts are not committed: a fresh clone
-//! encodes them on its first recomputed report.
+//! A full report removes the parts it did not use, unless another report is using the folder: a
+//! report holds the folder shared ([`readers::Reading`]) from before it decides which parts to
+//! reuse until it has spliced them, and parts are removed only with the folder taken exclusively
+//! ([`readers::alone`]); otherwise they stay for the next report to prune. The parts are not
+//! committed: a fresh clone encodes them on its first recomputed report.
 
 use crate::derive::model::ReportData;
+use crate::memo::stats::readers;
 use crate::render::datasets;
 use parquet::arrow::ArrowWriter;
 use parquet::column::writer::ColumnCloseResult;
@@ -42,6 +46,8 @@ pub struct TrialParts {
     found: HashMap<Key, u64>,
     /// The parts of this report, in order.
     used: Vec<PathBuf>,
+    /// This report's shared hold on the kept folder: no other report removes a part meanwhile.
+    reading: Option<readers::Reading>,
 }
 
 impl TrialParts {
@@ -56,12 +62,15 @@ impl TrialParts {
         } else {
             (out.join(format!("{}parts.{}", qsweep_pipeline::atomic::TEMP_PREFIX, std::process::id())), true)
         };
+        // Held before any part is checked for reuse, until the parts are spliced.
+        let reading = (!transient).then(|| readers::Reading::hold(&dir));
         Self {
             dir,
             rebuild: rebuild || transient,
             transient,
             found: crate::memo::folders::where_stored(scan),
             used: Vec::new(),
+            reading,
         }
     }
 
@@ -129,7 +138,8 @@ impl TrialParts {
     }
 
     /// Splice the parts used into `out` (rewritten only when its bytes change); with `prune`
-    /// (a full report), remove the parts not used. `false` when there is no part (no file).
+    /// (a full report), then remove the parts not used, unless another report holds the folder.
+    /// `false` when there is no part (no file).
     pub fn finish(self, out: &Path, prune: bool) -> anyhow::Result<bool> {
         let wrote = if self.used.is_empty() {
             false
@@ -149,20 +159,35 @@ impl TrialParts {
             done?;
             true
         };
-        if self.transient {
-            let _ = std::fs::remove_dir_all(&self.dir);
+        let Self { dir, transient, used, reading, .. } = self;
+        if transient {
+            let _ = std::fs::remove_dir_all(&dir);
         } else if prune {
-            if let Ok(entries) = std::fs::read_dir(&self.dir) {
-                for p in entries.flatten().map(|e| e.path()) {
-                    if p.extension().is_some_and(|x| x == "parquet") && !self.used.contains(&p) {
-                        let _ = std::fs::remove_file(&p);
-                        let _ = std::fs::remove_file(sidecar(&p));
-                    }
-                }
-            }
+            // Read: let go of the folder, then prune it only if no other report holds it.
+            drop(reading);
+            prune_unused(&dir, &used);
         }
         Ok(wrote)
     }
+}
+
+/// Remove the parts in `dir` that are not in `used`, when no other report holds the folder (or
+/// locks do not work there, [`readers::Alone::Unknown`]); `false` when they were left in place.
+fn prune_unused(dir: &Path, used: &[PathBuf]) -> bool {
+    let guard = readers::alone(dir);
+    if matches!(guard, readers::Alone::No) {
+        return false;
+    }
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for p in entries.flatten().map(|e| e.path()) {
+            if p.extension().is_some_and(|x| x == "parquet") && !used.contains(&p) {
+                let _ = std::fs::remove_file(&p);
+                let _ = std::fs::remove_file(sidecar(&p));
+            }
+        }
+    }
+    drop(guard);
+    true
 }
 
 /// Whether `dir` is (or can be made) a folder this process can write a file into.
@@ -241,8 +266,19 @@ fn concat(parts: &[PathBuf], out: &Path) -> anyhow::Result<()> {
     let inputs: Vec<(std::fs::File, ParquetMetaData)> = parts
         .iter()
         .map(|p| {
-            let f =
-                std::fs::File::open(p).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", p.display()))?;
+            let f = std::fs::File::open(p).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::NotFound {
+                    // Only where locks do not reach (see readers), or by hand.
+                    anyhow::anyhow!(
+                        "cannot read {}: {e}; the trial part was removed while this report used it (by hand, \
+                         by `qsweep gc`, or by a report on a machine whose locks this file system does not \
+                         share): run the report again, it encodes the part anew",
+                        p.display()
+                    )
+                } else {
+                    anyhow::anyhow!("cannot read {}: {e}", p.display())
+                }
+            })?;
             let m = ParquetMetaDataReader::new()
                 .with_page_index_policy(PageIndexPolicy::Optional)
                 .parse_and_finish(&f)
@@ -340,3 +376,6 @@ impl Drop for PartWriter {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

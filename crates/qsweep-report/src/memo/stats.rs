@@ -23,6 +23,8 @@
 //! damaged (checksum), older-format or other-version file is read as empty: everything is
 //! recomputed, never an error.
 
+pub mod readers;
+
 use qsweep_pipeline::analysis::claims::{ClaimCell, ClaimResult, CLAIMS, CLAIM_RESAMPLES};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -320,28 +322,49 @@ pub fn check(cache: &Path) -> DerivedCheck {
     out
 }
 
+/// What [`gc`] removed, or left because a report is reading it.
+#[derive(Debug, Default, Clone, PartialEq, Eq)]
+pub struct DerivedGc {
+    /// Memo files and parts' folders removed (with `dry_run`: that would be).
+    pub removed: usize,
+    /// Parts' folders of pipelines not kept, left in place because a report of the pipeline is
+    /// reading them now ([`readers`]); the next `gc` removes them.
+    pub in_use: Vec<PathBuf>,
+}
+
 /// Remove the memo files of the cache at `cache` that no report would read: those of pipelines
-/// not in `keep` (when given), with their trial parts, and those not of this format and
-/// definitions `version`. With `dry_run`, remove nothing. Returns how many files and parts'
-/// folders (would) go.
+/// not in `keep` (when given), with their trial parts (unless a report is reading them), and
+/// those not of this format and definitions `version`. With `dry_run`, remove nothing.
 pub fn gc(
     cache: &Path,
     keep: Option<&std::collections::HashSet<String>>,
     version: u32,
     dry_run: bool,
-) -> anyhow::Result<usize> {
-    let Ok(dir) = std::fs::read_dir(cache.join(DERIVED_DIR)) else { return Ok(0) };
-    let mut removed = 0;
+) -> anyhow::Result<DerivedGc> {
+    let mut out = DerivedGc::default();
+    let Ok(dir) = std::fs::read_dir(cache.join(DERIVED_DIR)) else { return Ok(out) };
     let paths: Vec<PathBuf> = dir.flatten().map(|e| e.path()).collect();
-    // A pipeline's trial parts (`<name>.trials/`, report::trials) go with it.
+    // A pipeline's trial parts (`<name>.trials/`, report::trials) go with it, once no report
+    // holds them (removed under the folder's lock, so a report starting meanwhile waits).
     for p in paths.iter().filter(|p| p.is_dir() && p.extension().is_some_and(|x| x == "trials")) {
         let name = p.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         if keep.is_some_and(|k| !k.contains(&name)) {
-            removed += 1;
-            if !dry_run {
-                std::fs::remove_dir_all(p)
-                    .map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
+            if dry_run {
+                if readers::in_use(p) {
+                    out.in_use.push(p.clone());
+                } else {
+                    out.removed += 1;
+                }
+                continue;
             }
+            let guard = readers::alone(p);
+            if matches!(guard, readers::Alone::No) {
+                out.in_use.push(p.clone());
+                continue;
+            }
+            out.removed += 1;
+            std::fs::remove_dir_all(p).map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
+            drop(guard);
         }
     }
     for p in paths.iter().filter(|p| is_memo(p)) {
@@ -349,13 +372,13 @@ pub fn gc(
         let unused = keep.is_some_and(|k| !k.contains(&name));
         let unreadable = std::fs::read(p).ok().and_then(|b| decode(&b, version)).is_none();
         if unused || unreadable {
-            removed += 1;
+            out.removed += 1;
             if !dry_run {
                 std::fs::remove_file(p).map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", p.display()))?;
             }
         }
     }
-    Ok(removed)
+    Ok(out)
 }
 
 /// Whether `path` is a memo file (`<name>.bin` in `_derived/`).
@@ -418,14 +441,39 @@ mod tests {
         assert_eq!(Derived::load(&path, 7, true).kept.len(), 0, "truncated");
         assert_eq!(Derived::load(&cache.path().join("none.bin"), 7, true).kept.len(), 0, "missing");
         // gc drops the damaged file, and a pipeline's file no given pipeline names.
-        assert_eq!(gc(cache.path(), None, 7, true).unwrap(), 1);
+        assert_eq!(gc(cache.path(), None, 7, true).unwrap().removed, 1);
         assert!(path.is_file(), "a dry run removes nothing");
-        assert_eq!(gc(cache.path(), None, 7, false).unwrap(), 1);
+        assert_eq!(gc(cache.path(), None, 7, false).unwrap().removed, 1);
         assert!(!path.is_file());
         m.save(&path, true).unwrap();
         let keep: std::collections::HashSet<String> = ["p".to_string()].into();
-        assert_eq!(gc(cache.path(), Some(&keep), 7, false).unwrap(), 0);
-        assert_eq!(gc(cache.path(), Some(&["q".to_string()].into()), 7, false).unwrap(), 1);
+        assert_eq!(gc(cache.path(), Some(&keep), 7, false).unwrap().removed, 0);
+        assert_eq!(gc(cache.path(), Some(&["q".to_string()].into()), 7, false).unwrap().removed, 1);
+    }
+
+    #[test]
+    fn gc_leaves_the_parts_a_report_is_reading() {
+        let cache = tempfile::tempdir().unwrap();
+        let parts = cache.path().join(DERIVED_DIR).join("q.trials");
+        std::fs::create_dir_all(&parts).unwrap();
+        std::fs::write(parts.join("a.parquet"), "part").unwrap();
+        let keep: std::collections::HashSet<String> = ["p".to_string()].into();
+        let reading = readers::Reading::hold(&parts);
+        for dry_run in [true, false] {
+            let r = gc(cache.path(), Some(&keep), 7, dry_run).unwrap();
+            assert_eq!(r, DerivedGc { removed: 0, in_use: vec![parts.clone()] });
+            assert!(parts.join("a.parquet").is_file());
+        }
+        drop(reading);
+        let lock = parts.join(readers::LOCK_FILE);
+        std::fs::remove_file(&lock).unwrap();
+        assert_eq!(gc(cache.path(), Some(&keep), 7, true).unwrap().removed, 1);
+        assert!(parts.join("a.parquet").is_file() && !lock.exists(), "a dry run makes and removes nothing");
+        assert_eq!(
+            gc(cache.path(), Some(&keep), 7, false).unwrap(),
+            DerivedGc { removed: 1, in_use: vec![] }
+        );
+        assert!(!parts.exists());
     }
 
     #[test]
