@@ -5,11 +5,11 @@ use super::keys::KeyMemo;
 use super::resolved::{Cell, Experiment, Plan, Variant};
 use crate::cache::Key;
 use crate::error::user_error;
+use crate::spec::{each_system, BallBeamM, CartPoleM, MountainCarM};
 use crate::spec::{
     format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings,
     SystemMarker, SystemSpec, Target,
 };
-use crate::spec::{BallBeamM, CartPoleM, MountainCarM};
 use qsweep_engine::config::{default_ranges, default_success, Success, TrialConfig};
 use qsweep_engine::env::{EnvParams, SystemKind};
 use qsweep_engine::Algorithm;
@@ -309,16 +309,7 @@ fn expand_all(
     memo: &KeyMemo,
 ) -> anyhow::Result<()> {
     let first = out.len();
-    let s = &spec.systems;
-    if let Some(sys) = &s.ball_beam {
-        expand(spec, sys, origin, out, memo)?;
-    }
-    if let Some(sys) = &s.cart_pole {
-        expand(spec, sys, origin, out, memo)?;
-    }
-    if let Some(sys) = &s.mountain_car {
-        expand(spec, sys, origin, out, memo)?;
-    }
+    each_system!(&spec.systems, |sys| expand(spec, sys, origin, out, memo)?);
     for e in &mut out[first..] {
         e.variant = variant.map(str::to_string);
     }
@@ -334,11 +325,9 @@ fn too_many(origin: &str, n: u128, limit: usize) -> anyhow::Error {
 
 /// Whether some experiment of `spec` races.
 fn spec_races(spec: &PipelineSpec) -> bool {
-    fn any<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> bool {
-        s.iter().flat_map(|s| &s.experiments).any(|e| e.race.is_some())
-    }
-    let s = &spec.systems;
-    spec.race.is_some() || any(&s.ball_beam) || any(&s.cart_pole) || any(&s.mountain_car)
+    let mut races = spec.race.is_some();
+    each_system!(&spec.systems, |s| races |= s.experiments.iter().any(|e| e.race.is_some()));
+    races
 }
 
 /// Trials the spec expands to (cells × seeds; a raced experiment counted at `max_seeds`, the most
@@ -353,9 +342,9 @@ fn planned_trials(spec: &PipelineSpec) -> u128 {
             })
             .sum()
     };
-    fn cells<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> Vec<(u128, Option<crate::spec::RaceSpec>)> {
-        s.iter()
-            .flat_map(|s| &s.experiments)
+    fn cells<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<(u128, Option<crate::spec::RaceSpec>)> {
+        s.experiments
+            .iter()
             .map(|e| {
                 let n = e.axes.iter().map(|a| a.values.len() as u128).product::<u128>()
                     * e.algorithms.len() as u128;
@@ -365,17 +354,15 @@ fn planned_trials(spec: &PipelineSpec) -> u128 {
     }
     // A `fresh:` block adds its seeds to one cell per heatmap (experiment × algorithm).
     let heatmaps = |s: Vec<u128>| -> u128 { s.into_iter().sum() };
-    fn algorithms<M: SystemMarker>(s: &Option<SystemSpec<M>>) -> Vec<u128> {
-        s.iter().flat_map(|s| &s.experiments).map(|e| e.algorithms.len() as u128).collect()
+    fn algorithms<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<u128> {
+        s.experiments.iter().map(|e| e.algorithms.len() as u128).collect()
     }
-    let fresh = spec.fresh.map_or(0, |f| u128::from(f.seeds))
-        * (heatmaps(algorithms(&spec.systems.ball_beam))
-            + heatmaps(algorithms(&spec.systems.cart_pole))
-            + heatmaps(algorithms(&spec.systems.mountain_car)));
-    system(cells(&spec.systems.ball_beam))
-        + system(cells(&spec.systems.cart_pole))
-        + system(cells(&spec.systems.mountain_car))
-        + fresh
+    let (mut trials, mut maps) = (0, 0);
+    each_system!(&spec.systems, |s| {
+        trials += system(cells(s));
+        maps += heatmaps(algorithms(s));
+    });
+    trials + spec.fresh.map_or(0, |f| u128::from(f.seeds)) * maps
 }
 
 fn expand<M: Resolve>(

@@ -3,7 +3,7 @@
 //! (checked on the whole section, so a variant may set its fields one `set` entry at a time).
 
 use super::experiment::Target;
-use super::pipeline::PipelineSpec;
+use super::pipeline::{each_system, PipelineSpec};
 use super::race::RaceSpec;
 use super::settings::SystemMarker;
 use super::system::SystemSpec;
@@ -30,18 +30,12 @@ pub fn check_races(spec: &PipelineSpec) -> Result<(), Problem> {
     if let Some(r) = &spec.race {
         check_one(r, seeds, &top)?;
     }
-    let s = &spec.systems;
-    check_system(spec, s.ball_beam.as_ref(), "ball-beam")?;
-    check_system(spec, s.cart_pole.as_ref(), "cart-pole")?;
-    check_system(spec, s.mountain_car.as_ref(), "mountain-car")
+    each_system!(&spec.systems, |s| check_system(spec, s)?);
+    Ok(())
 }
 
-pub(super) fn check_system<M: SystemMarker>(
-    spec: &PipelineSpec,
-    sys: Option<&SystemSpec<M>>,
-    name: &str,
-) -> Result<(), Problem> {
-    let Some(sys) = sys else { return Ok(()) };
+pub(super) fn check_system<M: SystemMarker>(spec: &PipelineSpec, sys: &SystemSpec<M>) -> Result<(), Problem> {
+    let name = M::SYSTEM.name();
     for (i, e) in sys.experiments.iter().enumerate() {
         let at = |tail: &[&str]| -> Vec<String> {
             ["systems", name, "experiments", &i.to_string()]
@@ -106,16 +100,17 @@ pub(super) fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<()
 
 /// Every Table III row of the pipeline: (system, experiment id, algorithm, has a reference).
 pub(super) fn rows(spec: &PipelineSpec) -> Vec<(SystemKind, String, Algorithm, bool)> {
-    fn of<M: SystemMarker>(s: Option<&SystemSpec<M>>) -> Vec<(SystemKind, String, Algorithm, bool)> {
-        s.iter()
-            .flat_map(|s| &s.experiments)
+    fn of<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<(SystemKind, String, Algorithm, bool)> {
+        s.experiments
+            .iter()
             .flat_map(|e| {
                 e.algorithms.iter().map(move |&a| (M::SYSTEM, e.id.clone(), a, e.reference.contains_key(&a)))
             })
             .collect()
     }
-    let s = &spec.systems;
-    [of(s.ball_beam.as_ref()), of(s.cart_pole.as_ref()), of(s.mountain_car.as_ref())].concat()
+    let mut out = Vec::new();
+    each_system!(&spec.systems, |s| out.extend(of(s)));
+    out
 }
 
 /// Check the block against the pipeline's rows.
@@ -215,22 +210,16 @@ pub fn check_fresh(spec: &PipelineSpec) -> Result<(), Problem> {
 }
 
 fn race_blocks(spec: &PipelineSpec) -> Vec<RaceSpec> {
-    fn of<M: SystemMarker>(s: Option<&SystemSpec<M>>) -> Vec<RaceSpec> {
-        s.iter().flat_map(|s| &s.experiments).filter_map(|e| e.race).collect()
-    }
-    let s = &spec.systems;
     let mut out: Vec<RaceSpec> = spec.race.into_iter().collect();
-    out.extend(of(s.ball_beam.as_ref()));
-    out.extend(of(s.cart_pole.as_ref()));
-    out.extend(of(s.mountain_car.as_ref()));
+    each_system!(&spec.systems, |s| out.extend(s.experiments.iter().filter_map(|e| e.race)));
     out
 }
 
 /// Every success section (a system's and its experiments') against the rules across its fields
 /// (`SystemMarker::check_success`: the solved rule's `window` and `mean_length` come together).
 pub fn check_successes(spec: &PipelineSpec) -> Result<(), Problem> {
-    fn of<M: SystemMarker>(sys: Option<&SystemSpec<M>>, name: &str) -> Result<(), Problem> {
-        let Some(sys) = sys else { return Ok(()) };
+    fn of<M: SystemMarker>(sys: &SystemSpec<M>) -> Result<(), Problem> {
+        let name = M::SYSTEM.name();
         let at =
             |path: &[&str], message| Problem { path: path.iter().map(|s| s.to_string()).collect(), message };
         if let Some(s) = &sys.success {
@@ -244,10 +233,8 @@ pub fn check_successes(spec: &PipelineSpec) -> Result<(), Problem> {
         }
         Ok(())
     }
-    let s = &spec.systems;
-    of(s.ball_beam.as_ref(), "ball-beam")?;
-    of(s.cart_pole.as_ref(), "cart-pole")?;
-    of(s.mountain_car.as_ref(), "mountain-car")
+    each_system!(&spec.systems, |s| of(s)?);
+    Ok(())
 }
 
 /// The rules that need the whole pipeline: success sections, races, fresh seeds and the

@@ -83,10 +83,7 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
     };
     // Typed parse of the text itself first, so every error has a position.
     let spec: PipelineSpec = typed(serde_yaml::Deserializer::from_str(text)).map_err(located)?;
-    if spec.systems.ball_beam.is_none()
-        && spec.systems.cart_pole.is_none()
-        && spec.systems.mountain_car.is_none()
-    {
+    if spec.systems.kinds().is_empty() {
         return Err(located(Failure::at(
             &["systems"],
             "the section is empty; add ball-beam, cart-pole or mountain-car",

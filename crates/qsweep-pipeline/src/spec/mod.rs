@@ -50,6 +50,7 @@ pub use fresh::FreshSpec;
 pub use load::{load, load_str, load_value, LoadedSpec};
 pub use locate::locate;
 pub use overrides::Override;
+pub(crate) use pipeline::{each_system, with_system};
 pub use pipeline::{is_report_setting, PipelineSpec, Systems};
 pub use race::RaceSpec;
 pub use readings::LoadedVariant;

@@ -3,10 +3,11 @@
 use super::explore::Exploratory;
 use super::fields::safe_folder_name;
 use super::race::RaceSpec;
-use super::settings::{BallBeamM, CartPoleM, MountainCarM, Settings};
+use super::settings::{BallBeamM, CartPoleM, MountainCarM, Settings, SystemMarker};
 use super::system::SystemSpec;
 use super::values::Seeds;
 use super::variants::VariantSpec;
+use qsweep_engine::env::SystemKind;
 use serde::de::{self, Deserializer};
 use serde::Deserialize;
 
@@ -77,6 +78,58 @@ pub struct Systems {
     /// Mountain Car.
     #[serde(rename = "mountain-car", default)]
     pub mountain_car: Option<SystemSpec<MountainCarM>>,
+}
+
+/// Runs `$body` once for each system a [`Systems`] declares, in the pipeline's order (Ball-Beam,
+/// Cart-Pole, Mountain Car), with `$s` bound to its `&SystemSpec<M>`. Each system has its own
+/// settings type, so the body is expanded once per system instead of called through a common
+/// type; generic helpers (`fn f<M: SystemMarker>(s: &SystemSpec<M>)`) take it from there. With
+/// [`with_system`], the one place that names the systems' fields: the destructuring is
+/// exhaustive, so a field added to [`Systems`] and not here does not compile, and no system is
+/// silently left out anywhere else.
+macro_rules! each_system {
+    ($systems:expr, |$s:ident| $body:expr) => {{
+        let $crate::spec::Systems { ball_beam, cart_pole, mountain_car } = $systems;
+        if let Some($s) = ball_beam.as_ref() {
+            $body;
+        }
+        if let Some($s) = cart_pole.as_ref() {
+            $body;
+        }
+        if let Some($s) = mountain_car.as_ref() {
+            $body;
+        }
+    }};
+}
+pub(crate) use each_system;
+
+/// `$body` for the section of system `$kind` (with `$s` bound to its `&SystemSpec<M>`), `None`
+/// when the pipeline does not declare it. Exhaustive over [`Systems`]' fields and over
+/// `SystemKind` (see [`each_system`]).
+macro_rules! with_system {
+    ($systems:expr, $kind:expr, |$s:ident| $body:expr) => {{
+        let $crate::spec::Systems { ball_beam, cart_pole, mountain_car } = $systems;
+        match $kind {
+            qsweep_engine::env::SystemKind::BallBeam => ball_beam.as_ref().map(|$s| $body),
+            qsweep_engine::env::SystemKind::CartPole => cart_pole.as_ref().map(|$s| $body),
+            qsweep_engine::env::SystemKind::MountainCar => mountain_car.as_ref().map(|$s| $body),
+        }
+    }};
+}
+pub(crate) use with_system;
+
+impl Systems {
+    /// The systems declared, in the pipeline's order (Ball-Beam, Cart-Pole, Mountain Car).
+    pub fn kinds(&self) -> Vec<SystemKind> {
+        let mut out = Vec::new();
+        each_system!(self, |s| out.push(system_of(s)));
+        out
+    }
+}
+
+/// The system a section is for.
+fn system_of<M: SystemMarker>(_: &SystemSpec<M>) -> SystemKind {
+    M::SYSTEM
 }
 
 pub(super) fn safe_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {

@@ -189,18 +189,7 @@ pub(super) fn check_target(base: &PipelineSpec, o: &Override) -> Result<(), Stri
 }
 
 pub(super) fn present_systems(base: &PipelineSpec) -> Vec<SystemKind> {
-    let s = &base.systems;
-    let mut out = Vec::new();
-    if s.ball_beam.is_some() {
-        out.push(SystemKind::BallBeam);
-    }
-    if s.cart_pole.is_some() {
-        out.push(SystemKind::CartPole);
-    }
-    if s.mountain_car.is_some() {
-        out.push(SystemKind::MountainCar);
-    }
-    out
+    base.systems.kinds()
 }
 
 /// Axes of the experiments in the override's scope (all systems for `defaults.*`, one system,
@@ -211,11 +200,12 @@ pub(super) fn varied_names(
     only: Option<usize>,
 ) -> Vec<(usize, String, Vec<String>)> {
     fn names<M: super::settings::SystemMarker>(
-        s: &Option<super::system::SystemSpec<M>>,
+        s: &super::system::SystemSpec<M>,
         only: Option<usize>,
     ) -> Vec<(usize, String, Vec<String>)> {
-        s.iter()
-            .flat_map(|s| s.experiments.iter().enumerate())
+        s.experiments
+            .iter()
+            .enumerate()
             .filter(|(i, _)| only.is_none_or(|o| o == *i))
             .map(|(i, e)| {
                 let n = e
@@ -229,12 +219,7 @@ pub(super) fn varied_names(
             })
             .collect()
     }
-    let s = &base.systems;
-    match system {
-        SystemKind::BallBeam => names(&s.ball_beam, only),
-        SystemKind::CartPole => names(&s.cart_pole, only),
-        SystemKind::MountainCar => names(&s.mountain_car, only),
-    }
+    super::with_system!(&base.systems, system, |s| names(s, only)).unwrap_or_default()
 }
 
 /// A variant must not set what an experiment in its scope varies: the axis would silently win.
