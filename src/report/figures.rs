@@ -17,8 +17,8 @@ use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
-use plotters::style::{FontStyle, FontTransform};
+use plotters::style::text_anchor::{HPos, VPos};
+use plotters::style::FontStyle;
 use std::sync::Once;
 
 /// Width of one panel, in pixels.
@@ -123,24 +123,23 @@ pub(crate) fn paint_as(
 
 fn paint_svg(picture: &impl Picture, (w, h): (u32, u32)) -> Result<String, String> {
     let mut svg = String::new();
-    let hatches = {
+    let (hatches, texts) = {
         let mut canvas = Canvas {
             root: SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(),
             texts: Vec::new(),
             hatch_marks: Some(Vec::new()),
         };
         picture.draw(&mut canvas)?;
-        for t in std::mem::take(&mut canvas.texts) {
-            let mut font = (FONT, t.size).into_font();
-            if t.rotate {
-                font = font.transform(FontTransform::Rotate270);
-            }
-            let style = font.color(&t.color).pos(Pos::new(t.h, t.v));
-            canvas.root.draw(&Text::new(t.text, t.at, style)).map_err(|e| e.to_string())?;
-        }
         canvas.root.present().map_err(|e| e.to_string())?;
-        canvas.hatch_marks.unwrap_or_default()
+        (canvas.hatch_marks.unwrap_or_default(), canvas.texts)
     };
+    // The texts after every shape, written (and escaped) by this crate.
+    let end = svg.rfind("</svg>").ok_or("plotters wrote no </svg>")?;
+    let tail = svg.split_off(end);
+    for t in &texts {
+        svg.push_str(&super::svg_text::element(t));
+    }
+    svg.push_str(&tail);
     Ok(super::svg::compact_with(&svg, |s| hatch_patterns(&s, &hatches)))
 }
 

@@ -4,11 +4,11 @@
 //! stored once) and a cell table per experiment, plus links to the data files.
 
 use super::curves::CURVE_RULE;
+use super::escape::html as esc;
 use super::formats::{Format, Formats};
 use super::model::{ExpData, ReportData};
 use super::table::{cell_table, render, table3_parts, Html};
 use crate::analysis::{BEST_RULE, CENSORING};
-use crate::report::table::html::escape_html as esc;
 
 /// The pages' stylesheet (`.aK`: the tables whose number columns follow the first K, see
 /// [`super::table::html`]).
@@ -31,17 +31,18 @@ img{max-width:100%;height:auto;border:1px solid #eee}
 
 /// Which report a page belongs to, as its heading and first paragraph say: the pipeline, and for
 /// a variant's folder the variant's id, title and `set` overrides, with a link back to the
-/// comparison of all variants.
-pub(crate) fn identity(data: &ReportData) -> (String, Vec<String>) {
+/// comparison of all variants. The name comes as written; in the notes, what the pipeline's
+/// author wrote is already escaped with `esc` (the page's format, [`super::escape`]).
+pub(crate) fn identity(data: &ReportData, esc: fn(&str) -> String) -> (String, Vec<String>) {
     let plan = data.plan;
     let mut notes = Vec::new();
     if let Some(v) = plan.report_variant() {
-        let title = v.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
-        notes.push(format!("Variant {}{title} of pipeline {}.", v.id, plan.name));
+        let title = v.title.as_deref().map(|t| format!(": {}", esc(t))).unwrap_or_default();
+        notes.push(format!("Variant {}{title} of pipeline {}.", esc(&v.id), esc(&plan.name)));
         if v.set.is_empty() {
             notes.push("Its settings: the pipeline as written (no `set`).".into());
         } else {
-            notes.push(format!("Its settings: the pipeline with {}.", v.set.join(", ")));
+            notes.push(format!("Its settings: the pipeline with {}.", esc(&v.set.join(", "))));
         }
     }
     (plan.report_name(), notes)
@@ -51,7 +52,7 @@ pub(crate) fn identity(data: &ReportData) -> (String, Vec<String>) {
 /// when written, else the PNG; none without either).
 pub fn page(data: &ReportData, formats: Formats) -> String {
     let plan = data.plan;
-    let (name, notes) = identity(data);
+    let (name, notes) = identity(data, esc);
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     h.push_str(&format!("<title>qsweep report: {}</title>\n", esc(&name)));
@@ -60,7 +61,7 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
     if plan.report_variant().is_some() {
         h.push_str(&format!(
             "<p class=\"variant\">{} <a href=\"../index.html\">All variants compared</a></p>\n",
-            esc(&notes.join(" "))
+            notes.join(" ")
         ));
     }
     if let Some(d) = &plan.description {

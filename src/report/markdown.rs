@@ -1,7 +1,10 @@
 //! `README.md` of a report folder: what a repository web page shows of it (such pages render
 //! Markdown and SVG images, not HTML pages). The same identity as `index.html` (pipeline,
-//! variant, its `set` overrides), Table III, and each system's figures.
+//! variant, its `set` overrides), Table III, and each system's figures. What the pipeline's author
+//! wrote (description, names, titles) is escaped ([`escape::markdown`]): it shows as written and
+//! never becomes HTML, a link or a heading.
 
+use super::escape;
 use super::formats::{Format, Formats};
 use super::html::identity;
 use super::model::ReportData;
@@ -11,13 +14,14 @@ use crate::analysis::CENSORING;
 /// The Markdown page of one report; `t3` is its Table III in its parts
 /// ([`super::table::table3_parts`]).
 pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
-    let (name, notes) = identity(data);
+    let (name, notes) = identity(data, escape::markdown);
+    let name = escape::markdown(&name);
     let mut m = format!("# qsweep report: {name}\n\n");
     if data.plan.report_variant().is_some() {
         m.push_str(&format!("{} [All variants compared](../README.md).\n\n", notes.join(" ")));
     }
     if let Some(d) = &data.plan.description {
-        m.push_str(&format!("{}\n\n", d.trim()));
+        m.push_str(&format!("{}\n\n", escape::markdown(d.trim())));
     }
     // Only the files this report writes (`--formats`).
     let links: Vec<String> =

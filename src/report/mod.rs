@@ -20,6 +20,7 @@
 pub mod compare;
 pub mod curves;
 pub mod datasets;
+pub mod escape;
 pub mod figures;
 mod folder;
 pub mod formats;
@@ -35,6 +36,7 @@ pub mod stage;
 pub mod stale;
 pub mod svg;
 pub mod svg_grid;
+pub mod svg_text;
 pub mod table;
 mod target;
 pub mod trials;

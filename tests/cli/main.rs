@@ -12,6 +12,7 @@ mod feasible;
 mod forest;
 mod fresh;
 mod helpers;
+mod hostile_text;
 mod json_formats;
 mod layering;
 mod library;

@@ -9,8 +9,8 @@ use super::forest::{Series, STEM, TWO_X};
 use super::selection::Selection;
 use crate::analysis::equivalence::{MARGIN, MARGIN_2X};
 use crate::plan::Plan;
+use crate::report::escape::html as escape_html;
 use crate::report::formats::Formats;
-use crate::report::table::html::escape_html;
 
 /// The plotted readings: the as-written one (the listed variant without a `set`, else the first)
 /// and the best-ranked declared one ([`super::explore::chosen`]), one series when they are the
