@@ -11,6 +11,7 @@ mod explore;
 mod feasible;
 mod forest;
 mod fresh;
+mod heatmap_blocks;
 mod helpers;
 mod hostile_text;
 mod json_formats;
