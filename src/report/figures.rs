@@ -12,6 +12,7 @@
 
 use super::glyphs::{self, TextCmd};
 use super::model::{CellData, ExpData, ReportData};
+use super::text_fit::{self, Entry, Legend};
 use crate::plan::Experiment;
 use crate::sim::env::SystemKind;
 use crate::sim::Algorithm;
@@ -31,7 +32,7 @@ pub const HEADER_H: u32 = 50;
 pub const FOOTER_H: u32 = 60;
 
 const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
+static FONT_BYTES: &[u8] = glyphs::FONT;
 static REGISTER: Once = Once::new();
 
 pub(crate) const MISSING: RGBColor = RGBColor(200, 200, 200);
@@ -41,9 +42,28 @@ const CONTENDER: RGBColor = RGBColor(255, 150, 0);
 pub(crate) const INK: RGBColor = RGBColor(30, 30, 30);
 pub(crate) const SUBTLE: RGBColor = RGBColor(90, 90, 90);
 
-/// Height of the legend band: one line more for a race's contenders.
-fn footer_h(raced: bool) -> u32 {
-    FOOTER_H + if raced { 24 } else { 0 }
+/// The legend band of a figure: what the cells' marks mean (a race's contenders too, when
+/// `raced`). It is [`FOOTER_H`] tall (24 px more when raced) where its two columns fit the
+/// figure, taller where its entries are stacked (a one-column figure).
+fn legend_band(raced: bool) -> Legend {
+    let entry = |text: &str, swatch| Entry { text: text.into(), size: 13.0, swatch };
+    let mut entries = vec![
+        entry("best cell (Table III)", true),
+        entry("* and hatched: some trials never reached the goal (counted at the episode cap)", true),
+        entry("no trials yet", true),
+        entry("values: mean episodes over the cell's trials; one colour scale per panel", false),
+    ];
+    let mut rows = vec![vec![(20, 0), (220, 1)], vec![(20, 2), (220, 3)]];
+    if raced {
+        entries.push(entry("contender: still in the race, not significantly worse than the best", true));
+        rows.push(vec![(20, 4)]);
+    }
+    Legend { entries, rows, first: 22, row_h: 24, bottom: FOOTER_H as i32 - 22 - 24 }
+}
+
+/// Height of the legend band of a figure `w` pixels wide.
+fn footer_h(raced: bool, w: u32) -> u32 {
+    legend_band(raced).place(w).1
 }
 
 /// The algorithms (figure columns) of a system's experiments, in the paper's order.
@@ -58,7 +78,8 @@ pub fn columns<E: AsRef<Experiment>>(exps: &[&E]) -> Vec<Algorithm> {
 pub fn figure_size<E: AsRef<Experiment>>(exps: &[&E]) -> (u32, u32) {
     let cols = columns(exps).len().max(1) as u32;
     let raced = exps.iter().any(|e| e.as_ref().race.is_some());
-    (cols * PANEL_W, HEADER_H + exps.len().max(1) as u32 * PANEL_H + footer_h(raced))
+    let w = cols * PANEL_W;
+    (w, HEADER_H + exps.len().max(1) as u32 * PANEL_H + footer_h(raced, w))
 }
 
 /// The figure of one system as SVG text and PNG bytes.
@@ -226,6 +247,28 @@ pub(crate) fn hatch_patterns(svg: &str, colors: &[RGBColor]) -> String {
 }
 
 impl<DB: DrawingBackend> Canvas<DB> {
+    /// A figure's title, centred in its header band, shrunk (and at worst shortened) to fit the
+    /// figure's width `w`.
+    pub(crate) fn title(&mut self, title: &str, w: u32) {
+        let (text, size) = text_fit::fit(title, f64::from(w) - 2.0 * f64::from(text_fit::MARGIN), 20.0, 9.0);
+        self.text(&text, (w as i32 / 2, HEADER_H as i32 / 2), size, INK, HPos::Center, VPos::Center);
+    }
+
+    /// A text centred at (`cx`, `y`) in at most `max` pixels: shrunk from `size` down to 9 px, then
+    /// shortened.
+    pub(crate) fn text_within(&mut self, s: &str, (cx, y): (i32, i32), max: i32, size: f64, color: RGBColor) {
+        let (text, size) = text_fit::fit(s, f64::from(max), size, 9.0);
+        self.text(&text, (cx, y), size, color, HPos::Center, VPos::Center);
+    }
+
+    /// A legend entry's text lines, placed by [`Legend::place`] in the band whose top is at `top`.
+    pub(crate) fn lines(&mut self, p: &text_fit::Placed, top: i32, e: &Entry, color: RGBColor) {
+        for (k, l) in p.lines.iter().enumerate() {
+            let y = top + p.y + k as i32 * Legend::line_h(e.size);
+            self.text(l, (p.text_x, y), e.size, color, HPos::Left, VPos::Center);
+        }
+    }
+
     pub(crate) fn text(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor, h: HPos, v: VPos) {
         self.texts.push(TextCmd { text: s.to_string(), at, size, color, h, v, rotate: false });
     }
@@ -277,9 +320,7 @@ impl<DB: DrawingBackend> Canvas<DB> {
 fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str) -> Res {
     cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
     let (w, h) = cv.root.dim_in_pixel();
-    // Shrink a title that would not fit a one-column figure (about 0.52 em per character).
-    let size = (w as f64 / (0.52 * title.chars().count() as f64)).min(20.0);
-    cv.text(title, (w as i32 / 2, HEADER_H as i32 / 2), size, INK, HPos::Center, VPos::Center);
+    cv.title(title, w);
     let cols = columns(exps);
     for (r, e) in exps.iter().enumerate() {
         for (c, &alg) in cols.iter().enumerate() {
@@ -288,7 +329,7 @@ fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str)
         }
     }
     let raced = exps.iter().any(|e| e.exp.race.is_some());
-    legend(cv, (h - footer_h(raced)) as i32, raced)
+    legend(cv, h, raced)
 }
 
 /// Sequential colour map (viridis, 9 anchors, linear in between) at t ∈ [0, 1].
@@ -357,14 +398,8 @@ pub(crate) fn panel_header<DB: DrawingBackend>(
         Some(t) => format!("Exp. {}: {t}", exp.id),
         None => format!("Exp. {}", exp.id),
     };
-    cv.text(
-        &format!("{name} — {}", alg.label(exp.repr)),
-        (cx, oy + 14),
-        15.0,
-        INK,
-        HPos::Center,
-        VPos::Center,
-    );
+    let within = PANEL_W as i32 - 2 * text_fit::MARGIN;
+    cv.text_within(&format!("{name} — {}", alg.label(exp.repr)), (cx, oy + 14), within, 15.0, INK);
     if exp.algorithms.contains(&alg) {
         return true;
     }
@@ -391,7 +426,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     if best.is_some_and(|b| !b.all_converged) {
         sub.push("no cell fully converged".into());
     }
-    cv.text(&sub.join("; "), (cx, oy + 33), 12.0, SUBTLE, HPos::Center, VPos::Center);
+    cv.text_within(&sub.join("; "), (cx, oy + 33), PANEL_W as i32 - 2 * text_fit::MARGIN, 12.0, SUBTLE);
 
     let g = Grid::of(exp, (ox, oy));
 
@@ -566,29 +601,31 @@ pub fn nice_ticks(lo: f64, hi: f64) -> (Vec<f64>, usize) {
     ((first..=last).map(|k| (k as f64 * step * unit).round() / unit).collect(), decimals)
 }
 
-/// The legend band at `y`.
-fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32, raced: bool) -> Res {
-    let y = y + 22;
-    let x = 20;
-    cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
-    cv.rect((x + 1, y - 8), (x + 25, y + 8), BEST.stroke_width(3))?;
-    cv.text("best cell (Table III)", (x + 34, y), 13.0, INK, HPos::Left, VPos::Center);
-    let x = 220;
-    cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.3).filled())?;
-    cv.hatch((x, y - 9), (x + 26, y + 9), WHITE)?;
-    let failed = "* and hatched: some trials never reached the goal (counted at the episode cap)";
-    cv.text(failed, (x + 34, y), 13.0, INK, HPos::Left, VPos::Center);
-    let y = y + 24;
-    cv.rect((20, y - 9), (46, y + 9), MISSING.filled())?;
-    cv.text("no trials yet", (54, y), 13.0, INK, HPos::Left, VPos::Center);
-    let note = "values: mean episodes over the cell's trials; one colour scale per panel";
-    cv.text(note, (220, y), 13.0, INK, HPos::Left, VPos::Center);
-    if raced {
-        let y = y + 24;
-        cv.rect((20, y - 9), (46, y + 9), viridis(0.6).filled())?;
-        cv.rect((24, y - 5), (42, y + 5), CONTENDER.stroke_width(2))?;
-        let text = "contender: still in the race, not significantly worse than the best";
-        cv.text(text, (54, y), 13.0, INK, HPos::Left, VPos::Center);
+/// The legend band at the bottom of a figure `h` pixels tall ([`legend_band`]).
+fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32, raced: bool) -> Res {
+    let band = legend_band(raced);
+    let (w, _) = cv.root.dim_in_pixel();
+    let (placed, band_h) = band.place(w);
+    let top = (h - band_h) as i32;
+    for p in &placed {
+        let (x, y) = (p.x, top + p.y);
+        match p.entry {
+            0 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
+                cv.rect((x + 1, y - 8), (x + 25, y + 8), BEST.stroke_width(3))?;
+            }
+            1 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.3).filled())?;
+                cv.hatch((x, y - 9), (x + 26, y + 9), WHITE)?;
+            }
+            2 => cv.rect((x, y - 9), (x + 26, y + 9), MISSING.filled())?,
+            4 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
+                cv.rect((x + 4, y - 5), (x + 22, y + 5), CONTENDER.stroke_width(2))?;
+            }
+            _ => {}
+        }
+        cv.lines(p, top, &band.entries[p.entry], INK);
     }
     Ok(())
 }

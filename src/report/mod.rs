@@ -39,6 +39,7 @@ pub mod svg_grid;
 pub mod svg_text;
 pub mod table;
 mod target;
+pub mod text_fit;
 pub mod trials;
 
 pub use crate::atomic::write_atomic;

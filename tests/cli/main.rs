@@ -9,6 +9,7 @@ mod error_locations;
 mod exit_codes;
 mod explore;
 mod feasible;
+mod figure_text;
 mod forest;
 mod fresh;
 mod heatmap_blocks;

@@ -129,7 +129,7 @@ pub fn write_comparison(
                     }
                 }
                 let exps: Vec<&ExpDigest> = v.exps.iter().filter(|e| e.exp.system == system).collect();
-                figs.push((&v.info, system, stem, super::figures::figure_size(&exps)));
+                figs.push((&v.info, system, stem, diff::figure_size(&exps)));
             }
         }
     }
