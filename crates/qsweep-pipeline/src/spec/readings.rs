@@ -219,7 +219,7 @@ pub(super) fn varied_names(
             })
             .collect()
     }
-    super::with_system!(&base.systems, system, |s| names(s, only)).unwrap_or_default()
+    super::pipeline::with_system!(&base.systems, system, |s| names(s, only)).unwrap_or_default()
 }
 
 /// A variant must not set what an experiment in its scope varies: the axis would silently win.

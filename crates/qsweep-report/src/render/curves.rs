@@ -14,6 +14,7 @@
 
 use crate::derive::model::{CellData, ExpData, ReportData};
 use crate::render::figures::{self, nice_ticks, Canvas, Picture, Res, INK, SUBTLE};
+use crate::render::text_fit::{self, Entry, Legend};
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
@@ -126,7 +127,31 @@ pub fn goal(success: &Success) -> (f64, String) {
 /// Pixel size of a system's curves figure with `panels` experiments.
 pub fn figure_size(panels: usize) -> (u32, u32) {
     let rows = (panels.max(1) as u32).div_ceil(PANELS_PER_ROW);
-    (PANELS_PER_ROW * PANEL_W, HEADER_H + rows * PANEL_H + FOOTER_H)
+    let w = PANELS_PER_ROW * PANEL_W;
+    (w, HEADER_H + rows * PANEL_H + legend_band().place(w).1)
+}
+
+/// The legend band: the two algorithms' lines and bands, the goal's line, and the rule past a
+/// seed's end; [`FOOTER_H`] tall where its columns fit.
+fn legend_band() -> Legend {
+    let mut entries: Vec<Entry> = [Algorithm::Q0, Algorithm::QLambda]
+        .into_iter()
+        .map(|a| Entry {
+            text: format!("{} (median, interquartile band)", a.label(qsweep_engine::repr::ReprKind::Crisp)),
+            size: 13.0,
+            swatch: true,
+        })
+        .collect();
+    entries.push(Entry { text: "learning goal".into(), size: 13.0, swatch: true });
+    entries.push(Entry {
+        text: "After a seed stops: counted at its last episode's length if it reached the goal, dropped if \
+               not. Cells: bins or fuzzy sets per state variable, in state order."
+            .into(),
+        size: 12.0,
+        swatch: false,
+    });
+    let rows = vec![vec![(20, 0), (350, 1), (680, 2)], vec![(20, 3)]];
+    Legend { entries, rows, first: 16, row_h: 22, bottom: FOOTER_H as i32 - 16 - 22 }
 }
 
 /// The curves figure of one system as SVG text and PNG bytes.
@@ -158,12 +183,12 @@ impl Picture for Curves<'_, '_> {
     fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>) -> Res {
         cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (w, h) = cv.root.dim_in_pixel();
-        cv.text(self.title, (w as i32 / 2, HEADER_H as i32 / 2), 20.0, INK, HPos::Center, VPos::Center);
+        cv.title(self.title, w);
         for (i, e) in self.exps.iter().enumerate() {
             let (r, c) = (i as u32 / PANELS_PER_ROW, i as u32 % PANELS_PER_ROW);
             panel(cv, ((c * PANEL_W) as i32, (HEADER_H + r * PANEL_H) as i32), e)?;
         }
-        legend(cv, (h - FOOTER_H) as i32)
+        legend(cv, h)
     }
 }
 
@@ -195,7 +220,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         Some(t) => format!("Exp. {}: {t} ({})", exp.id, exp.repr.name()),
         None => format!("Exp. {} ({})", exp.id, exp.repr.name()),
     };
-    cv.text(&name, (cx, oy + 14), 15.0, INK, HPos::Center, VPos::Center);
+    cv.text_within(&name, (cx, oy + 14), PANEL_W as i32 - 2 * text_fit::MARGIN, 15.0, INK);
 
     // One curve per algorithm with a best cell.
     let curves: Vec<(Algorithm, &CellData, Curve)> = exp
@@ -293,24 +318,28 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     cv.rect((left, top), (right, bottom), INK.stroke_width(1))
 }
 
-/// The legend band at `y`.
-fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32) -> Res {
-    let y = y + 16;
-    let mut x = 20;
-    for a in [Algorithm::Q0, Algorithm::QLambda] {
-        cv.rect((x, y - 7), (x + 26, y + 7), colour(a).mix(0.22).filled())?;
-        cv.line((x, y), (x + 26, y), colour(a).stroke_width(2))?;
-        let label = format!("{} (median, interquartile band)", a.label(qsweep_engine::repr::ReprKind::Crisp));
-        cv.text(&label, (x + 34, y), 13.0, INK, HPos::Left, VPos::Center);
-        x += 330;
+/// The legend band at the bottom of a figure `h` pixels tall ([`legend_band`]).
+fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32) -> Res {
+    let band = legend_band();
+    let (w, _) = cv.root.dim_in_pixel();
+    let (placed, band_h) = band.place(w);
+    let top = (h - band_h) as i32;
+    for p in &placed {
+        let (x, y) = (p.x, top + p.y);
+        match p.entry {
+            0 | 1 => {
+                let a = [Algorithm::Q0, Algorithm::QLambda][p.entry];
+                cv.rect((x, y - 7), (x + 26, y + 7), colour(a).mix(0.22).filled())?;
+                cv.line((x, y), (x + 26, y), colour(a).stroke_width(2))?;
+            }
+            2 => {
+                let path = DashedPathElement::new(vec![(x, y), (x + 26, y)], 6, 4, GOAL.stroke_width(2));
+                cv.root.draw(&path).map_err(|e| e.to_string())?;
+            }
+            _ => {}
+        }
+        cv.lines(p, top, &band.entries[p.entry], if p.entry == 3 { SUBTLE } else { INK });
     }
-    let path = DashedPathElement::new(vec![(x, y), (x + 26, y)], 6, 4, GOAL.stroke_width(2));
-    cv.root.draw(&path).map_err(|e| e.to_string())?;
-    cv.text("learning goal", (x + 34, y), 13.0, INK, HPos::Left, VPos::Center);
-    let y = y + 22;
-    let rule = "After a seed stops: counted at its last episode's length if it reached the goal, dropped if \
-                not. Cells: bins or fuzzy sets per state variable, in state order.";
-    cv.text(rule, (20, y), 12.0, SUBTLE, HPos::Left, VPos::Center);
     Ok(())
 }
 

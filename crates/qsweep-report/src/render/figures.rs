@@ -11,39 +11,50 @@
 //! `<pattern>` of the same diagonal lines ([`hatch_patterns`]), which keeps committed figures small.
 
 use crate::derive::model::{CellData, ExpData, ReportData};
-use crate::render::glyphs::{self, TextCmd};
-use plotters::coord::Shift;
+pub(crate) use crate::render::canvas::{paint_as, Canvas, Picture, Res};
+pub use crate::render::canvas::{Drawn, HEADER_H};
+pub(crate) use crate::render::canvas::{INK, SUBTLE};
+use crate::render::text_fit::{self, Entry, Legend};
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
-use plotters::style::{FontStyle, FontTransform};
+use plotters::style::text_anchor::{HPos, VPos};
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::Algorithm;
 use qsweep_pipeline::plan::Experiment;
-use std::sync::Once;
 
 /// Width of one panel, in pixels.
 pub const PANEL_W: u32 = 500;
 /// Height of one panel, in pixels.
 pub const PANEL_H: u32 = 370;
-/// Height of the figure's title band.
-pub const HEADER_H: u32 = 50;
 /// Height of the legend band.
 pub const FOOTER_H: u32 = 60;
-
-const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
-static REGISTER: Once = Once::new();
 
 pub(crate) const MISSING: RGBColor = RGBColor(200, 200, 200);
 const BEST: RGBColor = RGBColor(220, 0, 0);
 /// Outline of a race's final contenders (orange, inside the best cell's red).
 const CONTENDER: RGBColor = RGBColor(255, 150, 0);
-pub(crate) const INK: RGBColor = RGBColor(30, 30, 30);
-pub(crate) const SUBTLE: RGBColor = RGBColor(90, 90, 90);
 
-/// Height of the legend band: one line more for a race's contenders.
-fn footer_h(raced: bool) -> u32 {
-    FOOTER_H + if raced { 24 } else { 0 }
+/// The legend band of a figure: what the cells' marks mean (a race's contenders too, when
+/// `raced`). It is [`FOOTER_H`] tall (24 px more when raced) where its two columns fit the
+/// figure, taller where its entries are stacked (a one-column figure).
+fn legend_band(raced: bool) -> Legend {
+    let entry = |text: &str, swatch| Entry { text: text.into(), size: 13.0, swatch };
+    let mut entries = vec![
+        entry("best cell (Table III)", true),
+        entry("* and hatched: some trials never reached the goal (counted at the episode cap)", true),
+        entry("no trials yet", true),
+        entry("values: mean episodes over the cell's trials; one colour scale per panel", false),
+    ];
+    let mut rows = vec![vec![(20, 0), (220, 1)], vec![(20, 2), (220, 3)]];
+    if raced {
+        entries.push(entry("contender: still in the race, not significantly worse than the best", true));
+        rows.push(vec![(20, 4)]);
+    }
+    Legend { entries, rows, first: 22, row_h: 24, bottom: FOOTER_H as i32 - 22 - 24 }
+}
+
+/// Height of the legend band of a figure `w` pixels wide.
+fn footer_h(raced: bool, w: u32) -> u32 {
+    legend_band(raced).place(w).1
 }
 
 /// The algorithms (figure columns) of a system's experiments, in the paper's order.
@@ -58,7 +69,8 @@ pub fn columns<E: AsRef<Experiment>>(exps: &[&E]) -> Vec<Algorithm> {
 pub fn figure_size<E: AsRef<Experiment>>(exps: &[&E]) -> (u32, u32) {
     let cols = columns(exps).len().max(1) as u32;
     let raced = exps.iter().any(|e| e.as_ref().race.is_some());
-    (cols * PANEL_W, HEADER_H + exps.len().max(1) as u32 * PANEL_H + footer_h(raced))
+    let w = cols * PANEL_W;
+    (w, HEADER_H + exps.len().max(1) as u32 * PANEL_H + footer_h(raced, w))
 }
 
 /// The figure of one system as SVG text and PNG bytes.
@@ -77,21 +89,6 @@ pub fn render_as(data: &ReportData, system: SystemKind, svg: bool, png: bool) ->
         .map_err(|e| anyhow::anyhow!("drawing the {system} figure: {e}"))
 }
 
-/// A figure drawn as SVG text and/or PNG bytes.
-#[derive(Debug, Clone, Default)]
-pub struct Drawn {
-    /// The SVG text ([`crate::render::svg::compact`]ed), if asked for.
-    pub svg: Option<String>,
-    /// The PNG bytes, if asked for.
-    pub png: Option<Vec<u8>>,
-}
-
-/// What a figure draws: called once for the SVG and once for the bitmap, with the same result.
-pub(crate) trait Picture {
-    /// Draw onto `cv` (shapes directly, text through [`Canvas::text`]).
-    fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>) -> Res;
-}
-
 struct Heatmaps<'a, 'b> {
     exps: &'a [&'a ExpData<'b>],
     title: &'a str,
@@ -103,184 +100,10 @@ impl Picture for Heatmaps<'_, '_> {
     }
 }
 
-/// Draw `picture` as SVG (if `svg`) and PNG (if `png`).
-pub(crate) fn paint_as(
-    picture: &impl Picture,
-    size: (u32, u32),
-    svg: bool,
-    png: bool,
-) -> Result<Drawn, String> {
-    REGISTER.call_once(|| {
-        if plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_err() {
-            panic!("the embedded font is a valid TrueType file");
-        }
-    });
-    Ok(Drawn {
-        svg: if svg { Some(paint_svg(picture, size)?) } else { None },
-        png: if png { Some(paint_png(picture, size)?) } else { None },
-    })
-}
-
-fn paint_svg(picture: &impl Picture, (w, h): (u32, u32)) -> Result<String, String> {
-    let mut svg = String::new();
-    let hatches = {
-        let mut canvas = Canvas {
-            root: SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(),
-            texts: Vec::new(),
-            hatch_marks: Some(Vec::new()),
-        };
-        picture.draw(&mut canvas)?;
-        for t in std::mem::take(&mut canvas.texts) {
-            let mut font = (FONT, t.size).into_font();
-            if t.rotate {
-                font = font.transform(FontTransform::Rotate270);
-            }
-            let style = font.color(&t.color).pos(Pos::new(t.h, t.v));
-            canvas.root.draw(&Text::new(t.text, t.at, style)).map_err(|e| e.to_string())?;
-        }
-        canvas.root.present().map_err(|e| e.to_string())?;
-        canvas.hatch_marks.unwrap_or_default()
-    };
-    Ok(crate::render::svg::compact_with(&svg, |s| hatch_patterns(&s, &hatches)))
-}
-
-fn paint_png(picture: &impl Picture, (w, h): (u32, u32)) -> Result<Vec<u8>, String> {
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    let texts = {
-        let mut canvas = Canvas {
-            root: BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area(),
-            texts: Vec::new(),
-            hatch_marks: None,
-        };
-        picture.draw(&mut canvas)?;
-        canvas.root.present().map_err(|e| e.to_string())?;
-        canvas.texts
-    };
-    glyphs::draw(FONT_BYTES, &mut rgb, w, h, &texts).map_err(|e| e.to_string())?;
-    encode_png(&rgb, w, h).map_err(|e| e.to_string())
-}
-
-fn encode_png(rgb: &[u8], w: u32, h: u32) -> anyhow::Result<Vec<u8>> {
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, w, h);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header()?;
-        writer.write_image_data(rgb)?;
-        writer.finish()?;
-    }
-    Ok(out)
-}
-
-/// A drawing step's result (plotters' errors as text).
-pub(crate) type Res = Result<(), String>;
-
-/// A drawing area plus the text drawn on it, kept aside to be written last.
-pub(crate) struct Canvas<DB: DrawingBackend> {
-    /// The drawing area.
-    pub(crate) root: DrawingArea<DB, Shift>,
-    /// Text to write after the shapes.
-    pub(crate) texts: Vec<TextCmd>,
-    /// In SVG: the hatch colours used so far. A hatched area is then one rectangle filled with a
-    /// marker colour that [`hatch_patterns`] turns into a pattern fill (one element instead of a
-    /// dozen lines); in PNG (`None`) the lines are drawn.
-    pub(crate) hatch_marks: Option<Vec<RGBColor>>,
-}
-
-/// The marker fill of hatch colour `k` (an otherwise unused near-black).
-fn hatch_marker(k: usize) -> RGBColor {
-    RGBColor(1, 2, k as u8)
-}
-
-/// Replace the marker fills of [`Canvas::hatch`] in compacted SVG text by pattern fills: the same
-/// diagonal lines every 7 px at 45 % opacity, defined once per colour after the root element.
-pub(crate) fn hatch_patterns(svg: &str, colors: &[RGBColor]) -> String {
-    if colors.is_empty() {
-        return svg.to_string();
-    }
-    let hex = |c: &RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
-    let mut defs = String::from("<defs>");
-    for (k, c) in colors.iter().enumerate() {
-        defs.push_str(&format!(
-            "<pattern id=\"hatch{k}\" width=\"7\" height=\"7\" patternUnits=\"userSpaceOnUse\"><path d=\"M-1,1 L1,-1 M0,7 L7,0 M6,8 L8,6\" stroke=\"{}\" stroke-opacity=\"0.45\" stroke-width=\"1\"/></pattern>",
-            hex(c)
-        ));
-    }
-    defs.push_str("</defs>\n");
-    let subs: Vec<(String, String)> = (0..colors.len())
-        .map(|k| (format!("fill=\"{}\"", hex(&hatch_marker(k))), format!("fill=\"url(#hatch{k})\"")))
-        .collect();
-    let mut out = String::with_capacity(svg.len() + defs.len());
-    for (i, line) in svg.lines().enumerate() {
-        let mut l = line.to_string();
-        for (from, to) in &subs {
-            l = l.replace(from, to);
-        }
-        out.push_str(&l);
-        out.push('\n');
-        if i == 0 {
-            out.push_str(&defs);
-        }
-    }
-    out
-}
-
-impl<DB: DrawingBackend> Canvas<DB> {
-    pub(crate) fn text(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor, h: HPos, v: VPos) {
-        self.texts.push(TextCmd { text: s.to_string(), at, size, color, h, v, rotate: false });
-    }
-
-    pub(crate) fn text_up(&mut self, s: &str, at: (i32, i32), size: f64, color: RGBColor) {
-        self.texts.push(TextCmd {
-            text: s.to_string(),
-            at,
-            size,
-            color,
-            h: HPos::Center,
-            v: VPos::Center,
-            rotate: true,
-        });
-    }
-
-    pub(crate) fn rect(&self, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Res {
-        self.root.draw(&Rectangle::new([a, b], style)).map_err(|e| e.to_string())
-    }
-
-    pub(crate) fn line(&self, a: (i32, i32), b: (i32, i32), style: ShapeStyle) -> Res {
-        self.root.draw(&PathElement::new(vec![a, b], style)).map_err(|e| e.to_string())
-    }
-
-    /// Diagonal hatching clipped to a rectangle.
-    pub(crate) fn hatch(&mut self, (x0, y0): (i32, i32), (x1, y1): (i32, i32), color: RGBColor) -> Res {
-        if let Some(colors) = &mut self.hatch_marks {
-            let k = colors.iter().position(|c| *c == color).unwrap_or_else(|| {
-                colors.push(color);
-                colors.len() - 1
-            });
-            return self.rect((x0, y0), (x1, y1), hatch_marker(k).filled());
-        }
-        let style = color.mix(0.45).stroke_width(1);
-        let mut k = 4;
-        while k < (x1 - x0) + (y1 - y0) {
-            // The line x + y = c clipped to the rectangle, from lower-left to upper-right.
-            let c = x0 + y0 + k;
-            let (xa, xb) = (x0.max(c - y1), x1.min(c - y0));
-            if xa < xb {
-                self.line((xa, c - xa), (xb, c - xb), style)?;
-            }
-            k += 7;
-        }
-        Ok(())
-    }
-}
-
 fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str) -> Res {
     cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
     let (w, h) = cv.root.dim_in_pixel();
-    // Shrink a title that would not fit a one-column figure (about 0.52 em per character).
-    let size = (w as f64 / (0.52 * title.chars().count() as f64)).min(20.0);
-    cv.text(title, (w as i32 / 2, HEADER_H as i32 / 2), size, INK, HPos::Center, VPos::Center);
+    cv.title(title, w);
     let cols = columns(exps);
     for (r, e) in exps.iter().enumerate() {
         for (c, &alg) in cols.iter().enumerate() {
@@ -289,7 +112,7 @@ fn draw<DB: DrawingBackend>(cv: &mut Canvas<DB>, exps: &[&ExpData], title: &str)
         }
     }
     let raced = exps.iter().any(|e| e.exp.race.is_some());
-    legend(cv, (h - footer_h(raced)) as i32, raced)
+    legend(cv, h, raced)
 }
 
 /// Sequential colour map (viridis, 9 anchors, linear in between) at t ∈ [0, 1].
@@ -358,14 +181,8 @@ pub(crate) fn panel_header<DB: DrawingBackend>(
         Some(t) => format!("Exp. {}: {t}", exp.id),
         None => format!("Exp. {}", exp.id),
     };
-    cv.text(
-        &format!("{name} — {}", alg.label(exp.repr)),
-        (cx, oy + 14),
-        15.0,
-        INK,
-        HPos::Center,
-        VPos::Center,
-    );
+    let within = PANEL_W as i32 - 2 * text_fit::MARGIN;
+    cv.text_within(&format!("{name} — {}", alg.label(exp.repr)), (cx, oy + 14), within, 15.0, INK);
     if exp.algorithms.contains(&alg) {
         return true;
     }
@@ -396,7 +213,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     if best.is_some_and(|b| !b.all_converged) {
         sub.push("no cell fully converged".into());
     }
-    cv.text(&sub.join("; "), (cx, oy + 33), 12.0, SUBTLE, HPos::Center, VPos::Center);
+    cv.text_within(&sub.join("; "), (cx, oy + 33), PANEL_W as i32 - 2 * text_fit::MARGIN, 12.0, SUBTLE);
 
     let g = Grid::of(exp, (ox, oy));
 
@@ -578,29 +395,31 @@ pub fn nice_ticks(lo: f64, hi: f64) -> (Vec<f64>, usize) {
     ((first..=last).map(|k| (k as f64 * step * unit).round() / unit).collect(), decimals)
 }
 
-/// The legend band at `y`.
-fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32, raced: bool) -> Res {
-    let y = y + 22;
-    let x = 20;
-    cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
-    cv.rect((x + 1, y - 8), (x + 25, y + 8), BEST.stroke_width(3))?;
-    cv.text("best cell (Table III)", (x + 34, y), 13.0, INK, HPos::Left, VPos::Center);
-    let x = 220;
-    cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.3).filled())?;
-    cv.hatch((x, y - 9), (x + 26, y + 9), WHITE)?;
-    let failed = "* and hatched: some trials never reached the goal (counted at the episode cap)";
-    cv.text(failed, (x + 34, y), 13.0, INK, HPos::Left, VPos::Center);
-    let y = y + 24;
-    cv.rect((20, y - 9), (46, y + 9), MISSING.filled())?;
-    cv.text("no trials yet", (54, y), 13.0, INK, HPos::Left, VPos::Center);
-    let note = "values: mean episodes over the cell's trials; one colour scale per panel";
-    cv.text(note, (220, y), 13.0, INK, HPos::Left, VPos::Center);
-    if raced {
-        let y = y + 24;
-        cv.rect((20, y - 9), (46, y + 9), viridis(0.6).filled())?;
-        cv.rect((24, y - 5), (42, y + 5), CONTENDER.stroke_width(2))?;
-        let text = "contender: still in the race, not significantly worse than the best";
-        cv.text(text, (54, y), 13.0, INK, HPos::Left, VPos::Center);
+/// The legend band at the bottom of a figure `h` pixels tall ([`legend_band`]).
+fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32, raced: bool) -> Res {
+    let band = legend_band(raced);
+    let (w, _) = cv.root.dim_in_pixel();
+    let (placed, band_h) = band.place(w);
+    let top = (h - band_h) as i32;
+    for p in &placed {
+        let (x, y) = (p.x, top + p.y);
+        match p.entry {
+            0 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
+                cv.rect((x + 1, y - 8), (x + 25, y + 8), BEST.stroke_width(3))?;
+            }
+            1 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.3).filled())?;
+                cv.hatch((x, y - 9), (x + 26, y + 9), WHITE)?;
+            }
+            2 => cv.rect((x, y - 9), (x + 26, y + 9), MISSING.filled())?,
+            4 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
+                cv.rect((x + 4, y - 5), (x + 22, y + 5), CONTENDER.stroke_width(2))?;
+            }
+            _ => {}
+        }
+        cv.lines(p, top, &band.entries[p.entry], INK);
     }
     Ok(())
 }

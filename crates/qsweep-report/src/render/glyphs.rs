@@ -3,9 +3,13 @@
 //! left side bearings, which squeezes `= 2` into `=2`). Sizes are CSS pixels (the em), as in the
 //! SVG, so both files lay text out alike.
 
-use ab_glyph::{point, Font, FontRef, PxScale, ScaleFont};
+use ab_glyph::{point, Font, FontRef, Glyph, PxScale, ScaleFont};
 use plotters::style::text_anchor::{HPos, VPos};
 use plotters::style::RGBColor;
+
+/// The figures' font: a DejaVu Sans subset (`assets/fonts`), embedded so that no system font
+/// library is involved and the PNG is the same on every machine.
+pub static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
 
 /// One piece of text to draw.
 #[derive(Clone)]
@@ -26,25 +30,46 @@ pub struct TextCmd {
     pub rotate: bool,
 }
 
+/// The scale of a text of `size` pixels per em.
+fn scale(font: &FontRef, size: f64) -> PxScale {
+    let em_to_height = font.height_unscaled() / font.units_per_em().unwrap_or(2048.0);
+    PxScale::from(size as f32 * em_to_height)
+}
+
+/// The glyphs of `text` on one line from x = 0 (kerned), and the line's advance width.
+fn line(font: &FontRef, text: &str, scale: PxScale) -> (Vec<Glyph>, f32) {
+    let sf = font.as_scaled(scale);
+    let mut caret = 0.0f32;
+    let mut prev = None;
+    let mut glyphs = Vec::new();
+    for c in text.chars() {
+        let id = sf.glyph_id(c);
+        if let Some(p) = prev {
+            caret += sf.kern(p, id);
+        }
+        glyphs.push(id.with_scale_and_position(scale, point(caret, 0.0)));
+        caret += sf.h_advance(id);
+        prev = Some(id);
+    }
+    (glyphs, caret)
+}
+
+/// The advance width of `text` at `size` pixels per em in the font `font_bytes`, in pixels: the
+/// width [`draw`] gives it.
+pub fn text_width(font_bytes: &[u8], text: &str, size: f64) -> f64 {
+    match FontRef::try_from_slice(font_bytes) {
+        Ok(font) => f64::from(line(&font, text, scale(&font, size)).1),
+        Err(_) => 0.6 * size * text.chars().count() as f64,
+    }
+}
+
 /// Draw `cmds` onto an RGB8 buffer of width `w` and height `h`.
 pub fn draw(font_bytes: &[u8], rgb: &mut [u8], w: u32, h: u32, cmds: &[TextCmd]) -> anyhow::Result<()> {
     let font = FontRef::try_from_slice(font_bytes).map_err(|e| anyhow::anyhow!("embedded font: {e}"))?;
-    let em_to_height = font.height_unscaled() / font.units_per_em().unwrap_or(2048.0);
     for cmd in cmds {
-        let scale = PxScale::from(cmd.size as f32 * em_to_height);
+        let scale = scale(&font, cmd.size);
         let sf = font.as_scaled(scale);
-        let mut caret = 0.0f32;
-        let mut prev = None;
-        let mut glyphs = Vec::new();
-        for c in cmd.text.chars() {
-            let id = sf.glyph_id(c);
-            if let Some(p) = prev {
-                caret += sf.kern(p, id);
-            }
-            glyphs.push(id.with_scale_and_position(scale, point(caret, 0.0)));
-            caret += sf.h_advance(id);
-            prev = Some(id);
-        }
+        let (glyphs, caret) = line(&font, &cmd.text, scale);
         let dx = match cmd.h {
             HPos::Left => 0.0,
             HPos::Center => -caret / 2.0,

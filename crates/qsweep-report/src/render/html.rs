@@ -7,7 +7,7 @@ use crate::derive::model::{ExpData, ReportData};
 use crate::derive::table::{cell_table, table3_parts, TABLE3_PARTS};
 use crate::kinds::{Format, Formats};
 use crate::render::curves::CURVE_RULE;
-use crate::render::table::html::escape_html as esc;
+use crate::render::escape::html as esc;
 use crate::render::table::{render, Html};
 use qsweep_pipeline::analysis::{BEST_RULE, CENSORING};
 
@@ -32,17 +32,18 @@ img{max-width:100%;height:auto;border:1px solid #eee}
 
 /// Which report a page belongs to, as its heading and first paragraph say: the pipeline, and for
 /// a variant's folder the variant's id, title and `set` overrides, with a link back to the
-/// comparison of all variants.
-pub(crate) fn identity(data: &ReportData) -> (String, Vec<String>) {
+/// comparison of all variants. The name comes as written; in the notes, what the pipeline's
+/// author wrote is already escaped with `esc` (the page's format, [`crate::render::escape`]).
+pub(crate) fn identity(data: &ReportData, esc: fn(&str) -> String) -> (String, Vec<String>) {
     let plan = data.plan;
     let mut notes = Vec::new();
     if let Some(v) = plan.report_variant() {
-        let title = v.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
-        notes.push(format!("Variant {}{title} of pipeline {}.", v.id, plan.name));
+        let title = v.title.as_deref().map(|t| format!(": {}", esc(t))).unwrap_or_default();
+        notes.push(format!("Variant {}{title} of pipeline {}.", esc(&v.id), esc(&plan.name)));
         if v.set.is_empty() {
             notes.push("Its settings: the pipeline as written (no `set`).".into());
         } else {
-            notes.push(format!("Its settings: the pipeline with {}.", v.set.join(", ")));
+            notes.push(format!("Its settings: the pipeline with {}.", esc(&v.set.join(", "))));
         }
     }
     (plan.report_name(), notes)
@@ -52,7 +53,7 @@ pub(crate) fn identity(data: &ReportData) -> (String, Vec<String>) {
 /// when written, else the PNG; none without either).
 pub fn page(data: &ReportData, formats: Formats) -> String {
     let plan = data.plan;
-    let (name, notes) = identity(data);
+    let (name, notes) = identity(data, esc);
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     h.push_str(&format!("<title>qsweep report: {}</title>\n", esc(&name)));
@@ -61,7 +62,7 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
     if plan.report_variant().is_some() {
         h.push_str(&format!(
             "<p class=\"variant\">{} <a href=\"../index.html\">All variants compared</a></p>\n",
-            esc(&notes.join(" "))
+            notes.join(" ")
         ));
     }
     if let Some(d) = &plan.description {

@@ -1,23 +1,27 @@
 //! `README.md` of a report folder: what a repository web page shows of it (such pages render
 //! Markdown and SVG images, not HTML pages). The same identity as `index.html` (pipeline,
-//! variant, its `set` overrides), Table III, and each system's figures.
+//! variant, its `set` overrides), Table III, and each system's figures. What the pipeline's author
+//! wrote (description, names, titles) is escaped ([`escape::markdown`]): it shows as written and
+//! never becomes HTML, a link or a heading.
 
 use crate::derive::model::ReportData;
 use crate::kinds::{Format, Formats};
+use crate::render::escape;
 use crate::render::html::identity;
 use crate::render::table::{render, Markdown, Table};
 use qsweep_pipeline::analysis::CENSORING;
 
 /// The Markdown page of one report; `t3` is its Table III in its parts
-/// ([`crate::render::table::table3_parts`]).
+/// ([`crate::derive::table::table3_parts`]).
 pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
-    let (name, notes) = identity(data);
+    let (name, notes) = identity(data, escape::markdown);
+    let name = escape::markdown(&name);
     let mut m = format!("# qsweep report: {name}\n\n");
     if data.plan.report_variant().is_some() {
         m.push_str(&format!("{} [All variants compared](../README.md).\n\n", notes.join(" ")));
     }
     if let Some(d) = &data.plan.description {
-        m.push_str(&format!("{}\n\n", d.trim()));
+        m.push_str(&format!("{}\n\n", escape::markdown(d.trim())));
     }
     // Only the files this report writes (`--formats`).
     let links: Vec<String> =

@@ -4,9 +4,11 @@
 //! comparison's pages and figures ([`compare`]). Pure functions of what [`crate::derive`] computed:
 //! the same numbers give the same bytes.
 
+pub mod canvas;
 pub mod compare;
 pub mod curves;
 pub mod datasets;
+pub mod escape;
 pub mod figures;
 pub mod folder;
 pub mod glyphs;
@@ -14,4 +16,6 @@ pub mod html;
 pub mod markdown;
 pub mod svg;
 pub mod svg_grid;
+pub mod svg_text;
 pub mod table;
+pub mod text_fit;

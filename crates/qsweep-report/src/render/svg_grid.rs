@@ -1,9 +1,20 @@
 //! Heatmap grids drawn as one image: a figure's heatmaps are most of its bytes (one `<rect>` of
 //! about 60 bytes per cell, 81 cells per heatmap, eight heatmaps per figure). [`grid_images`]
-//! replaces every complete grid of cell rectangles by a PNG of one pixel per cell, scaled to the
-//! grid's box without smoothing, and one white path of the cell borders the rectangles' strokes
-//! drew; what was drawn over the cells (hatching) is kept, after the image. A run of rectangles
-//! that is not a complete grid is left as it was.
+//! replaces every complete grid of cell rectangles by a PNG, scaled to the grid's box, and one
+//! white path of the cell borders the rectangles' strokes drew; what was drawn over the cells
+//! (hatching) is kept, after the image. A run of rectangles that is not a complete grid is left as
+//! it was.
+//!
+//! A heatmap's PNG draws each cell as a uniform block of k × k pixels ([`block_px`]: at least 2,
+//! and enough that one image pixel covers at most [`MAX_SCALE`] pixels of the figure), so a viewer
+//! that smooths the image as it scales it up (librsvg, Inkscape and most converters ignore
+//! `image-rendering: pixelated`, which browsers honour) blends two cells only in a band of about
+//! `MAX_SCALE` pixels at their edge, half of it under the white border, and every cell shows its
+//! own colour as in a browser. (PNG's row filters and deflate store the repeated pixels in a few
+//! bytes; a larger k would cost the committed reports more than their budget.) A colour bar's PNG keeps one
+//! pixel per step: smoothed, its steps of a continuous scale become the gradient they stand for.
+//! An image drawn more than once in a figure (every panel's colour bar is the same) is stored once,
+//! as a `<symbol>` that each place `<use>`s.
 //!
 //! A cell here is what [`crate::render::svg`]'s merge step writes for a heatmap cell,
 //! `<rect x="X" y="Y" width="W" height="H" fill="#RRGGBB" stroke="#FFFFFF"/>` (whole pixels), or
@@ -26,16 +37,38 @@ struct Cell<'a> {
 /// The smallest grid worth an image.
 const MIN_CELLS: usize = 4;
 
+/// At most this many pixels of the figure per pixel of a heatmap's PNG, along either side.
+pub const MAX_SCALE: f64 = 4.0;
+
+/// Pixels per side of the blocks of a heatmap's PNG whose cells are drawn `cw` × `ch` pixels: the
+/// fewest that keep each image pixel within [`MAX_SCALE`] figure pixels, and at least 2.
+pub fn block_px(cw: f64, ch: f64) -> usize {
+    ((cw.max(ch) / MAX_SCALE).ceil() as usize).max(2)
+}
+
+/// What replaces a grid: lines of SVG, and its image (placed where the grid was).
+enum Piece<'a> {
+    Line(&'a str),
+    Owned(String),
+    Image {
+        /// The box the image fills: x, y, width, height.
+        at: (i64, i64, i64, i64),
+        /// The PNG's pixel size.
+        px: (usize, usize),
+        /// The PNG, base64.
+        data: String,
+    },
+}
+
 /// Rewrite every complete grid of heatmap cells in `svg` (one element per line) as described in
 /// the module documentation.
 pub fn grid_images(svg: &str) -> String {
     let lines: Vec<&str> = svg.lines().collect();
-    let mut out = String::with_capacity(svg.len());
+    let mut pieces = Vec::with_capacity(lines.len());
     let mut i = 0;
     while i < lines.len() {
         let Some(first) = cell(lines[i]) else {
-            out.push_str(lines[i]);
-            out.push('\n');
+            pieces.push(Piece::Line(lines[i]));
             i += 1;
             continue;
         };
@@ -53,8 +86,52 @@ pub fn grid_images(svg: &str) -> String {
             i += 1;
         }
         for grid in split_grids(run) {
-            emit(&mut out, &grid);
+            emit(&mut pieces, &grid);
         }
+    }
+    write(&pieces, svg.len())
+}
+
+/// The pieces as SVG text: an image drawn once in place, one drawn more often as a symbol (defined
+/// where it is first drawn) that each place uses.
+fn write(pieces: &[Piece], capacity: usize) -> String {
+    let mut count = std::collections::HashMap::new();
+    for p in pieces {
+        if let Piece::Image { data, .. } = p {
+            *count.entry(data.as_str()).or_insert(0usize) += 1;
+        }
+    }
+    let mut ids: Vec<&str> = Vec::new();
+    let mut out = String::with_capacity(capacity);
+    for p in pieces {
+        match p {
+            Piece::Line(l) => out.push_str(l),
+            Piece::Owned(l) => out.push_str(l),
+            Piece::Image { at: (x, y, w, h), px: (pw, ph), data } => {
+                const STYLE: &str = "style=\"image-rendering:pixelated\"";
+                if count[data.as_str()] == 1 {
+                    out.push_str(&format!(
+                        "<image x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\" preserveAspectRatio=\"none\" \
+                         {STYLE} href=\"data:image/png;base64,{data}\"/>"
+                    ));
+                } else {
+                    let k = ids.iter().position(|d| d == data).unwrap_or_else(|| {
+                        out.push_str(&format!(
+                            "<defs><symbol id=\"px{}\" viewBox=\"0 0 {pw} {ph}\" preserveAspectRatio=\"none\">\
+                             <image width=\"{pw}\" height=\"{ph}\" {STYLE} href=\"data:image/png;base64,{data}\"/>\
+                             </symbol></defs>\n",
+                            ids.len()
+                        ));
+                        ids.push(data);
+                        ids.len() - 1
+                    });
+                    out.push_str(&format!(
+                        "<use href=\"#px{k}\" x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\"/>"
+                    ));
+                }
+            }
+        }
+        out.push('\n');
     }
     out
 }
@@ -142,28 +219,32 @@ fn lattice(g: &[Cell]) -> Option<(Vec<i64>, Vec<i64>, Vec<usize>)> {
     (even(&xs) && even(&ys)).then_some((xs, ys, rows))
 }
 
-fn emit(out: &mut String, g: &[Cell]) {
+fn emit<'a>(out: &mut Vec<Piece<'a>>, g: &[Cell<'a>]) {
     let Some((xs, ys, rows)) = lattice(g) else {
         for c in g {
-            out.push_str(c.line);
-            out.push('\n');
-            for o in &c.overlays {
-                out.push_str(o);
-                out.push('\n');
-            }
+            out.push(Piece::Line(c.line));
+            out.extend(c.overlays.iter().map(|o| Piece::Line(o)));
         }
         return;
     };
     let (nx, ny) = (xs.len() - 1, ys.len() - 1);
-    let pixels: Vec<u8> = rows.iter().flat_map(|&r| &g[r..r + nx]).flat_map(|c| c.rgb).collect();
     let (x0, y0, x1, y1) = (xs[0], ys[0], xs[nx], ys[ny]);
-    out.push_str(&format!(
-        "<image x=\"{x0}\" y=\"{y0}\" width=\"{}\" height=\"{}\" preserveAspectRatio=\"none\" \
-         style=\"image-rendering:pixelated\" href=\"data:image/png;base64,{}\"/>\n",
-        x1 - x0,
-        y1 - y0,
-        base64(&png(nx as u32, ny as u32, &pixels))
-    ));
+    // A heatmap's cell is a block of k × k pixels; a colour bar's step one pixel.
+    let k =
+        if g[0].bordered { block_px((x1 - x0) as f64 / nx as f64, (y1 - y0) as f64 / ny as f64) } else { 1 };
+    let mut pixels = Vec::with_capacity(nx * ny * k * k * 3);
+    for &r in &rows {
+        let row: Vec<u8> = g[r..r + nx].iter().flat_map(|c| (0..k).flat_map(|_| c.rgb)).collect();
+        for _ in 0..k {
+            pixels.extend_from_slice(&row);
+        }
+    }
+    let (pw, ph) = (nx * k, ny * k);
+    out.push(Piece::Image {
+        at: (x0, y0, x1 - x0, y1 - y0),
+        px: (pw, ph),
+        data: base64(&png(pw as u32, ph as u32, &pixels)),
+    });
     if g[0].bordered {
         let mut d = String::new();
         for &y in &ys {
@@ -172,12 +253,9 @@ fn emit(out: &mut String, g: &[Cell]) {
         for &x in &xs {
             d.push_str(&format!("M{x} {y0}V{y1}"));
         }
-        out.push_str(&format!("<path fill=\"none\" stroke=\"#FFFFFF\" d=\"{d}\"/>\n"));
+        out.push(Piece::Owned(format!("<path fill=\"none\" stroke=\"#FFFFFF\" d=\"{d}\"/>")));
     }
-    for o in g.iter().flat_map(|c| &c.overlays) {
-        out.push_str(o);
-        out.push('\n');
-    }
+    out.extend(g.iter().flat_map(|c| &c.overlays).map(|o| Piece::Line(o)));
 }
 
 /// An 8-bit RGB PNG of `w` × `h` pixels, row by row.
@@ -253,15 +331,58 @@ mod tests {
         let image_at = out.find("<image").unwrap();
         assert!(image_at < out.find(hatch).unwrap(), "overlays are drawn after the image");
         assert!(out.ends_with("<text>after</text>\n</svg>\n"));
-        // The PNG holds one pixel per cell, row by row.
+        // The PNG holds a block of k × k pixels per cell, row by row: cells of 10 or 11 × 10
+        // pixels are blocks of 3 × 3 (at most 4 figure pixels per image pixel).
         let b64 = out.split("base64,").nth(1).unwrap().split('"').next().unwrap();
-        let bytes = decode_base64(b64);
-        let mut dec = png::Decoder::new(std::io::Cursor::new(bytes)).read_info().unwrap();
-        let mut buf = vec![0; dec.output_buffer_size().unwrap()];
-        let info = dec.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height), (3, 2));
-        let reds: Vec<u8> = buf[..info.buffer_size()].chunks(3).map(|p| p[0]).collect();
-        assert_eq!(reds, vec![0x11, 0x22, 0x33, 0x44, 0x55, 0x66]);
+        let (w, h, rgb) = decode_png(b64);
+        let k = 3;
+        assert_eq!(block_px(31.0 / 3.0, 10.0), k);
+        assert_eq!((w, h), (3 * k, 2 * k));
+        for y in 0..h {
+            for x in 0..w {
+                let cell = y / k * 3 + x / k;
+                assert_eq!(
+                    rgb[(y * w + x) * 3],
+                    [0x11, 0x22, 0x33, 0x44, 0x55, 0x66][cell],
+                    "pixel ({x}, {y})"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn blocks_keep_an_image_pixel_within_four_figure_pixels() {
+        assert_eq!(block_px(1.0, 1.0), 2, "at least 2");
+        assert_eq!(block_px(8.0, 3.0), 2);
+        assert_eq!(block_px(37.1, 28.9), 10);
+        assert_eq!(block_px(40.0, 167.0), 42);
+    }
+
+    #[test]
+    fn an_image_drawn_twice_is_stored_once() {
+        let bar = |x: i64| -> String {
+            (0..5)
+                .map(|k| {
+                    format!(
+                        "<rect x=\"{x}\" y=\"{}\" width=\"3\" height=\"4\" fill=\"#0{k}0000\" stroke=\"none\"/>\n",
+                        40 - 4 * k
+                    )
+                })
+                .collect()
+        };
+        let tall: String = (0..5)
+            .map(|k| format!("<rect x=\"200\" y=\"{}\" width=\"3\" height=\"8\" fill=\"#0{k}0000\" stroke=\"none\"/>\n", 80 - 8 * k))
+            .collect();
+        let out = grid_images(&format!(
+            "<svg>\n{}<text>a</text>\n{}<text>b</text>\n{tall}</svg>\n",
+            bar(7),
+            bar(100)
+        ));
+        assert_eq!(out.matches("base64,").count(), 1, "{out}");
+        assert!(out.starts_with("<svg>\n<defs><symbol id=\"px0\" viewBox=\"0 0 1 5\" preserveAspectRatio=\"none\"><image width=\"1\" height=\"5\" style=\"image-rendering:pixelated\" href=\"data:image/png;base64,"), "{out}");
+        assert!(out.contains("</symbol></defs>\n<use href=\"#px0\" x=\"7\" y=\"24\" width=\"3\" height=\"20\"/>\n<text>a</text>\n<use href=\"#px0\" x=\"100\" y=\"24\" width=\"3\" height=\"20\"/>\n<text>b</text>\n<use href=\"#px0\" x=\"200\" y=\"48\" width=\"3\" height=\"40\"/>\n</svg>\n"), "{out}");
+        let doc = roxmltree::Document::parse(&out).unwrap();
+        assert_eq!(doc.descendants().filter(|n| n.has_tag_name("use")).count(), 3);
     }
 
     #[test]
@@ -301,12 +422,19 @@ mod tests {
         assert!(out.starts_with("<image x=\"7\" y=\"24\" width=\"3\" height=\"20\""), "{out}");
         assert!(!out.contains("<path") && !out.contains("<rect"), "{out}");
         let b64 = out.split("base64,").nth(1).unwrap().split('"').next().unwrap();
+        let (w, h, rgb) = decode_png(b64);
+        assert_eq!((w, h), (1, 5), "one pixel per step");
+        let reds: Vec<u8> = rgb.chunks(3).map(|p| p[0]).collect();
+        assert_eq!(reds, vec![4, 3, 2, 1, 0], "the top row is the last drawn");
+    }
+
+    /// A base64 PNG's width, height and RGB pixels.
+    fn decode_png(b64: &str) -> (usize, usize, Vec<u8>) {
         let mut dec = png::Decoder::new(std::io::Cursor::new(decode_base64(b64))).read_info().unwrap();
         let mut buf = vec![0; dec.output_buffer_size().unwrap()];
         let info = dec.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height), (1, 5));
-        let reds: Vec<u8> = buf[..info.buffer_size()].chunks(3).map(|p| p[0]).collect();
-        assert_eq!(reds, vec![4, 3, 2, 1, 0], "the top row is the last drawn");
+        buf.truncate(info.buffer_size());
+        (info.width as usize, info.height as usize, buf)
     }
 
     fn decode_base64(s: &str) -> Vec<u8> {

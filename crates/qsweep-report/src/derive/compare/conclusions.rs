@@ -44,7 +44,7 @@ pub fn conclusions_table(variants: &[VariantDigest]) -> Table {
         for r in &v.claims {
             rows.push(Row {
                 values: vec![
-                    Value::Text(v.info.id.clone()),
+                    Value::User(v.info.id.clone()),
                     Value::Text(if v.info.exploratory { "yes" } else { "no" }.into()),
                     Value::Text(r.claim.id.into()),
                     Value::Text(r.claim.text.into()),

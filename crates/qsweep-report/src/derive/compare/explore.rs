@@ -83,7 +83,7 @@ pub fn search_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) ->
             let generated = plan.variants.iter().any(|p| p.id == v.info.id && p.generated);
             let mut values = vec![
                 Value::Int(k as u64 + 1),
-                Value::Text(v.info.id.clone()),
+                Value::User(v.info.id.clone()),
                 Value::Text(generated.to_string()),
             ];
             values.extend(cells(&ranking_fit(plan, v)));
@@ -139,7 +139,7 @@ pub fn held_out_table(plan: &Plan, x: &Exploratory, variants: &[VariantDigest]) 
         .map(|r| {
             let mut values = vec![
                 Value::Text(r.system.title().into()),
-                Value::Text(r.experiment.clone()),
+                Value::User(r.experiment.clone()),
                 Value::Text(r.algorithm.name().into()),
                 ms(r.ref_mean, Some(r.ref_std)),
                 ms(r.mean, r.std),

@@ -296,8 +296,8 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
             };
             let mut values = vec![
                 int(k + 1),
-                Value::Text(v.id.clone()),
-                v.title.clone().map_or(Value::Missing, Value::Text),
+                Value::User(v.id.clone()),
+                v.title.clone().map_or(Value::Missing, Value::User),
                 int(f.rows),
                 int(f.replicating_by_n[2]),
                 int(f.scale[0]),

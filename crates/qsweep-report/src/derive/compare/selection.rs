@@ -128,9 +128,9 @@ pub fn table(s: &Selection) -> Table {
         .map(|h| Row {
             values: vec![
                 Value::Text(h.row.0.title().into()),
-                Value::Text(h.row.1.clone()),
+                Value::User(h.row.1.clone()),
                 Value::Text(h.label.clone()),
-                Value::Text(h.chosen.clone()),
+                Value::User(h.chosen.clone()),
                 Value::Text(h.verdict.label().into()),
                 Value::Text(h.fit_verdict.label().into()),
             ],

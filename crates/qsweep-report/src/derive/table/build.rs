@@ -213,7 +213,7 @@ fn table3_built(data: &ReportData) -> (Table, Vec<(Vec<usize>, String)>) {
             let best = e.best_of(alg).map(|b| (b, &e.cells[b.cell]));
             let mut values = vec![
                 Value::Text(exp.system.title().into()),
-                Value::Text(exp.id.clone()),
+                Value::User(exp.id.clone()),
                 Value::Text(alg.label(exp.repr).into()),
             ];
             let ours = best.and_then(|(_, c)| c.summary.mean);

@@ -47,8 +47,11 @@ impl Column {
 pub enum Value {
     /// Absent (printed as a dash, an empty CSV field per field of the column).
     Missing,
-    /// Free text.
+    /// qsweep's own text (a word, a verdict, a computed label).
     Text(String),
+    /// Text the pipeline's author wrote (a title, an id): shown as written in every format, so
+    /// escaped as plain text where a format gives qsweep's own text more room (Markdown).
+    User(String),
     /// A count or resolution.
     Int(u64),
     /// A number with `decimals` places; `signed` prints a leading `+` for positive values.
@@ -138,8 +141,10 @@ pub(crate) struct Symbols {
     pub pm: &'static str,
     /// The fallback mark.
     pub dagger: &'static str,
-    /// Escape free text.
+    /// Escape qsweep's own text ([`Value::Text`]).
     pub escape: fn(&str) -> String,
+    /// Escape the text a pipeline's author wrote ([`Value::User`]).
+    pub user: fn(&str) -> String,
 }
 
 /// A fixed-point number, `-0.00` printed as `0.00`.
@@ -162,6 +167,7 @@ pub(crate) fn display(v: &Value, sym: &Symbols) -> String {
     match v {
         Value::Missing => sym.dash.to_string(),
         Value::Text(t) => (sym.escape)(t),
+        Value::User(t) => (sym.user)(t),
         Value::Int(i) => i.to_string(),
         Value::Num { value, decimals, signed } => fixed(*value, *decimals, *signed),
         Value::MeanStd { mean, std, decimals, marked } => {

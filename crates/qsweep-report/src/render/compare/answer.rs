@@ -8,7 +8,7 @@ use crate::derive::compare::selection::Selection;
 use crate::derive::compare::VariantDigest;
 use crate::kinds::Formats;
 use crate::render::compare::forest::{Series, STEM, TWO_X};
-use crate::render::table::html::escape_html;
+use crate::render::escape::html as escape_html;
 use qsweep_pipeline::analysis::equivalence::{MARGIN, MARGIN_2X};
 use qsweep_pipeline::plan::Plan;
 

@@ -7,6 +7,7 @@ use crate::memo::stats::Derived;
 use crate::render::figures::{
     self, cell_label_value, columns, ink_on, Canvas, Drawn, Grid, Picture, Res, INK, MISSING, SUBTLE,
 };
+use crate::render::text_fit::{self, Entry, Legend};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
 use qsweep_engine::env::SystemKind;
@@ -105,8 +106,30 @@ pub fn diff_figure(
         base.info.id
     );
     let only: Vec<&ExpDigest> = exps.iter().map(|e| e.0).collect();
-    figures::paint_as(&Diffs { exps: &exps, title: &title }, figures::figure_size(&only), svg, png)
+    figures::paint_as(&Diffs { exps: &exps, title: &title }, figure_size(&only), svg, png)
         .map_err(|e| anyhow::anyhow!("drawing the {system} difference figure of {}: {e}", other.info.id))
+}
+
+/// Pixel size of a difference figure of these experiments: the system figure's panels
+/// ([`figures::figure_size`]) above this figure's own legend band ([`legend_band`]).
+pub fn figure_size(exps: &[&ExpDigest]) -> (u32, u32) {
+    let w = columns(exps).len().max(1) as u32 * figures::PANEL_W;
+    (w, figures::HEADER_H + exps.len().max(1) as u32 * figures::PANEL_H + legend_band().place(w).1)
+}
+
+/// The legend band: the colours, the mark of a significant difference, and grey;
+/// [`figures::FOOTER_H`] tall where its columns fit.
+fn legend_band() -> Legend {
+    let entry = |text: &str, swatch| Entry { text: text.into(), size: 13.0, swatch };
+    let entries = vec![
+        entry("more episodes (slower)", true),
+        entry("fewer episodes (faster)", true),
+        entry("95% bootstrap interval of the difference excludes 0", true),
+        entry("no trials in one of the two variants", true),
+        entry("symmetric colour scale per panel", false),
+    ];
+    let rows = vec![vec![(20, 0), (230, 1), (450, 2)], vec![(20, 3), (450, 4)]];
+    Legend { entries, rows, first: 22, row_h: 24, bottom: figures::FOOTER_H as i32 - 22 - 24 }
 }
 
 struct Diffs<'a, 'b> {
@@ -118,10 +141,7 @@ impl Picture for Diffs<'_, '_> {
     fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>) -> Res {
         cv.root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (w, h) = cv.root.dim_in_pixel();
-        // Shrink a title that would not fit a one-column figure (as the system's figure does).
-        let size = (w as f64 / (0.52 * self.title.chars().count() as f64)).min(20.0);
-        let at = (w as i32 / 2, figures::HEADER_H as i32 / 2);
-        cv.text(self.title, at, size, INK, HPos::Center, VPos::Center);
+        cv.title(self.title, w);
         let only: Vec<&ExpDigest> = self.exps.iter().map(|e| e.0).collect();
         let cols = columns(&only);
         for (r, (e, d)) in self.exps.iter().enumerate() {
@@ -133,7 +153,7 @@ impl Picture for Diffs<'_, '_> {
                 diff_panel(cv, origin, e, d, alg)?;
             }
         }
-        diff_legend(cv, (h - figures::FOOTER_H) as i32)
+        diff_legend(cv, h)
     }
 }
 
@@ -180,7 +200,7 @@ fn diff_panel<DB: DrawingBackend>(
     let marked = diffs.iter().filter(|(_, d)| d.is_some_and(|d| d.significant)).count();
     let compared = diffs.iter().filter(|(_, d)| d.is_some()).count();
     let sub = format!("{compared} cells compared; {marked} with a 95% interval excluding 0");
-    cv.text(&sub, (cx, oy + 33), 12.0, SUBTLE, HPos::Center, VPos::Center);
+    cv.text_within(&sub, (cx, oy + 33), figures::PANEL_W as i32 - 2 * text_fit::MARGIN, 12.0, SUBTLE);
 
     let g = Grid::of(exp, (ox, oy));
     let span = diffs.iter().filter_map(|(_, d)| d.map(|d| d.diff.abs())).fold(0.0, f64::max);
@@ -242,29 +262,26 @@ fn diverging_bar<DB: DrawingBackend>(cv: &mut Canvas<DB>, a: (i32, i32), b: (i32
     Ok(())
 }
 
-/// The legend band of a difference figure at `y`.
-fn diff_legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, y: i32) -> Res {
-    let y = y + 22;
-    cv.rect((20, y - 9), (46, y + 9), diverging(0.8).filled())?;
-    cv.text("more episodes (slower)", (54, y), 13.0, INK, HPos::Left, VPos::Center);
-    cv.rect((230, y - 9), (256, y + 9), diverging(-0.8).filled())?;
-    cv.text("fewer episodes (faster)", (264, y), 13.0, INK, HPos::Left, VPos::Center);
-    let x = 450;
-    cv.rect((x, y - 9), (x + 26, y + 9), diverging(0.3).filled())?;
-    cv.rect((x + 2, y - 7), (x + 24, y + 7), INK.stroke_width(3))?;
-    cv.root.draw(&Circle::new((x + 17, y), 3, INK.filled())).map_err(|e| e.to_string())?;
-    cv.text(
-        "95% bootstrap interval of the difference excludes 0",
-        (x + 34, y),
-        13.0,
-        INK,
-        HPos::Left,
-        VPos::Center,
-    );
-    let y = y + 24;
-    cv.rect((20, y - 9), (46, y + 9), MISSING.filled())?;
-    cv.text("no trials in one of the two variants", (54, y), 13.0, INK, HPos::Left, VPos::Center);
-    let note = "symmetric colour scale per panel";
-    cv.text(note, (450, y), 13.0, INK, HPos::Left, VPos::Center);
+/// The legend band at the bottom of a difference figure `h` pixels tall ([`legend_band`]).
+fn diff_legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32) -> Res {
+    let band = legend_band();
+    let (w, _) = cv.root.dim_in_pixel();
+    let (placed, band_h) = band.place(w);
+    let top = (h - band_h) as i32;
+    for p in &placed {
+        let (x, y) = (p.x, top + p.y);
+        match p.entry {
+            0 => cv.rect((x, y - 9), (x + 26, y + 9), diverging(0.8).filled())?,
+            1 => cv.rect((x, y - 9), (x + 26, y + 9), diverging(-0.8).filled())?,
+            2 => {
+                cv.rect((x, y - 9), (x + 26, y + 9), diverging(0.3).filled())?;
+                cv.rect((x + 2, y - 7), (x + 24, y + 7), INK.stroke_width(3))?;
+                cv.root.draw(&Circle::new((x + 17, y), 3, INK.filled())).map_err(|e| e.to_string())?;
+            }
+            3 => cv.rect((x, y - 9), (x + 26, y + 9), MISSING.filled())?,
+            _ => {}
+        }
+        cv.lines(p, top, &band.entries[p.entry], INK);
+    }
     Ok(())
 }

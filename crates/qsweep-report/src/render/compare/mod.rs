@@ -30,7 +30,7 @@ use crate::derive::compare::{
     VariantInfo,
 };
 use crate::kinds::{Format, Formats};
-use crate::render::table::html::escape_html as esc;
+use crate::render::escape::{self, html as esc};
 use crate::render::table::{render, Csv, Html, Markdown, Table};
 use qsweep_engine::env::SystemKind;
 use qsweep_pipeline::plan::Plan;
@@ -119,7 +119,7 @@ pub fn write_comparison(
                     }
                 }
                 let exps: Vec<&ExpDigest> = v.exps.iter().filter(|e| e.exp.system == system).collect();
-                figs.push((&v.info, system, stem, crate::render::figures::figure_size(&exps)));
+                figs.push((&v.info, system, stem, diff::figure_size(&exps)));
             }
         }
     }
@@ -347,9 +347,9 @@ fn readme(
     notes: bool,
 ) -> String {
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
-    let mut m = format!("# {}\n\n", heading(plan));
+    let mut m = format!("# {}\n\n", escape::markdown(&heading(plan)));
     if let Some(d) = plan.description.as_deref() {
-        m.push_str(&format!("{}\n\n", d.trim()));
+        m.push_str(&format!("{}\n\n", escape::markdown(d.trim())));
     }
     m.push_str(&answer.markdown(formats));
     if notes {
@@ -362,19 +362,22 @@ fn readme(
         "Each variant is the whole pipeline with some settings changed; each has its own full report:\n\n",
     );
     for v in variants {
-        let title = v.info.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
+        let title = v.info.title.as_deref().map(|t| format!(": {}", escape::markdown(t))).unwrap_or_default();
+        // The link's target is the variant's folder: its id is a safe folder name
+        // (`spec::safe_folder_name`), so it needs no escaping there.
+        let id = escape::markdown_code(&v.info.id);
         if has_folder(plan, chosen, &v.info.id) {
             m.push_str(&format!(
-                "- [`{0}`]({0}/README.md){title} ({1} of {2} planned trials present)\n",
+                "- [{id}]({}/README.md){title} ({} of {} planned trials present)\n",
                 v.info.id, v.trials_cached, v.trials_planned
             ));
         } else {
+            let command = format!("qsweep report {} --variant '{}'", plan.source.display(), v.info.id);
             m.push_str(&format!(
-                "- `{0}`{title} ({1} of {2} planned trials present; report on demand: `qsweep report {3} --variant '{0}'`)\n",
-                v.info.id,
+                "- {id}{title} ({} of {} planned trials present; report on demand: {})\n",
                 v.trials_cached,
                 v.trials_planned,
-                plan.source.display()
+                escape::markdown_code(&command)
             ));
         }
     }
@@ -394,14 +397,10 @@ fn readme(
     }
     if let (Some(base), Some(ext)) = (variants.first(), formats.figure_ext()) {
         for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
-            m.push_str(&format!("\n## {} against {}\n\n", v.info.id, base.info.id));
+            let (id, base_id) = (escape::markdown(&v.info.id), escape::markdown(&base.info.id));
+            m.push_str(&format!("\n## {id} against {base_id}\n\n"));
             for (_, system, stem, _) in figs.iter().filter(|f| f.0.id == v.info.id) {
-                m.push_str(&format!(
-                    "![{}: {} against {}]({stem}.{ext})\n\n",
-                    system.title(),
-                    v.info.id,
-                    base.info.id
-                ));
+                m.push_str(&format!("![{}: {id} against {base_id}]({stem}.{ext})\n\n", system.title()));
             }
             m.push_str(&format!("{DIFF_RULE}\n"));
         }

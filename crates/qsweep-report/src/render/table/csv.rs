@@ -20,7 +20,7 @@ fn fields(v: &Value, n: usize) -> Vec<String> {
     let num = |x: f64| format!("{x}");
     let mut f = match v {
         Value::Missing => vec![],
-        Value::Text(t) => vec![quote(t)],
+        Value::Text(t) | Value::User(t) => vec![quote(t)],
         Value::Int(i) => vec![i.to_string()],
         Value::Num { value, .. } => vec![num(*value)],
         Value::MeanStd { mean, std, .. } => vec![num(*mean), std.map(num).unwrap_or_default()],

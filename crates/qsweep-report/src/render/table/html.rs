@@ -6,28 +6,13 @@
 //! left to the page.
 
 use crate::derive::table::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
+use crate::render::escape::html;
 
 /// HTML table exporter.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Html;
 
-const SYMBOLS: Symbols = Symbols { dash: "—", pm: " ± ", dagger: "†", escape: escape_html };
-
-/// Escape text for HTML element content and attribute values.
-pub fn escape_html(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            _ => out.push(c),
-        }
-    }
-    out
-}
+const SYMBOLS: Symbols = Symbols { dash: "—", pm: " ± ", dagger: "†", escape: html, user: html };
 
 /// `k` when the right-aligned columns are exactly those after the first `k` (1 ≤ k ≤ 4).
 fn right_suffix(columns: &[Column]) -> Option<usize> {
@@ -49,8 +34,8 @@ impl TableWriter for Html {
         if !table.caption.is_empty() {
             out.push_str(&format!(
                 "<caption><b>{}.</b> {}</caption>\n",
-                escape_html(&table.title),
-                escape_html(&table.caption)
+                html(&table.title),
+                html(&table.caption)
             ));
         }
     }
@@ -58,7 +43,7 @@ impl TableWriter for Html {
     fn header(&self, columns: &[Column], out: &mut String) {
         out.push_str("<thead><tr>");
         for c in columns {
-            out.push_str(&format!("<th{}>{}", class(columns, c), escape_html(&c.title)));
+            out.push_str(&format!("<th{}>{}", class(columns, c), html(&c.title)));
         }
         out.push_str("</tr></thead>\n<tbody>\n");
     }

@@ -3,66 +3,14 @@
 //! beyond `\usepackage{booktabs}`.
 
 use crate::derive::table::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
+use crate::render::escape::{latex, latex_comment};
 
 /// LaTeX exporter.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Latex;
 
-const SYMBOLS: Symbols = Symbols { dash: "---", pm: " $\\pm$ ", dagger: "$^\\dagger$", escape };
-
-fn math(c: char) -> Option<&'static str> {
-    Some(match c {
-        'α' => "\\alpha",
-        'γ' => "\\gamma",
-        'ε' => "\\varepsilon",
-        'θ' => "\\theta",
-        'λ' => "\\lambda",
-        'σ' => "\\sigma",
-        'Δ' => "\\Delta",
-        '±' => "\\pm",
-        '×' => "\\times",
-        '≥' => "\\geq",
-        '≤' => "\\leq",
-        '≈' => "\\approx",
-        '−' => "-",
-        '†' => "^\\dagger",
-        _ => return None,
-    })
-}
-
-/// Escape text for LaTeX's text mode.
-pub(crate) fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let mut chars = s.chars().peekable();
-    while let Some(c) = chars.next() {
-        if chars.peek() == Some(&'\u{307}') {
-            chars.next();
-            let base = math(c).map_or_else(|| c.to_string(), str::to_string);
-            out.push_str(&format!("$\\dot{{{base}}}$"));
-            continue;
-        }
-        match c {
-            '\\' => out.push_str("\\textbackslash{}"),
-            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
-                out.push('\\');
-                out.push(c);
-            }
-            '~' => out.push_str("\\textasciitilde{}"),
-            '^' => out.push_str("\\textasciicircum{}"),
-            '|' => out.push_str("\\textbar{}"),
-            '<' => out.push_str("\\textless{}"),
-            '>' => out.push_str("\\textgreater{}"),
-            '—' => out.push_str("---"),
-            '–' => out.push_str("--"),
-            '\n' => out.push(' '),
-            _ => match math(c) {
-                Some(m) => out.push_str(&format!("${m}$")),
-                None => out.push(c),
-            },
-        }
-    }
-    out
-}
+const SYMBOLS: Symbols =
+    Symbols { dash: "---", pm: " $\\pm$ ", dagger: "$^\\dagger$", escape: latex, user: latex };
 
 impl TableWriter for Latex {
     fn begin(&self, table: &Table, out: &mut String) {
@@ -76,14 +24,14 @@ impl TableWriter for Latex {
             .collect();
         out.push_str(&format!(
             "% {}: written by qsweep; needs \\usepackage{{booktabs}}.\n\\begin{{table}}[htbp]\n\\centering\n\\small\n\\caption{{{}}}\n\\begin{{tabular}}{{{spec}}}\n\\toprule\n",
-            table.title,
-            escape(&table.caption)
+            latex_comment(&table.title),
+            latex(&table.caption)
         ));
     }
 
     fn header(&self, columns: &[Column], out: &mut String) {
         let titles: Vec<String> =
-            columns.iter().map(|c| c.latex.clone().unwrap_or_else(|| escape(&c.title))).collect();
+            columns.iter().map(|c| c.latex.clone().unwrap_or_else(|| latex(&c.title))).collect();
         out.push_str(&format!("{} \\\\\n\\midrule\n", titles.join(" & ")));
     }
 
@@ -120,11 +68,5 @@ a\textbar{}b, "c" & --- & 200.00 $\pm$ ---$^\dagger$ & --- & --- \\
 \end{table}
 "#;
         assert_eq!(render(&sample(), &Latex), expected);
-    }
-
-    #[test]
-    fn escapes_combining_dots_and_specials() {
-        assert_eq!(escape("θ\u{307} & x\u{307}"), "$\\dot{\\theta}$ \\& $\\dot{x}$");
-        assert_eq!(escape("x_dot 5% ~"), "x\\_dot 5\\% \\textasciitilde{}");
     }
 }

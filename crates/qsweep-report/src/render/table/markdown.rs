@@ -1,16 +1,13 @@
 //! GitHub-flavoured Markdown: the caption as a bold-titled paragraph, then a pipe table.
 
 use crate::derive::table::model::{display, Align, Column, Row, Symbols, Table, TableWriter};
+use crate::render::escape::{markdown_cell, markdown_table_text as escape};
 
 /// Markdown exporter.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Markdown;
 
-const SYMBOLS: Symbols = Symbols { dash: "—", pm: " ± ", dagger: "†", escape };
-
-fn escape(s: &str) -> String {
-    s.replace('|', "\\|").replace('\n', " ")
-}
+const SYMBOLS: Symbols = Symbols { dash: "—", pm: " ± ", dagger: "†", escape, user: markdown_cell };
 
 impl TableWriter for Markdown {
     fn begin(&self, table: &Table, out: &mut String) {
