@@ -22,6 +22,7 @@ mod library;
 mod memo;
 mod mutations;
 mod no_overwrite;
+mod partial_trials;
 mod pipeline;
 mod race;
 mod readings;

@@ -340,6 +340,11 @@ impl PartWriter {
     fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
         for k in 0..data.experiments.len() {
             let batch = datasets::trials_batch_of(&data.experiments[k..k + 1])?;
+            // An experiment without stored trials has no rows, and its empty batch is not the
+            // schema of the others' (it lacks their `variant` column): skip it.
+            if batch.num_rows() == 0 {
+                continue;
+            }
             if self.writer.is_none() {
                 let file = std::fs::File::create(&self.tmp)
                     .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", self.tmp.display()))?;
