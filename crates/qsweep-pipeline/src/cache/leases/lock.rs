@@ -20,24 +20,37 @@ pub enum Lock {
 
 /// Try to lock `file` exclusively without waiting.
 pub fn try_lock(file: &File) -> std::io::Result<Lock> {
+    flock_nb(file, true)
+}
+
+/// Try to lock `file` shared (any number of shared holders, no exclusive one) without waiting;
+/// the report's trial parts are held this way while a report reads them.
+pub fn try_lock_shared(file: &File) -> std::io::Result<Lock> {
+    flock_nb(file, false)
+}
+
+fn flock_nb(file: &File, exclusive: bool) -> std::io::Result<Lock> {
     #[cfg(unix)]
     {
         use std::os::unix::io::AsRawFd;
-        // SAFETY: flock only acts on the descriptor, which `file` keeps open.
-        let rc = unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) };
-        if rc == 0 {
-            return Ok(Lock::Taken);
-        }
-        let e = std::io::Error::last_os_error();
-        match e.raw_os_error() {
-            Some(libc::EWOULDBLOCK) => Ok(Lock::Busy),
-            Some(libc::ENOLCK | libc::EOPNOTSUPP | libc::ENOSYS) => Ok(Lock::Unsupported),
-            _ => Err(e),
+        let op = if exclusive { libc::LOCK_EX } else { libc::LOCK_SH };
+        loop {
+            // SAFETY: flock only acts on the descriptor, which `file` keeps open.
+            if unsafe { libc::flock(file.as_raw_fd(), op | libc::LOCK_NB) } == 0 {
+                return Ok(Lock::Taken);
+            }
+            let e = std::io::Error::last_os_error();
+            return match e.raw_os_error() {
+                Some(libc::EINTR) => continue,
+                Some(libc::EWOULDBLOCK) => Ok(Lock::Busy),
+                Some(libc::ENOLCK | libc::EOPNOTSUPP | libc::ENOSYS) => Ok(Lock::Unsupported),
+                _ => Err(e),
+            };
         }
     }
     #[cfg(not(unix))]
     {
-        let _ = file;
+        let _ = (file, exclusive);
         Ok(Lock::Unsupported)
     }
 }

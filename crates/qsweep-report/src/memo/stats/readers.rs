@@ -16,6 +16,7 @@
 //! are pruned as if alone. Then a report whose part was removed under it fails, saying so, and a
 //! rerun succeeds (the parts are derived from the cache's rows; no trial is lost).
 
+use qsweep_pipeline::cache::leases::lock::{self, Lock};
 use std::fs::File;
 use std::io::ErrorKind;
 use std::path::Path;
@@ -46,7 +47,7 @@ impl Reading {
             match flock(&file, Mode::Shared) {
                 // The folder may have been removed (by `qsweep gc`) while we waited: a lock on a
                 // lock file no longer at its path holds nothing; take the new one.
-                Ok(true) if is_at(&file, &path) => return Self { _file: Some(file) },
+                Ok(true) if lock::is_at(&file, &path) => return Self { _file: Some(file) },
                 Ok(true) => {}
                 Ok(false) if start.elapsed() < WAIT => std::thread::sleep(Duration::from_millis(20)),
                 Ok(false) | Err(_) => return Self { _file: None },
@@ -78,7 +79,7 @@ pub fn alone(dir: &Path) -> Alone {
     let path = dir.join(LOCK_FILE);
     let Some(file) = open(dir, &path) else { return Alone::Unknown };
     match flock(&file, Mode::Exclusive) {
-        Ok(true) if is_at(&file, &path) => Alone::Yes(Guard { _file: file }),
+        Ok(true) if lock::is_at(&file, &path) => Alone::Yes(Guard { _file: file }),
         // Removed meanwhile (by another `qsweep gc`): nothing left to prune.
         Ok(true) | Ok(false) => Alone::No,
         Err(_) => Alone::Unknown,
@@ -113,50 +114,17 @@ enum Mode {
     Exclusive,
 }
 
-/// Try to lock `file` without waiting: `Ok(true)` taken, `Ok(false)` held by another open file,
-/// `Err` where the file system refuses locks.
+/// Try to lock `file` without waiting (the cache's leases' `flock`): `Ok(true)` taken,
+/// `Ok(false)` held by another open file, `Err` where the file system refuses locks.
 fn flock(file: &File, mode: Mode) -> std::io::Result<bool> {
-    #[cfg(unix)]
-    {
-        use std::os::unix::io::AsRawFd;
-        let op = match mode {
-            Mode::Shared => libc::LOCK_SH,
-            Mode::Exclusive => libc::LOCK_EX,
-        };
-        loop {
-            // SAFETY: flock only acts on the descriptor, which `file` keeps open.
-            if unsafe { libc::flock(file.as_raw_fd(), op | libc::LOCK_NB) } == 0 {
-                return Ok(true);
-            }
-            let e = std::io::Error::last_os_error();
-            match e.raw_os_error() {
-                Some(libc::EINTR) => continue,
-                Some(libc::EWOULDBLOCK) => return Ok(false),
-                _ => return Err(e),
-            }
-        }
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = (file, mode);
-        Err(std::io::Error::from(ErrorKind::Unsupported))
-    }
-}
-
-/// Whether `file` is still the file at `path` (not removed or replaced since it was opened).
-fn is_at(file: &File, path: &Path) -> bool {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        match (file.metadata(), std::fs::metadata(path)) {
-            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
-            _ => false,
-        }
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = file;
-        path.exists()
+    let got = match mode {
+        Mode::Shared => lock::try_lock_shared(file)?,
+        Mode::Exclusive => lock::try_lock(file)?,
+    };
+    match got {
+        Lock::Taken => Ok(true),
+        Lock::Busy => Ok(false),
+        Lock::Unsupported => Err(std::io::Error::from(ErrorKind::Unsupported)),
     }
 }
 
@@ -202,7 +170,7 @@ mod tests {
         let (r, held_at) = reader.join().unwrap();
         assert!(held_at >= released, "the reader waited for the pruner");
         assert!(
-            r._file.as_ref().is_some_and(|f| is_at(f, &dir.join(LOCK_FILE))),
+            r._file.as_ref().is_some_and(|f| lock::is_at(f, &dir.join(LOCK_FILE))),
             "it holds the new lock file"
         );
         assert!(matches!(alone(&dir), Alone::No));
