@@ -39,7 +39,7 @@ use qsweep_pipeline::cache::store::{KeySet, Store};
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::error::user_error;
 use qsweep_pipeline::plan::Plan;
-use qsweep_pipeline::race::Replayed;
+use qsweep_pipeline::race::{read_cached, replay, Replayed};
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::collections::HashSet;
@@ -64,7 +64,7 @@ pub fn write(
     }
     // A raced plan is reported as far as its races have run: each cell with the seeds it got;
     // the best cells with the fresh seeds they got.
-    write_replayed(Replayed::of(plan, store, scan)?, store, scan, opts)
+    write_replayed(replay(plan, &scan.keys, &mut read_cached(store, scan))?, store, scan, opts)
 }
 
 fn not_a_dir(dir: &Path) -> anyhow::Error {
