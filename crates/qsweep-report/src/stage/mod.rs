@@ -19,8 +19,8 @@
 //! written only when its bytes change. `--rebuild` ([`ReportOptions::rebuild`]) ignores every memo.
 //!
 //! [`write_replayed`] takes the report's steps one after another, each a named function: those
-//! decided before any trial is read in [`layout`] (which folders, their memos, the guard), then
-//! those of the report under way in [`steps`] (what each folder needs, the shared read, the
+//! decided before any trial is read in `layout.rs` (which folders, their memos, the guard), then
+//! those of the report under way in `steps.rs` (what each folder needs, the shared read, the
 //! summaries, the drawn folders, the chosen reading, the comparison, the statistics' memo).
 
 mod layout;
