@@ -13,6 +13,7 @@
 
 use qsweep_engine::{Outcome, StopReason};
 use qsweep_pipeline::cache::{Store, TrialRecord};
+use qsweep_pipeline::race::{read_cached, replay};
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -192,7 +193,8 @@ fn main() {
     }
     // The fresh-seed stage is planned from the grid's stored outcomes: replay it and store its
     // trials too, so that the no-op run below has nothing to run.
-    let staged = qsweep_pipeline::race::replay_cached(&plan, &store, &store.keys().unwrap()).unwrap().plan;
+    let scan = store.keys().unwrap();
+    let staged = replay(&plan, &scan.keys, &mut read_cached(&store, &scan)).unwrap().into_plan();
     let grid: std::collections::HashSet<_> = unique.iter().map(|t| t.key).collect();
     let fresh: Vec<_> =
         qsweep_pipeline::exec::jobs(&staged).into_iter().filter(|t| !grid.contains(&t.key)).collect();
@@ -268,12 +270,12 @@ fn race_cost(pipeline: &Path, cache: &Path) {
     let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
     let store = Store::open(cache).unwrap();
     let scan = store.keys().unwrap();
-    let raced = qsweep_pipeline::race::replay_cached(&plan, &store, &scan).unwrap();
+    let raced = replay(plan, &scan.keys, &mut read_cached(&store, &scan)).unwrap();
     let secs = start.elapsed().as_secs_f64();
-    let wanted = raced.plan.trials().map(|(_, _, t)| t.key).collect();
+    let wanted = raced.plan().trials().map(|(_, _, t)| t.key).collect();
     let outcomes = store.read_outcomes(&scan, &wanted, false).unwrap();
     let (mut trials, mut all, mut steps, mut all_steps) = (0usize, 0usize, 0f64, 0f64);
-    for e in &raced.plan.experiments {
+    for e in &raced.plan().experiments {
         let most = e.race.map_or(0, |r| r.max_seeds as usize);
         for c in &e.cells {
             let s: Vec<f64> = c
@@ -288,12 +290,12 @@ fn race_cost(pipeline: &Path, cache: &Path) {
             all_steps += s.iter().sum::<f64>() / s.len().max(1) as f64 * most.max(c.trials.len()) as f64;
         }
     }
-    let finished = raced.heats.iter().filter(|h| h.finished).count();
+    let finished = raced.heats().iter().filter(|h| h.finished).count();
     println!(
         "race paper-race.yaml from the committed cache ({finished} of {} heatmaps finished, resolved in {secs:.2} s): \
          {trials} trials = {:.1}% of the {all} with max_seeds in every cell (target ≤ 25%); \
          {:.3e} simulated steps = {:.1}% of the {:.3e} those would take",
-        raced.heats.len(),
+        raced.heats().len(),
         100.0 * trials as f64 / all as f64,
         steps,
         100.0 * steps / all_steps,

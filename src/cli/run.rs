@@ -3,6 +3,7 @@
 use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
 use clap::Args;
 use qsweep_pipeline::exec::{ExecOptions, Reporter, INTERRUPTED};
+use qsweep_pipeline::race::{read_cached, replay};
 use qsweep_pipeline::run::AfterRun;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
@@ -108,7 +109,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
                     warn_quarantined(&scan);
                     scan
                 };
-                let plan = qsweep_pipeline::race::Replayed::of(plan, &store, &scan.stored)?;
+                let plan = replay(plan, &scan.stored.keys, &mut read_cached(&store, &scan.stored))?;
                 (scan, plan)
             }
         };

@@ -301,7 +301,7 @@ fn the_import_scan_sees_known_imports() {
     let g = graph("crates/qsweep-pipeline/src");
     assert!(g["race"].contains("analysis"), "{:?}", g["race"]);
     let g = graph("crates/qsweep-report/src");
-    assert!(g["stage"].contains("render::folder"), "{:?}", g["stage"]);
+    assert!(g["stage::steps"].contains("render::folder"), "{:?}", g["stage::steps"]);
     let g = graph("crates/qsweep-engine/src");
     assert!(g["repr::fuzzy"].contains("repr::activation"), "{:?}", g["repr::fuzzy"]);
     assert!(g["repr"].contains("repr::crisp"), "re-exports count: {:?}", g["repr"]);

@@ -57,6 +57,7 @@ fn replayed_cells(
 /// replay itself, and a run that stored trials hands nothing on (the cache changed).
 #[test]
 fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
+    use qsweep_pipeline::race::{read_cached, replay};
     use qsweep_pipeline::run::run_trials_replayed;
     for fixture in ["fresh.yaml", "race.yaml"] {
         let dir = tempfile::tempdir().unwrap();
@@ -80,7 +81,7 @@ fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
         let qsweep_pipeline::run::AfterRun::Replayed(handed) = handed else {
             panic!("{fixture}: nothing ran: the replayed plan is handed on")
         };
-        let own = qsweep_pipeline::race::Replayed::of(plan.clone(), &store, &scanned).unwrap();
+        let own = replay(&plan, &scanned.keys, &mut read_cached(&store, &scanned)).unwrap();
         // Every trial of the replayed plan ran in the first call, each once.
         let distinct: std::collections::HashSet<_> = own.plan().trials().map(|(_, _, t)| t.key).collect();
         assert_eq!(done.exec.executed, distinct.len(), "{fixture}");

@@ -145,8 +145,9 @@ mod tests {
             let out = replay(p, &cached, &mut |w| {
                 Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
             })
-            .unwrap();
-            let missing: Vec<(usize, u64, Key)> = out.plan.experiments[0]
+            .unwrap()
+            .into_plan();
+            let missing: Vec<(usize, u64, Key)> = out.experiments[0]
                 .cells
                 .iter()
                 .enumerate()
@@ -154,7 +155,7 @@ mod tests {
                 .filter(|(_, _, k)| !cached.contains(k))
                 .collect();
             if missing.is_empty() {
-                return (out.plan, store, stages);
+                return (out, store, stages);
             }
             stages += 1;
             for (i, seed, key) in missing {
@@ -168,7 +169,7 @@ mod tests {
         let p = plan();
         // Nothing stored: nothing is decided, no fresh trial is planned.
         let none = replay(&p, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
-        assert!(none.plan.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
+        assert!(none.plan().experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
         // All but one trial stored: still undecided.
         let keys: Vec<Key> = p.trials().map(|(_, _, t)| t.key).collect();
         let almost: HashSet<Key> = keys[1..].iter().copied().collect();
@@ -176,7 +177,7 @@ mod tests {
             Ok(w.iter().map(|k| (*k, StageOutcome::from(&outcome(20)))).collect())
         };
         let part = replay(&p, &almost, &mut |w| read(w)).unwrap();
-        assert!(part.plan.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
+        assert!(part.plan().experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
 
         let (done, store, stages) = run_to_the_end(&p);
         assert_eq!(stages, 2, "the grid, then the fresh seeds");
@@ -204,11 +205,17 @@ mod tests {
         let again =
             replay(&p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect()))
                 .unwrap();
-        assert!(again.plan.trials().all(|(_, _, t)| cached.contains(&t.key)));
-        assert_eq!(again.plan.experiments[0].cells[best].fresh, cells[best].fresh);
+        assert!(again.plan().trials().all(|(_, _, t)| cached.contains(&t.key)));
+        assert_eq!(again.plan().experiments[0].cells[best].fresh, cells[best].fresh);
         assert_eq!(done.trial_count(), 9 * 5 + 20);
-        // The replay taken back is the plan as planned: no fresh trials.
-        let back = crate::race::Unreplay::of(&p).expect("nothing to replace").undo(done.clone());
+        // Replayed in place and taken back, it is the plan as planned: no fresh trials.
+        let mut stored = |w: &HashSet<Key>| -> anyhow::Result<Vec<(Key, StageOutcome)>> {
+            Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+        };
+        let (in_place, undo) = crate::race::Unreplay::replay(p.clone(), false, &cached, &mut stored).unwrap();
+        assert_eq!(in_place.plan().experiments[0].cells[best].fresh, cells[best].fresh);
+        assert!(undo.planned().is_none(), "replayed in place");
+        let back = undo.undo(in_place);
         assert!(back.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
         let trials = |q: &Plan| q.experiments[0].cells.iter().map(|c| c.trials.clone()).collect::<Vec<_>>();
         assert_eq!(trials(&back), trials(&p));

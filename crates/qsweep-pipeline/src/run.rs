@@ -2,7 +2,7 @@
 //! move damaged segments aside, [`scan`]), choose the trials to run ([`select`]: shard, cached,
 //! `--force`), execute and store them ([`run_trials`]); the report stage is [`qsweep_report::write`].
 //! A staged plan (a race, [`crate::race`], or fresh seeds, [`crate::fresh`]) is replayed against
-//! the cache first ([`crate::race::replay_cached`]), and [`run_trials`] runs its stages one after
+//! the cache first ([`crate::race::replay`]), and [`run_trials`] runs its stages one after
 //! another (one stage per call under `--shard`).
 
 use crate::cache::store::{Damaged, KeySet, Store};
@@ -10,7 +10,7 @@ use crate::cache::Key;
 use crate::exec::shard::{assign, key_owner, Shard};
 use crate::exec::{execute, ExecOptions, ExecReport, Job};
 use crate::plan::Plan;
-use crate::race::{Replayed, Unreplay};
+use crate::race::{read_cached, replay, Replayed, Unreplay};
 use std::path::PathBuf;
 
 /// The cache's keys, after every damaged segment was moved to the quarantine folder.
@@ -118,9 +118,9 @@ pub enum AfterRun {
 
 /// [`run_trials`] of a plan the caller gives up, and the plan back ([`AfterRun`]): `qsweep run`
 /// hands a replayed plan on to its report instead of replaying it a second time. Each round
-/// replays the plan in place and takes the replay back ([`crate::race::Unreplay`]) when another
-/// round follows, so no second copy of its cells is made (under a shard, whose owners are
-/// decided on the plan as planned, a copy is replayed).
+/// replays the plan in place and takes the replay back when another round follows, so no second
+/// copy of its cells is made (under a shard, whose owners are decided on the plan as planned, a
+/// copy is replayed).
 pub fn run_trials_replayed(
     plan: Plan,
     store: &Store,
@@ -152,17 +152,15 @@ pub fn run_trials_replayed(
     let mut first = true;
     let mut plan = plan;
     loop {
-        let (raced, kept) = match Unreplay::of(&plan).filter(|_| sel.shard.is_none()) {
-            Some(undo) => (crate::race::replay_cached_owned(plan, store, scan)?, Kept::Undo(undo)),
-            None => (crate::race::replay_cached(&plan, store, scan)?, Kept::Planned(Box::new(plan))),
+        // Replayed in place, but under a shard: this round's trials are the shard's, whose owners
+        // are decided on the plan as planned (by key: see shard_owners), kept beside a copy.
+        let copy = sel.shard.is_some();
+        let (replayed, back) = Unreplay::replay(plan, copy, &scan.keys, &mut read_cached(store, scan))?;
+        let round = crate::exec::jobs(replayed.plan());
+        let unique = match back.planned() {
+            Some(planned) => in_shard(planned, round, sel.shard),
+            None => round,
         };
-        let as_planned = match &kept {
-            Kept::Planned(p) => p,
-            // Only without a shard, where the owners are not asked for.
-            Kept::Undo(_) => &raced.plan,
-        };
-        // This round's trials, of this task's shard (owned by key: see shard_owners).
-        let unique = in_shard(as_planned, crate::exec::jobs(&raced.plan), sel.shard);
         let jobs: Vec<Job> = if sel.force {
             unique.iter().filter(|t| forced.insert(t.key)).copied().collect()
         } else {
@@ -171,11 +169,8 @@ pub fn run_trials_replayed(
         if jobs.is_empty() {
             let done = RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total };
             drop((jobs, unique));
-            let after = if first {
-                AfterRun::Replayed(raced.into_replayed())
-            } else {
-                AfterRun::Planned(kept.back(raced))
-            };
+            let after =
+                if first { AfterRun::Replayed(replayed) } else { AfterRun::Planned(back.undo(replayed)) };
             return Ok((done, after));
         }
         if let Some(c) = &opts.leases {
@@ -188,30 +183,13 @@ pub fn run_trials_replayed(
         total.elsewhere += exec.elsewhere;
         total.failed += exec.failed;
         total.interrupted |= exec.interrupted;
-        plan = kept.back(raced);
+        plan = back.undo(replayed);
         if exec.interrupted || sel.shard.is_some() {
             return Ok((RunOutcome { cached, exec: total }, AfterRun::Planned(plan)));
         }
         rescanned = store.keys()?;
         scan = &rescanned;
         first = false;
-    }
-}
-
-/// How a round keeps the plan as planned: a note to take its in-place replay back, or the plan
-/// itself (its copy was replayed).
-enum Kept {
-    Undo(Unreplay),
-    Planned(Box<Plan>),
-}
-
-impl Kept {
-    /// The plan as planned, given the round's replay.
-    fn back(self, raced: crate::race::Raced) -> Plan {
-        match self {
-            Self::Undo(u) => u.undo(raced.plan),
-            Self::Planned(p) => *p,
-        }
     }
 }
 
@@ -227,8 +205,8 @@ pub fn referenced_keys(plans: &[Plan], store: &Store) -> anyhow::Result<std::col
                 scan = Some(store.keys()?);
             }
             let scan = scan.as_ref().expect("scanned just above");
-            let raced = crate::race::replay_cached(planned, store, scan)?.plan;
-            keep.extend(raced.trials().map(|(_, _, t)| t.key));
+            let replayed = replay(planned, &scan.keys, &mut read_cached(store, scan))?;
+            keep.extend(replayed.plan().trials().map(|(_, _, t)| t.key));
         } else {
             keep.extend(planned.trials().map(|(_, _, t)| t.key));
         }

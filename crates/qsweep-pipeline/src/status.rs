@@ -105,10 +105,11 @@ pub fn status(plan: Plan, store: Option<&Store>, explain: bool) -> anyhow::Resul
     let (plan, heats) = if plan.is_staged() {
         let has_race = plan.has_race();
         let r = match store {
-            Some(store) => crate::race::replay_cached_owned(plan, store, &scan)?,
-            None => crate::race::replay_owned(plan, cached, &mut |_| Ok(Vec::new()))?,
+            Some(store) => crate::race::replay(plan, cached, &mut crate::race::read_cached(store, &scan))?,
+            None => crate::race::replay(plan, cached, &mut |_| Ok(Vec::new()))?,
         };
-        (r.plan, has_race.then_some(r.heats))
+        let heats = has_race.then(|| r.heats().to_vec());
+        (r.into_plan(), heats)
     } else {
         (plan, None)
     };

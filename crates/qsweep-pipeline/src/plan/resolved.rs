@@ -187,6 +187,20 @@ impl Cell {
     }
 }
 
+/// A plan given up to a function that takes one owned or borrowed ([`crate::race::replay`]).
+impl From<Plan> for std::borrow::Cow<'_, Plan> {
+    fn from(plan: Plan) -> Self {
+        Self::Owned(plan)
+    }
+}
+
+/// A plan lent to a function that takes one owned or borrowed: it works on a copy.
+impl<'a> From<&'a Plan> for std::borrow::Cow<'a, Plan> {
+    fn from(plan: &'a Plan) -> Self {
+        Self::Borrowed(plan)
+    }
+}
+
 /// A trial: a seed and its key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PlannedTrial {
@@ -217,7 +231,7 @@ impl Plan {
 
     /// Whether part of the plan is decided from stored outcomes (a race's rounds, the fresh
     /// seeds of the best cells): such a plan is replayed against the cache
-    /// ([`crate::race::replay_cached`]) before it is run, counted or reported.
+    /// ([`crate::race::replay`]) before it is run, counted or reported.
     pub fn is_staged(&self) -> bool {
         self.has_race() || self.has_fresh()
     }

@@ -31,6 +31,7 @@ use crate::cache::store::{KeySet, Store};
 use crate::cache::{Key, ENGINE_VERSION};
 use crate::plan::{Plan, PlannedTrial, StageOutcome};
 use qsweep_engine::{Algorithm, Outcome};
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 
 pub use crate::plan::ReadOutcomes;
@@ -60,14 +61,34 @@ pub struct HeatRace {
     pub without_race: usize,
 }
 
-/// A plan whose races are replayed against the cache.
+/// A plan whose stages (races, fresh seeds) are replayed against the cache: what a report reads.
+/// Only [`replay`] makes one, so a report handed one never replays it again (a no-op `qsweep run`
+/// replays its plan once, not twice).
 #[derive(Debug, Clone)]
-pub struct Raced {
+pub struct Replayed {
     /// The plan with every raced cell's trials (decided rounds and the pending one) and its
-    /// `contender` flag set; experiments without a race are as planned.
-    pub plan: Plan,
+    /// `contender` flag set, and the fresh trials of every decided best cell; experiments without
+    /// stages are as planned.
+    plan: Plan,
     /// Every raced heatmap, in plan order.
-    pub heats: Vec<HeatRace>,
+    heats: Vec<HeatRace>,
+}
+
+impl Replayed {
+    /// The replayed plan.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// How each raced heatmap stands, in plan order (none without a race).
+    pub fn heats(&self) -> &[HeatRace] {
+        &self.heats
+    }
+
+    /// The replayed plan, given up by the replay.
+    pub fn into_plan(self) -> Plan {
+        self.plan
+    }
 }
 
 impl Plan {
@@ -116,49 +137,40 @@ struct Heat {
     finished: bool,
 }
 
-/// A plan whose stages (races, fresh seeds) are replayed against one scan of the cache: what a
-/// report reads. Only [`Replayed::of`] and [`replay_cached_owned`]'s result make one, so a report
-/// handed one never replays it again (a no-op `qsweep run` replays its plan once, not twice).
-#[derive(Debug, Clone)]
-pub struct Replayed(Plan);
-
-impl Replayed {
-    /// `plan` replayed against what `store` holds of the trials `scan` lists; a plan without
-    /// stages comes back as it is (not copied).
-    pub fn of(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Self> {
-        if plan.is_staged() {
-            Ok(Self(replay_cached_owned(plan, store, scan)?.plan))
-        } else {
-            Ok(Self(plan))
-        }
-    }
-
-    /// The replayed plan.
-    pub fn plan(&self) -> &Plan {
-        &self.0
-    }
+/// How a run has a plan it replays round by round back as planned for the next round: by undoing
+/// what the replay changed (it was replayed in place: no second copy of its cells is made), or as
+/// the plan itself, beside a replayed copy. A replay only appends trials to a raced cell, sets its
+/// `contender` and sets the fresh trials of a best cell.
+#[derive(Debug)]
+pub(crate) enum Unreplay {
+    /// Each staged experiment's cells as planned: their trial counts and race states.
+    Undo(Vec<(usize, Vec<CellAsPlanned>)>),
+    /// The plan as planned (a copy of it was replayed).
+    Planned(Box<Plan>),
 }
-
-impl Raced {
-    /// Its plan, as replayed against the scan it was replayed against.
-    pub fn into_replayed(self) -> Replayed {
-        Replayed(self.plan)
-    }
-}
-
-/// What a replay ([`replay_owned`]) changes in a plan, noted before it, so that the replayed plan
-/// can be taken back to the plan as planned instead of replaying a copy: a replay only appends
-/// trials to a raced cell, sets its `contender` and sets the fresh trials of a best cell.
-#[derive(Debug, Clone)]
-pub struct Unreplay(Vec<(usize, Vec<CellAsPlanned>)>);
 
 /// A staged cell as planned: its trial count and race state.
 type CellAsPlanned = (usize, Option<bool>);
 
 impl Unreplay {
-    /// The staged experiments' cells of `plan` as they are: each cell's trial count and race
-    /// state. `None` when a cell already has fresh trials (a replay replaces them: not undone).
-    pub fn of(plan: &Plan) -> Option<Self> {
+    /// [`replay`] `plan`, and how to have it back as planned: replayed in place, unless `copy` (the
+    /// caller needs the plan as planned beside the replayed one) or a cell already has fresh trials
+    /// (a replay replaces them: not undone).
+    pub(crate) fn replay(
+        plan: Plan,
+        copy: bool,
+        cached: &HashSet<Key>,
+        read: &mut ReadOutcomes,
+    ) -> anyhow::Result<(Replayed, Self)> {
+        match Self::note(&plan).filter(|_| !copy) {
+            Some(undo) => Ok((replay(plan, cached, read)?, Self::Undo(undo))),
+            None => Ok((replay(&plan, cached, read)?, Self::Planned(Box::new(plan)))),
+        }
+    }
+
+    /// The staged experiments' cells of `plan` as they are; `None` when a cell already has fresh
+    /// trials.
+    fn note(plan: &Plan) -> Option<Vec<(usize, Vec<CellAsPlanned>)>> {
         let mut out = Vec::new();
         for (ei, e) in plan.experiments.iter().enumerate() {
             if e.race.is_none() && e.fresh.is_none() {
@@ -169,46 +181,59 @@ impl Unreplay {
             }
             out.push((ei, e.cells.iter().map(|c| (c.trials.len(), c.contender)).collect()));
         }
-        Some(Self(out))
+        Some(out)
     }
 
-    /// `replayed`, the plan this was noted of after a replay, as it was before.
-    pub fn undo(self, mut replayed: Plan) -> Plan {
-        for (ei, cells) in self.0 {
-            for (c, (n, contender)) in replayed.experiments[ei].cells.iter_mut().zip(cells) {
-                c.trials.truncate(n);
-                c.contender = contender;
-                c.fresh.clear();
-            }
+    /// The plan as planned while its replay is in use, where it is kept beside it (a copy was
+    /// replayed); `None` when it was replayed in place.
+    pub(crate) fn planned(&self) -> Option<&Plan> {
+        match self {
+            Self::Undo(_) => None,
+            Self::Planned(p) => Some(p),
         }
-        replayed
+    }
+
+    /// The plan as planned, from `replayed`, the replay this was made with.
+    pub(crate) fn undo(self, replayed: Replayed) -> Plan {
+        match self {
+            Self::Undo(cells) => {
+                let mut plan = replayed.plan;
+                for (ei, cells) in cells {
+                    for (c, (n, contender)) in plan.experiments[ei].cells.iter_mut().zip(cells) {
+                        c.trials.truncate(n);
+                        c.contender = contender;
+                        c.fresh.clear();
+                    }
+                }
+                plan
+            }
+            Self::Planned(p) => *p,
+        }
     }
 }
 
-/// [`replay`] against a cache: `plan` with its races replayed from the outcomes `store` holds of
-/// the trials `scan` lists (the plan itself, with no race).
-pub fn replay_cached(plan: &Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
-    replay_cached_owned(plan.clone(), store, scan)
+/// How a replay reads the outcomes of a cache: what `store` holds of the trials `scan` lists
+/// (pass `&scan.keys` as the replay's cached trials).
+pub fn read_cached<'a>(
+    store: &'a Store,
+    scan: &'a KeySet,
+) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, StageOutcome)>> + 'a {
+    move |wanted| store.read_outcomes_as(scan, wanted, false, |k, s| (k, StageOutcome::from(&s.outcome)))
 }
 
-/// [`replay_cached`] of a plan the caller gives up, replayed in place (a report of the paper's
-/// readings holds no second copy of its 37,000 cells).
-pub fn replay_cached_owned(plan: Plan, store: &Store, scan: &KeySet) -> anyhow::Result<Raced> {
-    replay_owned(plan, &scan.keys, &mut |wanted| {
-        store.read_outcomes_as(scan, wanted, false, |k, s| (k, StageOutcome::from(&s.outcome)))
-    })
-}
-
-/// Replay every race of `plan`: replay its rounds from the outcomes of the trials in `cached`
-/// (`read` fetches the outcomes of some of them), as far as each round's trials are all cached,
-/// and plan the next round's; then plan the fresh-seed trials of every decided best cell
-/// ([`crate::fresh::plan_fresh`]). Without a race or a `fresh:` block the plan comes back as it is.
-pub fn replay(plan: &Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
-    replay_owned(plan.clone(), cached, read)
-}
-
-/// [`replay`] of a plan the caller gives up, replayed in place.
-pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcomes) -> anyhow::Result<Raced> {
+/// Replay every stage of `plan`, given up (replayed in place) or borrowed (a copy is replayed):
+/// replay its races' rounds from the outcomes of the trials in `cached` (`read` fetches the
+/// outcomes of some of them; against a cache, [`read_cached`]), as far as each round's trials are
+/// all cached, and plan the next round's; then plan the fresh-seed trials of every decided best
+/// cell ([`crate::fresh::plan_fresh`]). Without a race or a `fresh:` block the plan comes back as
+/// it is (a plan given up is not copied: a report of the paper's readings holds no second copy of
+/// its 37,000 cells).
+pub fn replay<'p>(
+    plan: impl Into<Cow<'p, Plan>>,
+    cached: &HashSet<Key>,
+    read: &mut ReadOutcomes,
+) -> anyhow::Result<Replayed> {
+    let mut out = plan.into().into_owned();
     let mut heats: Vec<Heat> = Vec::new();
     for (ei, e) in out.experiments.iter_mut().enumerate() {
         if e.race.is_none() {
@@ -339,7 +364,7 @@ pub fn replay_owned(mut out: Plan, cached: &HashSet<Key>, read: &mut ReadOutcome
             }
         })
         .collect();
-    Ok(Raced { plan: out, heats })
+    Ok(Replayed { plan: out, heats })
 }
 
 /// A contender's sample: the counted episodes of its trials and how many reached the goal.
@@ -436,16 +461,21 @@ mod tests {
     }
 
     /// Resolve against a cache that holds every planned trial the closure gives an outcome for,
-    /// running "trials" until the race is over; returns the rounds' trial counts.
-    fn race_to_the_end(plan: &Plan, value: impl Fn(usize, u64) -> u32) -> (Raced, Vec<usize>) {
-        let mut store: HashMap<Key, Outcome> = HashMap::new();
+    /// running "trials" until the race is over; returns the rounds' trial counts and the outcomes.
+    /// Outcomes by key: a cache.
+    type Stored = HashMap<Key, Outcome>;
+
+    /// Read from `store`, as a replay reads a cache.
+    fn reader(store: &Stored) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, StageOutcome)>> + '_ {
+        |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+    }
+
+    fn race_to_the_end(plan: &Plan, value: impl Fn(usize, u64) -> u32) -> (Replayed, Vec<usize>, Stored) {
+        let mut store: Stored = HashMap::new();
         let mut per_round = Vec::new();
         loop {
             let cached: HashSet<Key> = store.keys().copied().collect();
-            let raced = replay(plan, &cached, &mut |w| {
-                Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
-            })
-            .unwrap();
+            let raced = replay(plan, &cached, &mut reader(&store)).unwrap();
             let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
                 .cells
                 .iter()
@@ -454,7 +484,7 @@ mod tests {
                 .filter(|(_, _, k)| !cached.contains(k))
                 .collect();
             if missing.is_empty() {
-                return (raced, per_round);
+                return (raced, per_round, store);
             }
             per_round.push(missing.len());
             for (i, seed, key) in missing {
@@ -467,7 +497,7 @@ mod tests {
     fn a_worse_cell_leaves_after_round_0_and_a_tie_runs_to_max_seeds() {
         let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
         // Cells 0 and 2 alternate 4 and 6 episodes (a tie); cell 1 always fails (50).
-        let (raced, rounds) =
+        let (raced, rounds, _) =
             race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
         assert_eq!(rounds, vec![9, 4, 4, 2], "round 0: 3 cells × 3 seeds; then 2 contenders × 2, 2, 1 seeds");
         let cells = &raced.plan.experiments[0].cells;
@@ -498,22 +528,34 @@ mod tests {
     #[test]
     fn an_undone_replay_is_the_plan_as_planned() {
         let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        let (raced, _) = race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
+        let (raced, _, store) =
+            race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
         assert_ne!(cells(&raced.plan), cells(&p), "the replay added rounds and decided the race");
-        let undo = Unreplay::of(&p).expect("nothing to replace");
-        assert_eq!(cells(&undo.undo(raced.plan)), cells(&p));
-        // A plan whose cells already have fresh trials is not undone (a replay replaces them).
+        let cached: HashSet<Key> = store.keys().copied().collect();
+        // Replayed in place: the same replay, taken back to the plan as planned.
+        let (in_place, undo) = Unreplay::replay(p.clone(), false, &cached, &mut reader(&store)).unwrap();
+        assert!(undo.planned().is_none(), "no copy is kept");
+        assert_eq!(cells(&in_place.plan), cells(&raced.plan));
+        assert_eq!(cells(&undo.undo(in_place)), cells(&p));
+        // A copy replayed when asked: the plan as planned is kept beside it.
+        let (copied, kept) = Unreplay::replay(p.clone(), true, &cached, &mut reader(&store)).unwrap();
+        assert_eq!(kept.planned().map(cells), Some(cells(&p)));
+        assert_eq!(cells(&copied.plan), cells(&raced.plan));
+        assert_eq!(cells(&kept.undo(copied)), cells(&p));
+        // A plan whose cells already have fresh trials is not undone (a replay replaces them): a
+        // copy is replayed.
         let mut with_fresh = p.clone();
         with_fresh.experiments[0].fresh = Some(vec![100]);
         with_fresh.experiments[0].cells[0].fresh = with_fresh.experiments[0].cells[1].trials.clone();
-        assert!(Unreplay::of(&with_fresh).is_none());
+        let (_, kept) = Unreplay::replay(with_fresh.clone(), false, &cached, &mut reader(&store)).unwrap();
+        assert_eq!(kept.planned().map(cells), Some(cells(&with_fresh)));
     }
 
     #[test]
     fn raising_max_seeds_adds_rounds_and_keeps_the_earlier_ones() {
         let value = |i: usize, seed: u64| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 };
-        let (short, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 5 }"), value);
-        let (long, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 9 }"), value);
+        let (short, _, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 5 }"), value);
+        let (long, _, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 9 }"), value);
         for (a, b) in short.plan.experiments[0].cells.iter().zip(&long.plan.experiments[0].cells) {
             assert_eq!(a.trials[..], b.trials[..a.trials.len()], "the short race's trials are a prefix");
         }

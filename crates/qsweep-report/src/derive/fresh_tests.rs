@@ -46,8 +46,9 @@ fn run_to_the_end(p: &Plan) -> (Plan, HashMap<Key, Outcome>, usize) {
         let cached: HashSet<Key> = store.keys().copied().collect();
         let out =
             replay(p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect()))
-                .unwrap();
-        let missing: Vec<(usize, u64, Key)> = out.plan.experiments[0]
+                .unwrap()
+                .into_plan();
+        let missing: Vec<(usize, u64, Key)> = out.experiments[0]
             .cells
             .iter()
             .enumerate()
@@ -55,7 +56,7 @@ fn run_to_the_end(p: &Plan) -> (Plan, HashMap<Key, Outcome>, usize) {
             .filter(|(_, _, k)| !cached.contains(k))
             .collect();
         if missing.is_empty() {
-            return (out.plan, store, stages);
+            return (out, store, stages);
         }
         stages += 1;
         for (i, seed, key) in missing {

@@ -10,6 +10,7 @@ use qsweep_pipeline::analysis::BOOTSTRAP_RESAMPLES;
 use qsweep_pipeline::cache::store::{KeySet, Store};
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::plan::Plan;
+use qsweep_pipeline::race::{read_cached, replay};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -35,11 +36,7 @@ pub fn staleness(
     dir: &Path,
     formats: Formats,
 ) -> anyhow::Result<Staleness> {
-    let plan = if plan.is_staged() {
-        qsweep_pipeline::race::replay_cached_owned(plan, store, scan)?.plan
-    } else {
-        plan
-    };
+    let plan = replay(plan, &scan.keys, &mut read_cached(store, scan))?.into_plan();
     let folders = folders(&plan, scan, dir, formats);
     let path = Derived::path(store.dir(), &plan.name);
     let memo = Derived::load(&path, crate::memo::ANALYSIS_VERSION, true);
