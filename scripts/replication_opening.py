@@ -3,8 +3,8 @@
 
 Usage: .venv/bin/python scripts/replication_opening.py [reports/paper]
 
-Prints Markdown: the claims x readings matrix of the declared readings (conclusions.csv), then
-Table III of the best-fitting declared reading (variants.csv, rank 1) with every row's fresh-seed
+Prints Markdown: the claims x variants matrix of the declared variants (conclusions.csv), then
+Table III of the best-fitting declared variant (variants.csv, rank 1) with every row's fresh-seed
 estimate and its interval, the paper's value, ours/paper with its interval, the verdict on the
 pre-registered scale and the cause (table3.csv's `verdict`, `cause`: issue #46), the old rule's
 within-2-SE / within-2x verdict and the equivalence verdicts (table3.csv). Analysis only; the
@@ -36,7 +36,7 @@ def claims(d: Path, declared: list[str]) -> None:
         print(f"| `{claim}` | " + " | ".join(cells) + " |")
     tally = c.groupby("variant")["verdict"].value_counts().unstack(fill_value=0)
     print()
-    print("Per reading (holds / reversed / undecided): " + "; ".join(
+    print("Per variant (holds / reversed / undecided): " + "; ".join(
         f"`{v}` {tally.loc[v].get('holds', 0)} / {tally.loc[v].get('reversed', 0)} / {tally.loc[v].get('undecided', 0)}"
         for v in declared
     ) + ".")
@@ -66,7 +66,7 @@ def main() -> None:
     declared = listed[listed["exploratory"] == "no"]["variant"].tolist()
     claims(d, declared)
     print()
-    print(f"Table III of the best-fitting declared reading, `{declared[0]}`:\n")
+    print(f"Table III of the best-fitting declared variant, `{declared[0]}`:\n")
     table3(d, declared[0])
 
 

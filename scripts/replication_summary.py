@@ -3,7 +3,7 @@
 
 Usage: .venv/bin/python scripts/replication_summary.py [reports/paper]
 
-For a report of a pipeline with variants (reports/paper: one folder per reading of the paper,
+For a report of a pipeline with variants (reports/paper: one folder per variant of the paper,
 variants.csv), prints Markdown: every variant's tally recomputed from its table3.csv (and checked
 against variants.csv), the ranking by the pre-registered fit measure (docs/preregistration.md),
 Table III under `as-written` and under the best-fitting variant side by side, then the paper's
@@ -212,7 +212,7 @@ def causes(t3: pd.DataFrame, cells: pd.DataFrame) -> list[str]:
 
 
 def cause_table(d: Path, v: str) -> None:
-    """The per-row cause table of REPLICATION.md for reading `v`, and its tallies: the verdicts and
+    """The per-row cause table of REPLICATION.md for variant `v`, and its tallies: the verdicts and
     causes of the verdict scale (table3.csv's `verdict`, `paper_cell_verdict`, `cause`) beside the
     old rule's (within 2 SE, recomputed; equal to `verdict_2se`, `paper_cell_verdict_2se`,
     `cause_2se`)."""
@@ -222,7 +222,7 @@ def cause_table(d: Path, v: str) -> None:
     j = judged(t3)
     at = paper_cell(cells, t3)
     why_2se = causes(t3, cells)
-    # The declared reading whose best cell (judged estimate) comes closest to the paper, per row.
+    # The declared variant whose best cell (judged estimate) comes closest to the paper, per row.
     listed = pd.read_csv(d / "variants.csv")
     others = {
         o: judged(pd.read_csv(d / o / "table3.csv", dtype={"experiment": str}))
@@ -234,7 +234,7 @@ def cause_table(d: Path, v: str) -> None:
     print(
         "| system | exp. | algorithm | paper | ours, best cell | verdict | within 2 SE (old rule) "
         "| ours at paper's config | verdict | within 2 SE (old rule) | cause | cause (old rule) "
-        "| closest reading (ours/paper) |"
+        "| closest variant (ours/paper) |"
     )
     print("|---|---|---|---:|---:|---|---|---:|---|---|---|---|---|")
     for (i, r), c in zip(j.iterrows(), why_2se):
@@ -272,7 +272,7 @@ def cause_table(d: Path, v: str) -> None:
 
 def study(d: Path) -> str:
     """Print the variant study; return the id of the best-fitting declared variant. Exploratory
-    readings have no folder of their own (their rows are in variants.csv only) and are skipped."""
+    variants have no folder of their own (their rows are in variants.csv only) and are skipped."""
     listed = pd.read_csv(d / "variants.csv")
     listed = listed[[(d / v / "table3.csv").is_file() for v in listed["variant"]]]
     ids = listed["variant"].tolist()
@@ -283,7 +283,7 @@ def study(d: Path) -> str:
             got = r[k]
             ok = math.isclose(got, want, rel_tol=1e-9) if k == "geo_mean_ratio" else int(got) == want
             assert ok, f"variants.csv {r['variant']}.{k} = {got}, recomputed {want}"
-    # variants.csv lists the declared readings first, each part in fit order.
+    # variants.csv lists the declared variants first, each part in fit order.
     explo = dict(zip(listed["variant"], listed["exploratory"].astype(str) == "yes"))
     ranked = sorted(ids, key=lambda v: (explo[v], fit_key(tallies[v]), ids.index(v)))
     assert ranked == ids, f"variants.csv order {ids} differs from the recomputed ranking {ranked}"

@@ -307,7 +307,7 @@ def test_paper_comparison_opens_with_the_answer_on_the_first_screen() -> None:
                                       "report-screenshot-paper.png")
     assert errors_in(events) == [], f"console errors (screenshot: {screenshot})"
     check_opening(page, screenshot)
-    assert page["answer"]["text"].startswith("Under the best-ranked declared reading, "), page["answer"]
+    assert page["answer"]["text"].startswith("Under the best-ranked declared variant, "), page["answer"]
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
 """Independent checks of issue #40 on the committed paper report, in Python with pandas/SciPy:
 
-- every declared reading's table3.csv has the `paper_cell_*` columns, and ours at the paper's
+- every declared variant's table3.csv has the `paper_cell_*` columns, and ours at the paper's
   configuration (mean, std, n, successes, fresh-seed estimate, ratio to the paper) is recomputed
-  from that reading's rows of `cells.parquet` and the paper's values;
+  from that variant's rows of `cells.parquet` and the paper's values;
 - the old rule's columns (issue #46 renamed them `verdict_2se`, `paper_cell_verdict_2se`,
   `cause_2se`) and `contradictory_pair` follow the rule pre-registered in docs/preregistration.md
   for issue #40, recomputed by scripts/replication_summary.py; `paper_inconsistent` marks the one
@@ -10,7 +10,7 @@
 - consistency.csv lists exactly the comparable pairs recomputed from the paper's values and the
   grids (9 pairs, 1 contradictory: Ball-Beam crisp Q(0), Exp. 1 against Exp. 2, marking Exp. 1;
   still contradictory with the paper's means over 5 runs, not over 3);
-- the comparison page opens with the best declared reading's tally of causes (the scale's `cause`).
+- the comparison page opens with the best declared variant's tally of causes (the scale's `cause`).
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def test_consistency_lists_every_comparable_pair(cells: pd.DataFrame) -> None:
     assert int(got["marked"].notna().sum()) == 1
 
 
-def test_the_comparison_page_opens_with_the_best_readings_causes() -> None:
+def test_the_comparison_page_opens_with_the_best_variants_causes() -> None:
     best = _declared()[0]
     t3 = pd.read_csv(PAPER / best / "table3.csv")
     counts = ", ".join(f"{int((t3['cause'] == c).sum())} {c}" for c in CAUSES)
@@ -160,4 +160,4 @@ def test_the_comparison_page_opens_with_the_best_readings_causes() -> None:
     assert counts in readme
     assert html.index('id="causes"') < html.index('id="fit"'), "near the top"
     notes = (PAPER / "REPLICATION.md").read_text()
-    assert counts in notes, "REPLICATION.md states the tally of the best declared reading"
+    assert counts in notes, "REPLICATION.md states the tally of the best declared variant"

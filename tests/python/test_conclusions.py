@@ -2,7 +2,7 @@
 
 - `conclusions.csv` of the committed paper report reads in pandas, polars and DuckDB with the
   documented columns, and every verdict follows from its interval and null (the rule re-derived);
-- every claim's point estimate of every declared reading is recomputed from the committed
+- every claim's point estimate of every declared variant is recomputed from the committed
   `cells.parquet` with SciPy's Spearman and our own pairing, and agrees;
 - the TOST p-values and verdicts of `table3.csv` are recomputed with `scipy.stats.ttest_ind_from_stats`;
 - on a fixture run, the bootstrap intervals of Table III agree with NumPy's percentile bootstrap of
@@ -37,7 +37,7 @@ def conclusions() -> pd.DataFrame:
     return pd.read_csv(PAPER / "conclusions.csv", keep_default_na=False, na_values=[""])
 
 
-def _readings() -> dict[str, bool]:
+def _variants() -> dict[str, bool]:
     """The variants of pipelines/paper.yaml as written (id -> exploratory): the oracle the report's
     files are checked against, read from the pipeline rather than counted by hand."""
     spec = yaml.safe_load((REPO_ROOT / "pipelines" / "paper.yaml").read_text())
@@ -48,9 +48,9 @@ def test_conclusions_load_everywhere_with_the_documented_columns(conclusions: pd
     assert list(conclusions.columns) == COLUMNS
     assert conclusions["estimate"].dtype == np.float64
     assert len(conclusions) == 10 * conclusions["variant"].nunique()
-    readings = _readings()
-    assert set(conclusions["variant"]) == set(readings)
-    assert {v for v in readings if readings[v]} == set(conclusions[conclusions["exploratory"] == "yes"]["variant"])
+    variants = _variants()
+    assert set(conclusions["variant"]) == set(variants)
+    assert {v for v in variants if variants[v]} == set(conclusions[conclusions["exploratory"] == "yes"]["variant"])
     assert set(conclusions["exploratory"]) == {"yes", "no"}
     p = pl.read_csv(PAPER / "conclusions.csv")
     assert p.columns == COLUMNS and p["ci_lo"].dtype == pl.Float64
@@ -84,7 +84,7 @@ def _compact(df: pd.DataFrame) -> pd.Series:
 
 
 def _claims(c: pd.DataFrame) -> dict[str, float]:
-    """Every claim's estimate for one reading's cells (docs/preregistration.md), from scratch."""
+    """Every claim's estimate for one variant's cells (docs/preregistration.md), from scratch."""
     c = c.copy()
     c["states"] = _states(c)
     c["compact"] = _compact(c)
@@ -147,8 +147,8 @@ def _claims(c: pd.DataFrame) -> dict[str, float]:
 def test_claim_estimates_recomputed_from_cells_parquet(conclusions: pd.DataFrame) -> None:
     cells = pd.read_parquet(PAPER / "cells.parquet")
     declared = sorted(cells["variant"].unique())
-    readings = _readings()
-    assert declared == sorted(v for v in readings if not readings[v]), "exploratory readings are not in the combined cells.parquet"
+    variants = _variants()
+    assert declared == sorted(v for v in variants if not variants[v]), "exploratory variants are not in the combined cells.parquet"
     for v in declared:
         got = _claims(cells[cells["variant"] == v])
         rows = conclusions[conclusions["variant"] == v].set_index("claim")

@@ -7,10 +7,10 @@ temporary folders;
 set `$QSWEEP_EXPLORE_REPORT_DIR` and `$QSWEEP_EXPLORE_PIPELINE` to check another, e.g.
 `reports/explore-ball-beam` and `pipelines/explore-ball-beam.yaml`.
 
-From the combined `cells.parquet` (each reading's best cells) and the pipeline's `reference:` and
+From the combined `cells.parquet` (each variant's best cells) and the pipeline's `reference:` and
 `exploratory:` blocks (read with PyYAML), the test recomputes, independently of qsweep's Rust:
-every Table III row's verdict, each reading's tallies on the fit rows and on the held-out rows,
-the ranking on the fit rows alone, and the held-out table of the chosen reading beside
+every Table III row's verdict, each variant's tallies on the fit rows and on the held-out rows,
+the ranking on the fit rows alone, and the held-out table of the chosen variant beside
 `as-written`; then compares with `variants.csv` and `held_out.csv`.
 """
 
@@ -129,7 +129,7 @@ def test_fit_and_held_out_scores_recomputed(search) -> None:
         rows, rep, w2, cfg, logs = tallies[v]["fit"]
         return (-rep, -w2, -cfg, abs(sum(logs) / len(logs)) if logs else math.inf, order.index(v))
     assert list(got["variant"]) == sorted(order, key=key)
-    # The held-out table: the chosen reading beside as-written, row by row.
+    # The held-out table: the chosen variant beside as-written, row by row.
     held = pd.read_csv(d / "held_out.csv")
     chosen = got["variant"].iloc[0]
     assert len(held) == sum(1 for k in refs if not is_fit(k, fit_rows))

@@ -1,6 +1,6 @@
 """README's answer against the files it comes from: every count and value that README.md's
 "Does the paper replicate?" paragraph and its example rows state is recomputed here from the
-committed report (`variants.csv`, `cross_validation.csv`, the best reading's `table3.csv`,
+committed report (`variants.csv`, `cross_validation.csv`, the best variant's `table3.csv`,
 `conclusions.csv`), and the yardstick's numbers (seeded permutations that only qsweep computes)
 must be the ones the generated comparison page states. A changed count in any of those files fails
 this test until the prose follows.
@@ -45,7 +45,7 @@ def test_the_answer_states_the_counts_of_the_report(variants: pd.DataFrame) -> N
     rows = len(t3)
     aw = variants[variants["variant"] == "as-written"].iloc[0]
     want = [
-        f"Under the best-ranked declared reading, {b['variant']}, {b['replicating_n10']} of {rows} Table III rows replicate",
+        f"Under the best-ranked declared variant, {b['variant']}, {b['replicating_n10']} of {rows} Table III rows replicate",
         f"{b['equivalent_n10']} equivalent (TOST, ours ÷ paper within 0.80–1.25) and {b['within_2x_n10']} shown within 2×",
         f"As written (as-written): {aw['replicating_n10']} of {rows} replicate",
         f"with 5 runs behind each published mean {b['replicating_n5']} rows replicate, with 3 runs {b['replicating_n3']}",
@@ -55,12 +55,12 @@ def test_the_answer_states_the_counts_of_the_report(variants: pd.DataFrame) -> N
     replicating = {"equivalent", "within-2x"}
     declared = variants[variants["exploratory"] == "no"]
     want.append(
-        f"over the {len(declared)} declared readings), {int(cv['verdict'].isin(replicating).sum())} of {len(cv)} rows "
+        f"over the {len(declared)} declared variants), {int(cv['verdict'].isin(replicating).sum())} of {len(cv)} rows "
         f"replicate ({int((cv['verdict'] == 'equivalent').sum())} equivalent; "
         f"{int((cv['verdict_2se'] == 'replicates').sum())} within two standard errors), against "
         f"{b['replicating_n10']} ({b['equivalent_n10']}; {b['within_2se']}) for `{b['variant']}` in sample"
     )
-    want.append(f"the best of {len(declared)} readings has {declared['within_2se'].max()} rows within two standard errors")
+    want.append(f"the best of {len(declared)} variants has {declared['within_2se'].max()} rows within two standard errors")
     # The yardstick's distribution is qsweep's own (seeded permutations): README repeats the page.
     page = (PAPER / "README.md").read_text()
     m = re.search(r"the best would reach a median \d+ \(95th percentile \d+, p = [0-9.]+\)", page)
@@ -75,12 +75,12 @@ def test_the_answer_states_the_counts_of_the_report(variants: pd.DataFrame) -> N
     c = c[c["exploratory"] == "no"]
     everywhere = int(c.groupby("claim")["verdict"].apply(lambda v: (v == "holds").all()).sum())
     words = ["none", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten"]
-    want.append(f"Of the paper's ten conclusions {words[everywhere]} hold in every reading")
+    want.append(f"Of the paper's ten conclusions {words[everywhere]} hold in every variant")
     for w in want:
         assert w in answer, f"README.md's answer should say:\n  {w}\nit says:\n  {answer}"
 
 
-def test_the_example_rows_are_the_best_readings_fresh_seed_values(variants: pd.DataFrame) -> None:
+def test_the_example_rows_are_the_best_variants_fresh_seed_values(variants: pd.DataFrame) -> None:
     b = _best(variants)
     text = _readme()
     assert f"([`{b['variant']}`](reports/paper/{b['variant']}/README.md)" in text
@@ -100,7 +100,7 @@ def test_replication_md_repeats_the_generated_answer() -> None:
     """REPLICATION.md's answer quotes the comparison page's generated opening sentence by sentence,
     so a count that changes in the report fails here until the write-up follows."""
     page = (PAPER / "README.md").read_text()
-    opening = next(p for p in page.split("\n\n") if p.startswith("Under the best-ranked declared reading"))
+    opening = next(p for p in page.split("\n\n") if p.startswith("Under the best-ranked declared variant"))
     notes = " ".join((PAPER / "REPLICATION.md").read_text().split())
     sentences = re.split(r"(?<=[.)]) (?=[A-Z])", " ".join(opening.split()))
     assert len(sentences) >= 6
@@ -109,7 +109,7 @@ def test_replication_md_repeats_the_generated_answer() -> None:
 
 
 def test_replication_md_tables_are_the_scripts_output() -> None:
-    """The claims × readings matrix and Table III on fresh seeds in REPLICATION.md are what
+    """The claims × variants matrix and Table III on fresh seeds in REPLICATION.md are what
     scripts/replication_opening.py lays out from the committed report, line for line."""
     import subprocess
     import sys

@@ -2,13 +2,13 @@
 section: "Verdicts that need closeness, the paper's unknown n, one row per contradiction").
 
 Nothing here imports the project's scripts: the only inputs are `reports/paper/cells.parquet`
-(every cell of every declared reading), the order and the `exploratory:` flags of `variants:` in
+(every cell of every declared variant), the order and the `exploratory:` flags of `variants:` in
 `pipelines/paper.yaml`, and the paper's Table III typed afresh below (itself checked against the
 `paper_*` columns of `as-written/table3.csv`, so a typo shows). Statistics are SciPy's.
 
 What is checked, each against what qsweep wrote:
 
-- `table3.csv` of every declared reading: the new columns follow `paper_cell_equivalent_n100` in the
+- `table3.csv` of every declared variant: the new columns follow `paper_cell_equivalent_n100` in the
   declared order, and each is recomputed: the old rule (`verdict_2se`, `paper_cell_verdict_2se`,
   `cause_2se` with both rows of a contradictory pair `paper-inconsistent` and `learner`), the
   within-2x TOST's p for the best cell and the paper's cell (`tost2x_p_n10`,
@@ -16,21 +16,21 @@ What is checked, each against what qsweep wrote:
   (`contradictory_pair`), the designated row (`paper_inconsistent`), the `cause`, and the spread
   (`std_ratio` with its F interval, `spread_differs`), all at n_paper = 10, on the fresh-seed
   estimate where the cell has one;
-- `verdicts_by_n.csv`: one line per reading of the pipeline, Table III row and n_paper in
-  {3, 5, 10}; for every reading with cells in `cells.parquet` (today the declared ones) every
+- `verdicts_by_n.csv`: one line per variant of the pipeline, Table III row and n_paper in
+  {3, 5, 10}; for every variant with cells in `cells.parquet` (today the declared ones) every
   verdict, pair flag, designation and cause recomputed at that n; for the others (the exploratory
-  `*-failures` readings, which have neither cells nor a folder) the pair flags and the designation
+  `*-failures` variants, which have neither cells nor a folder) the pair flags and the designation
   recomputed (they depend on the paper alone), the verdict recomputed from the estimate the line
-  states (`mean`, `std`, `n`; for readings with cells that estimate is checked too) and the cause
-  checked against the line's own verdicts; the closest reading per row and n (best verdict, then
-  smallest |ln(m/M)|, then pipeline order): fully among readings with cells, and against the others
+  states (`mean`, `std`, `n`; for variants with cells that estimate is checked too) and the cause
+  checked against the line's own verdicts; the closest variant per row and n (best verdict, then
+  smallest |ln(m/M)|, then pipeline order): fully among variants with cells, and against the others
   as far as their lines allow;
-- `cross_validation.csv`: leave-one-row-out over the declared readings with the fit measure of
+- `cross_validation.csv`: leave-one-row-out over the declared variants with the fit measure of
   2026-11-30 (rows within 2 SE, rows within 2x by ratio, matching configurations, |ln geometric
-  mean|, then pipeline order), the held-out row judged under the chosen reading;
+  mean|, then pipeline order), the held-out row judged under the chosen variant;
 - `variants.csv`: the old rule's counts under their new names (`within_2se`, `ratio_within_2x`), the
-  new counts per reading (`replicating_n3/5/10` = equivalent + within-2x, `within_2x_n10`,
-  `consistent_but_wide_n10`, `differs_n10`), and the declared readings' order by the fit measure.
+  new counts per variant (`replicating_n3/5/10` = equivalent + within-2x, `within_2x_n10`,
+  `consistent_but_wide_n10`, `differs_n10`), and the declared variants' order by the fit measure.
 
 Not recomputed: the permutation yardstick's exact numbers (its ChaCha8 stream is qsweep's own); its
 unit tests check its behaviour (crates/qsweep-pipeline/src/analysis/selection.rs).
@@ -93,7 +93,7 @@ BY_N_COLUMNS = [
     "contradictory_pair",
     "paper_inconsistent",
     "cause",
-    "closest_reading",
+    "closest_variant",
     "closest_exploratory",
     "closest_ratio",
     "closest_verdict",
@@ -136,7 +136,7 @@ PUBLISHED = {r[:3]: r[3:] for r in TABLE3}  # key -> (M, S, config)
 # Inputs
 
 
-def pipeline_readings() -> list[tuple[str, bool]]:
+def pipeline_variants() -> list[tuple[str, bool]]:
     """(id, exploratory) of `variants:` in pipelines/paper.yaml, in pipeline order."""
     text = PIPELINE.read_text(encoding="utf-8")
     out: list[list] = []
@@ -148,10 +148,10 @@ def pipeline_readings() -> list[tuple[str, bool]]:
     return [(a, b) for a, b in out]
 
 
-READINGS = pipeline_readings()
-ORDER = {v: i for i, (v, _) in enumerate(READINGS)}
-EXPLORATORY = dict(READINGS)
-DECLARED = [v for v, e in READINGS if not e]
+VARIANTS = pipeline_variants()
+ORDER = {v: i for i, (v, _) in enumerate(VARIANTS)}
+EXPLORATORY = dict(VARIANTS)
+DECLARED = [v for v, e in VARIANTS if not e]
 
 
 @lru_cache(maxsize=1)
@@ -161,7 +161,7 @@ def cells() -> pd.DataFrame:
 
 @lru_cache(maxsize=None)
 def has_cells(v: str) -> bool:
-    """Whether `cells.parquet` holds the reading (today: the declared ones only)."""
+    """Whether `cells.parquet` holds the variant (today: the declared ones only)."""
     return v in set(cells()["variant"])
 
 
@@ -219,7 +219,7 @@ def paper_cell(v: str, key: tuple) -> pd.Series | None:
 
 @lru_cache(maxsize=None)
 def grid(key: tuple) -> frozenset:
-    """The cells (configurations) of a row's heatmap, the same in every declared reading."""
+    """The cells (configurations) of a row's heatmap, the same in every declared variant."""
     grids = {frozenset(config_of(r) for _, r in heatmap(v, key).iterrows()) for v in DECLARED}
     assert len(grids) == 1, key
     return grids.pop()
@@ -429,12 +429,12 @@ def test_typed_table3_matches_the_reports_paper_columns() -> None:
             assert got == cfg, (v, key_of(r))
 
 
-def test_pipeline_and_variants_csv_name_the_same_readings() -> None:
+def test_pipeline_and_variants_csv_name_the_same_variants() -> None:
     vs = read_csv(PAPER / "variants.csv")
     assert sorted(vs["variant"]) == sorted(ORDER)
     for _, r in vs.iterrows():
         assert r["exploratory"] == yes(EXPLORATORY[r["variant"]]), r["variant"]
-    assert set(DECLARED) <= set(cells()["variant"]) <= set(ORDER), "cells.parquet holds every declared reading"
+    assert set(DECLARED) <= set(cells()["variant"]) <= set(ORDER), "cells.parquet holds every declared variant"
 
 
 def test_the_papers_pairs_and_contradictions_at_each_n() -> None:
@@ -508,10 +508,10 @@ def by_n() -> pd.DataFrame:
     return read_csv(PAPER / "verdicts_by_n.csv")
 
 
-def test_verdicts_by_n_has_one_line_per_reading_row_and_n(by_n: pd.DataFrame) -> None:
+def test_verdicts_by_n_has_one_line_per_variant_row_and_n(by_n: pd.DataFrame) -> None:
     assert by_n.columns.tolist() == BY_N_COLUMNS
     got = sorted((r.variant, key_of(r), int(r.n_paper)) for _, r in by_n.iterrows())
-    want = sorted((v, k, n) for v, _ in READINGS for k in ROWS for n in NS)
+    want = sorted((v, k, n) for v, _ in VARIANTS for k in ROWS for n in NS)
     assert got == want
     for _, r in by_n.iterrows():
         assert r["exploratory"] == yes(EXPLORATORY[r["variant"]]), r["variant"]
@@ -528,7 +528,7 @@ def test_verdicts_by_n_recomputed(by_n: pd.DataFrame, n_paper: int) -> None:
         M, S, _ = PUBLISHED[key]
         line_est = Est(float(r["mean"]), float(r["std"]), int(r["n"]))
         if not has_cells(v):
-            # An exploratory reading without cells: its verdict recomputed from the estimate the
+            # An exploratory variant without cells: its verdict recomputed from the estimate the
             # line states, its cause from the line's verdicts.
             assert r["verdict"] == verdict(line_est, M, S, n_paper), where
             pc = None if pd.isna(r["paper_cell_verdict"]) else r["paper_cell_verdict"]
@@ -547,31 +547,31 @@ def test_verdicts_by_n_recomputed(by_n: pd.DataFrame, n_paper: int) -> None:
 
 
 @pytest.mark.parametrize("n_paper", NS)
-def test_closest_reading_per_row(by_n: pd.DataFrame, n_paper: int) -> None:
+def test_closest_variant_per_row(by_n: pd.DataFrame, n_paper: int) -> None:
     lines = by_n[by_n["n_paper"] == n_paper]
     for key in ROWS:
         M = PUBLISHED[key][0]
         mine = lines[lines.apply(key_of, axis=1) == key]
-        named = mine[["closest_reading", "closest_exploratory", "closest_ratio", "closest_verdict"]]
-        assert len(named.drop_duplicates()) == 1, (key, n_paper, "one closest reading per row and n")
+        named = mine[["closest_variant", "closest_exploratory", "closest_ratio", "closest_verdict"]]
+        assert len(named.drop_duplicates()) == 1, (key, n_paper, "one closest variant per row and n")
         c = named.iloc[0]
-        where = (*key, n_paper, c["closest_reading"])
-        assert c["closest_reading"] in ORDER, where
-        assert c["closest_exploratory"] == yes(EXPLORATORY[c["closest_reading"]]), where
-        own = mine[mine["variant"] == c["closest_reading"]].iloc[0]
+        where = (*key, n_paper, c["closest_variant"])
+        assert c["closest_variant"] in ORDER, where
+        assert c["closest_exploratory"] == yes(EXPLORATORY[c["closest_variant"]]), where
+        own = mine[mine["variant"] == c["closest_variant"]].iloc[0]
         assert c["closest_verdict"] == own["verdict"], where
-        # Readings with cells, recomputed: (verdict rank, |ln m/M|, pipeline order).
+        # Variants with cells, recomputed: (verdict rank, |ln m/M|, pipeline order).
         scored = {}
         for v in ORDER:
             if has_cells(v):
                 j = judged(v, key, n_paper)
                 scored[v] = (SCALE.index(j.verdict), ln_ratio(j.est.mean, M), ORDER[v])
         first = min(scored, key=scored.get)
-        # Readings without cells (exploratory) can only be ranked by the verdicts they report.
+        # Variants without cells (exploratory) can only be ranked by the verdicts they report.
         rest = mine[~mine["variant"].map(has_cells)]
         best_rest = min((SCALE.index(x) for x in rest["verdict"]), default=len(SCALE))
-        if c["closest_reading"] in scored:
-            assert c["closest_reading"] == first, where
+        if c["closest_variant"] in scored:
+            assert c["closest_variant"] == first, where
             j = judged(first, key, n_paper)
             assert close(c["closest_ratio"], j.est.mean / M), where
             assert c["closest_verdict"] == j.verdict, where
@@ -580,7 +580,7 @@ def test_closest_reading_per_row(by_n: pd.DataFrame, n_paper: int) -> None:
             named_score = (
                 SCALE.index(c["closest_verdict"]),
                 ln_ratio(float(c["closest_ratio"]), 1.0),
-                ORDER[c["closest_reading"]],
+                ORDER[c["closest_variant"]],
             )
             assert named_score < scored[first], where
             assert SCALE.index(c["closest_verdict"]) == best_rest, where
@@ -588,7 +588,7 @@ def test_closest_reading_per_row(by_n: pd.DataFrame, n_paper: int) -> None:
 
 def test_leave_one_row_out() -> None:
     cv = read_csv(PAPER / "cross_validation.csv")
-    assert cv.columns.tolist() == ["system", "experiment", "algorithm", "chosen_reading", "verdict", "verdict_2se"]
+    assert cv.columns.tolist() == ["system", "experiment", "algorithm", "chosen_variant", "verdict", "verdict_2se"]
     assert [key_of(r) for _, r in cv.iterrows()] == ROWS
     for _, r in cv.iterrows():
         held = key_of(r)
@@ -596,7 +596,7 @@ def test_leave_one_row_out() -> None:
         chosen = min(DECLARED, key=lambda v: fit_key(v, rest))
         M, S, _ = PUBLISHED[held]
         j = judged(chosen, held, HEADLINE_N)
-        assert r["chosen_reading"] == chosen, held
+        assert r["chosen_variant"] == chosen, held
         assert r["verdict"] == j.verdict, held
         assert r["verdict_2se"] == verdict_2se(j.est, M, S), held
 
@@ -626,6 +626,6 @@ def test_variants_counts(by_n: pd.DataFrame) -> None:
             old = [verdict_2se(judged(v, k, HEADLINE_N).est, *PUBLISHED[k][:2]) for k in ROWS]
             assert r["within_2se"] == old.count("replicates"), v
             assert r["ratio_within_2x"] == old.count("within-2x"), v
-    # The declared readings are still ranked by the fit measure on all rows.
+    # The declared variants are still ranked by the fit measure on all rows.
     ranked = vs[vs["exploratory"] == "no"].sort_values("rank")["variant"].tolist()
     assert ranked == sorted(DECLARED, key=lambda v: fit_key(v, ROWS))

@@ -27,6 +27,6 @@ pub mod spec;
 pub mod status;
 
 #[cfg(test)]
-mod readings_tests;
-#[cfg(test)]
 mod settings_tests;
+#[cfg(test)]
+mod variants_tests;

@@ -22,9 +22,9 @@
 //!
 //! - [`kinds`]: which files a report writes (`--formats`);
 //! - [`memo`]: the one owner of derived results kept between reports (the statistics' memo in the
-//!   cache, the per-reading trial parts, each folder's `memo.json`), with [`memo::ANALYSIS_VERSION`];
+//!   cache, the per-variant trial parts, each folder's `memo.json`), with [`memo::ANALYSIS_VERSION`];
 //! - [`derive`]: the numbers (per-cell statistics, Table III as a format-neutral table, the fit of
-//!   each reading to the paper, its verdicts, claims and causes), computed or taken from the memo;
+//!   each variant to the paper, its verdicts, claims and causes), computed or taken from the memo;
 //! - [`render`]: pure functions of derived numbers into files (CSV, Markdown, LaTeX, HTML tables;
 //!   SVG/PNG figures; pages; Parquet datasets);
 //! - [`stage`]: the report stage itself: which folders to write, guarded against writing less

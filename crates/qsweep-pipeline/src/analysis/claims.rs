@@ -1,4 +1,4 @@
-//! The paper's conclusions as tests: each claim is a statistic over a reading's cells with a null
+//! The paper's conclusions as tests: each claim is a statistic over a variant's cells with a null
 //! value and a direction, and a percentile-bootstrap interval that redraws every cell's trials.
 //! The definitions ([`CLAIMS`]) were fixed in `docs/preregistration.md` before any was computed;
 //! a claim **holds** when its interval lies entirely on the claimed side of the null, is
@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 pub const CLAIM_RESAMPLES: usize = 1000;
 
 /// The verdict rule, as stated in captions.
-pub const CLAIM_RULE: &str = "Each claim is a statistic over the reading's cells (definitions in \
+pub const CLAIM_RULE: &str = "Each claim is a statistic over the variant's cells (definitions in \
 docs/preregistration.md) with a 95 % percentile-bootstrap interval (1,000 resamples, each redrawing \
 every cell's trials with replacement). holds: the interval lies entirely on the claimed side of the \
 null value; reversed: entirely on the other side; undecided: otherwise; — : not computable here.";
@@ -138,7 +138,7 @@ pub const CLAIMS: [Claim; 10] = [
 pub struct ClaimCell {
     /// The system.
     pub system: SystemKind,
-    /// Index of the cell's experiment in the reading (cells of one heatmap share it and the
+    /// Index of the cell's experiment in the variant (cells of one heatmap share it and the
     /// algorithm).
     pub experiment: usize,
     /// The experiment's id as written ("1" … "4" in the paper's pipelines).
@@ -169,7 +169,7 @@ impl ClaimCell {
     }
 }
 
-/// How one claim came out in one reading.
+/// How one claim came out in one variant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ClaimResult {
     /// The claim.
@@ -182,7 +182,7 @@ pub struct ClaimResult {
     pub verdict: ClaimVerdict,
 }
 
-/// A claim's verdict in one reading.
+/// A claim's verdict in one variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ClaimVerdict {
     /// The interval lies on the claimed side of the null.
@@ -546,7 +546,7 @@ fn statistics(cells: &[ClaimCell], g: &Groups, view: &[View]) -> [Option<f64>; C
 mod tests {
     use super::*;
 
-    /// A two-experiment, one-system reading where Q(λ) is better everywhere and more states cost
+    /// A two-experiment, one-system variant where Q(λ) is better everywhere and more states cost
     /// more episodes.
     fn cells(system: SystemKind, q_lambda_gain: f64) -> Vec<ClaimCell> {
         let mut out = Vec::new();

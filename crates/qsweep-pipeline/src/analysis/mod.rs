@@ -1,6 +1,6 @@
 //! Statistics in one layer, below both the race and the report: cell summaries (mean, std,
 //! quantiles, bootstrap intervals), Table III's rules (episodes counted, the best cell) and the
-//! race's test (Welch, Holm), equivalence with the published values (TOST) and the verdict scale, what choosing among readings is worth (a permutation yardstick), survival under the
+//! race's test (Welch, Holm), equivalence with the published values (TOST) and the verdict scale, what choosing among variants is worth (a permutation yardstick), survival under the
 //! episode cap (Kaplan–Meier), rank correlation, and the paper's claims as tests. Everything is a pure, seeded function of its inputs, so reports stay
 //! byte-identical; the race only decides rounds with these, the report only renders them.
 

@@ -1,6 +1,6 @@
-//! What choosing the best of several readings is worth (docs/preregistration.md, "Choosing the
+//! What choosing the best of several variants is worth (docs/preregistration.md, "Choosing the
 //! reading honestly"): a permutation yardstick for the largest count of rows that any one
-//! reading matches, if all readings were equally good. The leave-one-row-out choice itself needs
+//! variant matches, if all variants were equally good. The leave-one-row-out choice itself needs
 //! the fit measure and lives beside it (`report::compare::selection`).
 
 use qsweep_engine::rng::TrialRng;
@@ -11,7 +11,7 @@ pub const PERMUTATIONS: usize = 10_000;
 /// The yardstick's seed (ChaCha8, qsweep's own integer mapping).
 pub const SEED: u64 = 46;
 
-/// The largest count of matched rows over the readings, against its permutation distribution.
+/// The largest count of matched rows over the variants, against its permutation distribution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Yardstick {
     /// The observed largest count.
@@ -24,17 +24,17 @@ pub struct Yardstick {
     pub p: f64,
 }
 
-/// The yardstick of `outcomes` (one `Vec` per row, one entry per reading: whether that reading
-/// matches the row): each of `permutations` shuffles every row's outcomes among the readings
+/// The yardstick of `outcomes` (one `Vec` per row, one entry per variant: whether that variant
+/// matches the row): each of `permutations` shuffles every row's outcomes among the variants
 /// independently (Fisher–Yates from [`TrialRng`] seeded with `seed`) and records the largest count
-/// of matched rows of any one reading. `None` without rows or readings.
+/// of matched rows of any one variant. `None` without rows or variants.
 pub fn yardstick(outcomes: &[Vec<bool>], permutations: usize, seed: u64) -> Option<Yardstick> {
-    let readings = outcomes.first()?.len();
-    if readings == 0 || outcomes.iter().any(|r| r.len() != readings) {
+    let variants = outcomes.first()?.len();
+    if variants == 0 || outcomes.iter().any(|r| r.len() != variants) {
         return None;
     }
     let largest =
-        |rows: &[Vec<bool>]| (0..readings).map(|k| rows.iter().filter(|r| r[k]).count()).max().unwrap_or(0);
+        |rows: &[Vec<bool>]| (0..variants).map(|k| rows.iter().filter(|r| r[k]).count()).max().unwrap_or(0);
     let observed = largest(outcomes);
     let mut rng = TrialRng::new(seed);
     let mut rows = outcomes.to_vec();
@@ -65,8 +65,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn equal_readings_are_what_chance_gives() {
-        // Every row matched by exactly one of four readings, a different one each time round:
+    fn equal_variants_are_what_chance_gives() {
+        // Every row matched by exactly one of four variants, a different one each time round:
         // the observed largest count (3 of 12) is no better than permutations give.
         let rows: Vec<Vec<bool>> = (0..12).map(|i| (0..4).map(|k| k == i % 4).collect()).collect();
         let y = yardstick(&rows, 2_000, SEED).unwrap();
@@ -75,14 +75,14 @@ mod tests {
     }
 
     #[test]
-    fn one_reading_that_matches_everything_stands_out() {
-        // Reading 0 matches all 12 rows, the other 4 none: every row's one match falls to
-        // reading 0 with probability 1/5, so a count of 12 essentially never happens by chance.
+    fn one_variant_that_matches_everything_stands_out() {
+        // Variant 0 matches all 12 rows, the other 4 none: every row's one match falls to
+        // variant 0 with probability 1/5, so a count of 12 essentially never happens by chance.
         let rows: Vec<Vec<bool>> = (0..12).map(|_| (0..5).map(|k| k == 0).collect()).collect();
         let y = yardstick(&rows, 2_000, SEED).unwrap();
         assert_eq!((y.observed, y.p), (12, 1.0 / 2_001.0));
         assert!(y.p95 < 12 && y.median < 8, "{y:?}");
-        // Rows that every reading matches (or none) do not change with the shuffle.
+        // Rows that every variant matches (or none) do not change with the shuffle.
         let all = vec![vec![true; 3]; 5];
         let y = yardstick(&all, 100, SEED).unwrap();
         assert_eq!((y.observed, y.median, y.p95, y.p), (5, 5, 5, 1.0));

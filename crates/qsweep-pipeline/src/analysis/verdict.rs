@@ -3,7 +3,7 @@
 //! III's columns, the comparison and the answer alike; and the cause of a row that does not
 //! replicate. Both as pre-registered in docs/preregistration.md: the scale that needs closeness
 //! ([`Verdict`], [`judge`], [`Cause`]) and, kept for comparison and because the fit measure that
-//! ranks the readings is defined on it, the older rule of two standard errors ([`FitVerdict`],
+//! ranks the variants is defined on it, the older rule of two standard errors ([`FitVerdict`],
 //! [`cause_2se`]).
 
 use super::equivalence::{tost, tost_within, Moments, MARGIN_2X};
@@ -92,7 +92,7 @@ pub enum Verdict {
 }
 
 impl Verdict {
-    /// Every verdict, closest first (the order [`Ord`] gives, which the closest reading uses).
+    /// Every verdict, closest first (the order [`Ord`] gives, which the closest variant uses).
     pub const ALL: [Verdict; 5] =
         [Self::Equivalent, Self::Within2x, Self::ConsistentButWide, Self::Differs, Self::Undecided];
 

@@ -1,12 +1,12 @@
 //! Keying a plan's trials: each trial's key is blake3 of its cell's canonical configuration and
 //! its seed ([`Key::from_canonical`]); [`KeyMemo`] computes each distinct cell's keys once across
-//! the readings of a pipeline.
+//! the variants of a pipeline.
 
 use super::resolved::PlannedTrial;
 use crate::cache::Key;
 
 /// The trials of the cells planned so far, by a digest of each cell's canonical configuration
-/// and seeds: a pipeline's readings share most of their cells (the paper's 378,000 planned trials
+/// and seeds: a pipeline's variants share most of their cells (the paper's 378,000 planned trials
 /// are 100,000 distinct), and a key hashes the whole configuration once per seed, so each
 /// distinct cell's keys are computed once. Off (`enabled: false`) for a single plan.
 #[derive(Default)]
@@ -16,7 +16,7 @@ pub(super) struct KeyMemo {
 }
 
 impl KeyMemo {
-    /// A memo shared by the plans of several readings.
+    /// A memo shared by the plans of several variants.
     pub(super) fn shared() -> Self {
         Self { enabled: true, ..Self::default() }
     }

@@ -167,7 +167,7 @@ pub fn plan_variants(
         }
     }
     let generated = loaded.variants.iter().filter(|v| v.generated).count();
-    if max_trials.is_some() && generated > crate::spec::grid::DEFAULT_MAX_READINGS {
+    if max_trials.is_some() && generated > crate::spec::grid::DEFAULT_MAX_VARIANTS {
         // The position is read again from the file: the typed pipeline does not keep it.
         let pos = std::fs::read_to_string(&loaded.path)
             .ok()
@@ -175,9 +175,9 @@ pub fn plan_variants(
             .map(|(l, c)| format!("{l}:{c}:"))
             .unwrap_or_default();
         return Err(user_error(format!(
-            "{origin}:{pos} variant_grid: {generated} readings, more than the confirmation limit of {}; \
+            "{origin}:{pos} variant_grid: {generated} variants, more than the confirmation limit of {}; \
              rerun with --yes if this is intended, or add `sample: N` to try a random N of them",
-            crate::spec::grid::DEFAULT_MAX_READINGS
+            crate::spec::grid::DEFAULT_MAX_VARIANTS
         )));
     }
     let chosen: Vec<&LoadedVariant> =
@@ -217,7 +217,7 @@ pub fn plan_variants(
     if chosen.is_empty() {
         expand_all(spec, &origin, None, &mut experiments, &KeyMemo::default())?;
     } else {
-        // The readings share most of their cells: each distinct cell's keys are computed once.
+        // The variants share most of their cells: each distinct cell's keys are computed once.
         let memo = KeyMemo::shared();
         // The pipeline as written, to tell which variants change nothing. A variant without a
         // `set` is exactly that, so it is planned first and its keys reused (no second plan).
@@ -292,7 +292,7 @@ pub fn plan_variants(
             loaded.variants.iter().any(|v| spec_races(&v.spec))
         },
         exploratory: spec.exploratory.clone(),
-        readings: loaded.variants.len(),
+        variant_count: loaded.variants.len(),
         experiments,
         variants,
         warnings,

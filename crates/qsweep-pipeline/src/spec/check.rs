@@ -121,7 +121,7 @@ pub fn check_exploratory(spec: &PipelineSpec) -> Result<(), Problem> {
     if x.fit_rows.is_empty() {
         return Err(Problem {
             path: vec!["exploratory".into(), "fit_rows".into()],
-            message: "the list is empty; name the Table III rows that choose the reading".into(),
+            message: "the list is empty; name the Table III rows that choose the variant".into(),
         });
     }
     for (i, r) in x.fit_rows.iter().enumerate() {
@@ -146,7 +146,7 @@ pub fn check_exploratory(spec: &PipelineSpec) -> Result<(), Problem> {
             return Err(Problem {
                 path: at(i),
                 message: format!(
-                    "{} has no `reference:` value, so it cannot choose a reading; name rows with a reference",
+                    "{} has no `reference:` value, so it cannot choose a variant; name rows with a reference",
                     r.label()
                 ),
             });
@@ -157,7 +157,7 @@ pub fn check_exploratory(spec: &PipelineSpec) -> Result<(), Problem> {
         return Err(Problem {
             path: vec!["exploratory".into(), "fit_rows".into()],
             message: "the fit rows cover every row with a reference, so nothing is held out to judge the \
-                      chosen reading; leave some rows out"
+                      chosen variant; leave some rows out"
                 .into(),
         });
     }

@@ -1,5 +1,5 @@
-//! `exploratory:`: a search over readings that keeps its fit honest. The Table III rows named in
-//! `fit_rows` choose the best reading; every other row with a reference is held out and only
+//! `exploratory:`: a search over variants that keeps its fit honest. The Table III rows named in
+//! `fit_rows` choose the best variant; every other row with a reference is held out and only
 //! judged, after the choice.
 //!
 //! ```yaml
@@ -21,7 +21,7 @@ use serde::{Deserialize, Deserializer};
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Exploratory {
-    /// The rows that choose the reading; the rest are held out.
+    /// The rows that choose the variant; the rest are held out.
     pub fit_rows: Vec<RowSelector>,
 }
 

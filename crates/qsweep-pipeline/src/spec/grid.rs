@@ -21,11 +21,11 @@ use serde_yaml::Value;
 use std::fmt;
 
 /// Generated variants above this many need `--yes`.
-pub const DEFAULT_MAX_READINGS: usize = 256;
+pub const DEFAULT_MAX_VARIANTS: usize = 256;
 
-/// No grid generates more readings than this, `--yes` or not (each is a whole pipeline to plan):
+/// No grid generates more variants than this, `--yes` or not (each is a whole pipeline to plan):
 /// a larger product needs `sample:`.
-pub const MAX_READINGS: usize = 10_000;
+pub const MAX_VARIANTS: usize = 10_000;
 
 /// A `variant_grid:` section, checked: at least one path, every list non-empty.
 #[derive(Debug, Clone, PartialEq)]
@@ -115,12 +115,12 @@ impl<'de> Deserialize<'de> for VariantGrid {
                     ));
                 }
                 let product = g.axes.iter().try_fold(1usize, |n, (_, v)| n.checked_mul(v.len()));
-                let readings = product.map(|p| g.sample.map_or(p, |s| s.min(p)));
-                if readings.is_none_or(|r| r > MAX_READINGS) {
+                let variants = product.map(|p| g.sample.map_or(p, |s| s.min(p)));
+                if variants.is_none_or(|r| r > MAX_VARIANTS) {
                     let size = product.map_or_else(|| "more than 2^64".to_string(), |p| p.to_string());
                     return Err(de::Error::custom(format!(
-                        "the grid has {size} combinations; at most {MAX_READINGS} readings can be generated, \
-                         so add `sample: N` (N ≤ {MAX_READINGS}) or shorten the lists"
+                        "the grid has {size} combinations; at most {MAX_VARIANTS} variants can be generated, \
+                         so add `sample: N` (N ≤ {MAX_VARIANTS}) or shorten the lists"
                     )));
                 }
                 // Two values of one path that read alike would give two variants one id.

@@ -7,7 +7,7 @@ use super::fields::{FIELD, SEP};
 use super::locate::locate_prefix;
 use super::overrides::Override;
 use super::pipeline::PipelineSpec;
-use super::readings::LoadedVariant;
+use super::variant_load::LoadedVariant;
 use crate::error::user_error;
 use serde_path_to_error::Segment;
 use std::path::{Path, PathBuf};
@@ -50,7 +50,7 @@ pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
         user_error(format!("{shown}:{line}: the file is not valid UTF-8 (byte {at}); save it as UTF-8"))
     })?;
     let spec = load_str(&text, &shown.to_string(), overrides)?;
-    let variants = super::readings::resolve(&spec, &text, &shown.to_string(), overrides)?;
+    let variants = super::variant_load::resolve(&spec, &text, &shown.to_string(), overrides)?;
     Ok(LoadedSpec { spec, path: path.to_path_buf(), variants })
 }
 

@@ -37,10 +37,10 @@ pub mod locate;
 mod overrides;
 pub(crate) mod pipeline;
 mod race;
-mod readings;
 mod settings;
 mod system;
 mod values;
+mod variant_load;
 mod variants;
 
 pub use check::Problem;
@@ -53,7 +53,6 @@ pub use overrides::Override;
 pub(crate) use pipeline::each_system;
 pub use pipeline::{is_report_setting, PipelineSpec, Systems};
 pub use race::RaceSpec;
-pub use readings::LoadedVariant;
 pub use settings::{
     setting_level, BalanceSpec, BallBeamM, CartPoleM, MountainCarM, Ranges, ReachSpec, Settings, SystemMarker,
 };
@@ -61,4 +60,5 @@ pub use system::SystemSpec;
 pub use values::{
     AtLeastOne, AxisValues, Bounds, Confidence, Finite, Positive, Seeds, SubUnit, Unit, Values,
 };
+pub use variant_load::LoadedVariant;
 pub use variants::VariantSpec;

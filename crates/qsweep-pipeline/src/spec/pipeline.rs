@@ -50,13 +50,13 @@ pub struct PipelineSpec {
     pub defaults: Settings,
     /// The systems and their experiments.
     pub systems: Systems,
-    /// Alternative readings or settings of the whole pipeline (see [`variants`]).
+    /// Variants: the whole pipeline with some settings changed (see [`variants`]).
     #[serde(default, deserialize_with = "opt_variants")]
     pub variants: Option<Vec<VariantSpec>>,
     /// Variants generated as a product of value lists (see [`grid`]).
     #[serde(default)]
     pub variant_grid: Option<super::grid::VariantGrid>,
-    /// An exploratory search: the Table III rows that choose the best reading (see [`explore`]).
+    /// An exploratory search: the Table III rows that choose the best variant (see [`explore`]).
     #[serde(default)]
     pub exploratory: Option<Exploratory>,
 }

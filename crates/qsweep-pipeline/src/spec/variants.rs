@@ -1,4 +1,4 @@
-//! Variants: alternative readings or settings of one pipeline, declared side by side.
+//! Variants: the pipeline with some settings changed, several declared side by side.
 //!
 //! ```yaml
 //! variants:
@@ -29,14 +29,14 @@ pub struct VariantSpec {
     /// Short title shown in reports.
     #[serde(default)]
     pub title: Option<String>,
-    /// Free text: the reading this variant stands for and its source.
+    /// Free text: what this variant stands for and its source.
     #[serde(default)]
     pub description: Option<String>,
     /// Dotted path → value, applied to the pipeline (empty: the pipeline as written).
     #[serde(default)]
     pub set: serde_yaml::Mapping,
-    /// A reading suggested by the data rather than declared before it ran: labelled exploratory,
-    /// ranked after the declared readings, and its folder written only on demand (`--variant ID`).
+    /// A variant suggested by the data rather than declared before it ran: labelled exploratory,
+    /// ranked after the declared variants, and its folder written only on demand (`--variant ID`).
     #[serde(default)]
     pub exploratory: bool,
 }

@@ -1,5 +1,5 @@
 //! The report's numbers: what a plan's trials say (per-cell statistics, the best cells, Table III
-//! as a format-neutral table) and how each reading compares with the paper (fit, verdicts,
+//! as a format-neutral table) and how each variant compares with the paper (fit, verdicts,
 //! selection, consistency, conclusions). Expensive statistics come through the memo
 //! ([`crate::memo::stats`]); nothing here writes a file or knows a file format.
 

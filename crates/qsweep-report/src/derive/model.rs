@@ -243,7 +243,7 @@ impl<'a> ReportData<'a> {
     }
 
     /// [`ReportData::build`], with the cells' bootstrap intervals only when `intervals` gives the
-    /// statistics' memo they are taken from or recorded in: a reading that writes no folder (an
+    /// statistics' memo they are taken from or recorded in: a variant that writes no folder (an
     /// exploratory or not-chosen one) only needs its means for the comparison.
     pub fn build_as(plan: &'a Plan, records: &'a dyn Outcomes, intervals: Option<&Derived>) -> Self {
         let planned = plan.trial_count();

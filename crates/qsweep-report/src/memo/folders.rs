@@ -52,7 +52,7 @@ pub struct Memo {
     pub inputs: String,
     /// The report's counts over what the folder covers (the comparison folder: the whole plan).
     pub summary: Counted,
-    /// The reading the comparison chose for its folder (a pipeline with a `variant_grid:`).
+    /// The variant the comparison chose for its folder (a pipeline with a `variant_grid:`).
     pub chosen: Option<String>,
     /// Every file of the folder (the manifest included, the memo excluded) with its blake3, hex.
     pub files: BTreeMap<String, String>,
@@ -143,9 +143,9 @@ impl Inputs {
         h.update(formats.to_string().as_bytes());
         h.update(format!("\0{role:?}\0").as_bytes());
         // The header as reported; warnings are printed, never written into a report. How many
-        // readings the pipeline declares is the comparison's (what an exploratory search tried):
-        // a reading added leaves the other readings' folders as they are.
-        let readings = (role == Role::Comparison).then_some(sub.readings);
+        // variants the pipeline declares is the comparison's (what an exploratory search tried):
+        // a variant added leaves the other variants' folders as they are.
+        let variant_count = (role == Role::Comparison).then_some(sub.variant_count);
         let header = (
             &sub.name,
             &sub.description,
@@ -156,7 +156,7 @@ impl Inputs {
             sub.variant_subset,
             sub.raced,
             &sub.exploratory,
-            readings,
+            variant_count,
         );
         let _ = write!(h, "{header:?}");
         for (v, d) in &self.exps {
@@ -283,7 +283,7 @@ pub fn file_digest(path: &Path) -> Option<blake3::Hash> {
     Some(h.finalize())
 }
 
-/// Write the memo of `dir`: its inputs, counts, chosen reading and the digest of each of `files`
+/// Write the memo of `dir`: its inputs, counts, chosen variant and the digest of each of `files`
 /// (relative to `dir`, as they are on disk now). Left alone when its bytes would not change.
 pub fn write(
     dir: &Path,

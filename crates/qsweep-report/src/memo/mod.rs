@@ -4,7 +4,7 @@
 //! - [`stats`]: the statistics' memo, `<cache>/_derived/<pipeline>.bin` (bootstrap intervals,
 //!   difference intervals, claims), its file format, its check (`qsweep verify`) and its
 //!   garbage collection (`qsweep gc`, which also sweeps the report's `.trials/` parts);
-//! - [`parts`]: a comparison's `trials.parquet` assembled from one part per reading;
+//! - [`parts`]: a comparison's `trials.parquet` assembled from one part per variant;
 //! - [`folders`]: each report folder's `memo.json` (the digest of its inputs and of its files),
 //!   which lets a rerun skip a folder whose inputs have not changed.
 //!

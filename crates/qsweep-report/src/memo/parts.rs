@@ -1,17 +1,17 @@
-//! The combined `trials.parquet` of a comparison, assembled from one part per reading.
+//! The combined `trials.parquet` of a comparison, assembled from one part per variant.
 //!
-//! Each declared reading's rows are encoded once into a part, `<cache>/_derived/<pipeline>.trials/
+//! Each declared variant's rows are encoded once into a part, `<cache>/_derived/<pipeline>.trials/
 //! <digest>.parquet`, whose name is a blake3 digest of everything the rows depend on
-//! ([`TrialParts::digest`]: the reading's id, its experiments' identity columns and counting
+//! ([`TrialParts::digest`]: the variant's id, its experiments' identity columns and counting
 //! rule, every cell's algorithm and coordinates, and each trial's seed, key and the segment it
 //! is read from). The combined file is the parts' row groups spliced one after the other, byte
-//! for byte, without decoding them (as `parquet-concat` does), so a report in which one reading
-//! changed encodes that reading's rows and copies the others'. `--rebuild` encodes every part
+//! for byte, without decoding them (as `parquet-concat` does), so a report in which one variant
+//! changed encodes that variant's rows and copies the others'. `--rebuild` encodes every part
 //! again; either way the combined file is the same concatenation, so it is byte-identical.
 //!
 //! A part is written atomically (temporary file, then rename) with its blake3 beside it
 //! (`<digest>.b3`), and checked before it is reused (its bytes are those written, and it holds the
-//! rows the reading has); anything else is encoded again. `qsweep verify` checks every part.
+//! rows the variant has); anything else is encoded again. `qsweep verify` checks every part.
 //! A full report removes the parts it did not use, unless another report is using the folder: a
 //! report holds the folder shared ([`readers::Reading`]) from before it decides which parts to
 //! reuse until it has spliced them, and parts are removed only with the folder taken exclusively
@@ -36,7 +36,7 @@ use std::sync::Arc;
 /// Rows per row group of a part (and so of the combined `trials.parquet`).
 const TRIALS_ROW_GROUP: usize = 1024;
 
-/// The parts of one report's combined `trials.parquet`, in the order the readings are pushed.
+/// The parts of one report's combined `trials.parquet`, in the order the variants are pushed.
 pub struct TrialParts {
     dir: PathBuf,
     rebuild: bool,
@@ -79,7 +79,7 @@ impl TrialParts {
         !self.transient
     }
 
-    /// The digest of the rows of `sub` (one reading of the plan, as reported).
+    /// The digest of the rows of `sub` (one variant of the plan, as reported).
     pub fn digest(&self, sub: &Plan) -> blake3::Hash {
         let mut h = blake3::Hasher::new();
         h.update(b"qsweep-trial-rows\0");
@@ -127,7 +127,7 @@ impl TrialParts {
         let path = self.path(digest);
         let mut sink = PartWriter::new(path.clone());
         sink.push(data)?;
-        // A reading without experiments has no rows and no part.
+        // A variant without experiments has no rows and no part.
         if sink.finish()? {
             let sum = crate::memo::folders::file_digest(&path)
                 .ok_or_else(|| anyhow::anyhow!("cannot read {} back", path.display()))?;
@@ -335,7 +335,7 @@ impl PartWriter {
         Self { tmp: qsweep_pipeline::atomic::temp_beside(&path), path, writer: None }
     }
 
-    /// Append one reading's rows, built an experiment at a time and flushed every
+    /// Append one variant's rows, built an experiment at a time and flushed every
     /// [`TRIALS_ROW_GROUP`] trials.
     fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
         for k in 0..data.experiments.len() {

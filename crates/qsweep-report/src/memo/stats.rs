@@ -1,11 +1,11 @@
 //! The statistics' memo: the report's expensive numbers — each cell's bootstrap interval, each
-//! difference figure's per-cell interval, each reading's claims — addressed by content, as
+//! difference figure's per-cell interval, each variant's claims — addressed by content, as
 //! trials are. An entry's id is blake3 over the statistic's kind, the definitions' version
 //! (`ANALYSIS_VERSION`), its parameters (resamples, seed) and its inputs' bits (the values it
 //! resamples), so an entry is exactly what recomputation would give: a changed input is a
 //! different id, never a stale number. A report recomputes only the statistics whose inputs
 //! changed (one more seed in one cell: that cell's interval, the differences it takes part in,
-//! its reading's claims) and takes every other one from the memo.
+//! its variant's claims) and takes every other one from the memo.
 //!
 //! The memo of a pipeline lives in the cache, `<cache>/_derived/<pipeline>.bin` (the leading `_`
 //! keeps pandas, polars and pyarrow from reading the folder as trial rows). A full report keeps

@@ -1,12 +1,12 @@
-//! The paper's conclusions tested in every reading ([`qsweep_pipeline::analysis::claims`]):
-//! `conclusions.csv` (one row per reading and claim) and the reading ×
+//! The paper's conclusions tested in every variant ([`qsweep_pipeline::analysis::claims`]):
+//! `conclusions.csv` (one row per variant and claim) and the variant ×
 //! claim matrix of the comparison pages.
 //!
 //! `conclusions.csv` schema (one row per variant and claim, in pipeline × claim order):
 //!
 //! | column | type | meaning |
 //! |---|---|---|
-//! | `variant` | string | the reading |
+//! | `variant` | string | the variant |
 //! | `exploratory` | `yes` / `no` | declared exploratory in the pipeline |
 //! | `claim` | string | the claim's id (`docs/preregistration.md`) |
 //! | `text` | string | the paper's claim, shortened, and where it is |
@@ -71,13 +71,13 @@ pub fn conclusions_table(variants: &[VariantDigest]) -> Table {
     }
     Table {
         title: "Conclusions".into(),
-        caption: format!("The paper's conclusions as tests, per reading. {CLAIM_RULE}"),
+        caption: format!("The paper's conclusions as tests, per variant. {CLAIM_RULE}"),
         columns,
         rows,
     }
 }
 
-/// The reading × claim matrix: one row per claim, one column per reading (declared first), each
+/// The variant × claim matrix: one row per claim, one column per variant (declared first), each
 /// value the verdict and its interval.
 pub fn matrix_table(variants: &[VariantDigest]) -> Table {
     let order: Vec<&VariantDigest> = variants
@@ -117,9 +117,9 @@ pub fn matrix_table(variants: &[VariantDigest]) -> Table {
         })
         .collect();
     Table {
-        title: "Claims × readings".into(),
+        title: "Claims × variants".into(),
         caption: format!(
-            "Each of the paper's conclusions in each reading: verdict [95% interval of its statistic] \
+            "Each of the paper's conclusions in each variant: verdict [95% interval of its statistic] \
              (statistics, nulls and sides in conclusions.csv). {CLAIM_RULE} Tally: {}.",
             tally.join("; ")
         ),

@@ -108,17 +108,17 @@ pub fn consistency_table(plan: &Plan) -> Option<(Vec<Pair>, Table)> {
     Some((found, Table { title: "The paper against itself".into(), caption, columns, rows: table_rows }))
 }
 
-/// The opening sentence on causes: the tally of the best declared reading (first by the fit
-/// measure; in an exploratory search, the chosen reading, ranked on the fit rows), or `None`
+/// The opening sentence on causes: the tally of the best declared variant (first by the fit
+/// measure; in an exploratory search, the chosen variant, ranked on the fit rows), or `None`
 /// without reference rows.
 pub fn cause_tally(plan: &Plan, variants: &[VariantDigest]) -> Option<String> {
     let (v, which) = if plan.exploratory.is_some() {
         let id = &crate::derive::compare::explore::chosen(plan, variants)?.id;
-        (variants.iter().find(|v| &v.info.id == id)?, "the chosen reading of the search")
+        (variants.iter().find(|v| &v.info.id == id)?, "the chosen variant of the search")
     } else {
         let fits: Vec<Fit> = variants.iter().map(|v| v.fit).collect();
         let best = fit_order(&fits).into_iter().find(|&i| !variants[i].info.exploratory)?;
-        (&variants[best], "the best declared reading")
+        (&variants[best], "the best declared variant")
     };
     if v.rows.is_empty() {
         return None;
@@ -129,7 +129,7 @@ pub fn cause_tally(plan: &Plan, variants: &[VariantDigest]) -> Option<String> {
         .collect();
     Some(format!(
         "Why each Table III row does or does not replicate, under {which} `{}` ({} rows): {}. \
-         {CAUSE_RULE} Each reading's table3.csv gives the cause per row beside ours at the paper's \
+         {CAUSE_RULE} Each variant's table3.csv gives the cause per row beside ours at the paper's \
          configuration; consistency.csv lists the pairs of rows the paper's own numbers contradict.",
         v.info.id,
         v.rows.len(),

@@ -104,7 +104,7 @@ pub struct RowFit {
 pub type RowKey = (SystemKind, String, Algorithm);
 
 impl RowFit {
-    /// The row's identity, the same in every reading.
+    /// The row's identity, the same in every variant.
     pub fn key(&self) -> RowKey {
         (self.system, self.experiment.clone(), self.algorithm)
     }
@@ -281,7 +281,7 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
         columns.push(Column::new("Geo. mean fresh/selection", "fresh_over_selection", Align::Right));
     }
     let fits: Vec<Fit> = variants.iter().map(|v| v.1).collect();
-    // Declared readings first, then the exploratory ones, each in fit order.
+    // Declared variants first, then the exploratory ones, each in fit order.
     let (declared, exploratory): (Vec<usize>, Vec<usize>) =
         fit_order(&fits).into_iter().partition(|&i| !variants[i].0.exploratory);
     let rows = declared
@@ -325,11 +325,11 @@ pub fn comparison_table(variants: &[(&VariantInfo, Fit)], fresh: bool) -> Table 
         "How well each variant reproduces the reference values (one row per variant; counts over its \
          Table III rows that have a reference value and a best cell). {SCALE_RULE} Replicate: equivalent \
          or within-2x (Equiv., Within 2×), with the paper's n taken as 10 (Repl. n=5, n=3: as 5 or 3); \
-         Wide: consistent but wide. ≤ 2 SE and Ratio ≤ 2× (old): the old rule, which ranks the readings. {VERDICT_RULE} Config matches: the \
+         Wide: consistent but wide. ≤ 2 SE and Ratio ≤ 2× (old): the old rule, which ranks the variants. {VERDICT_RULE} Config matches: the \
          best cell has the reference's bins or sets per variable and action count. Order matches: of the \
          experiments where every algorithm has a reference, those whose algorithms (Q(0), Q(λ)) rank by \
          mean as in the reference. Geo. mean: exp of the mean of ln(ours/reference) over the rows. {FIT_ORDER} \
-         {EQUIVALENCE_RULE} Exploratory readings (suggested by the data, not declared before they ran) \
+         {EQUIVALENCE_RULE} Exploratory variants (suggested by the data, not declared before they ran) \
          are ranked after the declared ones."
     );
     let caption = if fresh {

@@ -7,6 +7,6 @@ pub struct VariantInfo {
     pub id: String,
     /// Optional title.
     pub title: Option<String>,
-    /// Declared exploratory: ranked after the declared readings, folder on demand.
+    /// Declared exploratory: ranked after the declared variants, folder on demand.
     pub exploratory: bool,
 }

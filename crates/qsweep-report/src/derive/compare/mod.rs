@@ -1,6 +1,6 @@
-//! The numbers of a comparison of readings (variants): each reading's fit to the published Table
-//! III, its verdicts at each assumed number of paper runs, the honest choice among readings, the
-//! paper against itself, its conclusions tested, and what the comparison keeps of each reading.
+//! The numbers of a comparison of variants: each variant's fit to the published Table
+//! III, its verdicts at each assumed number of paper runs, the honest choice among variants, the
+//! paper against itself, its conclusions tested, and what the comparison keeps of each variant.
 
 pub mod conclusions;
 pub mod consistency;

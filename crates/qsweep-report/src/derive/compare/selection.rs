@@ -1,20 +1,20 @@
-//! Choosing the reading honestly (docs/preregistration.md): leave-one-row-out — each Table III
-//! row judged under the declared reading that the fit measure picks on the other rows — and the
-//! permutation yardstick ([`qsweep_pipeline::analysis::selection`]) for the best reading's count. Written as
+//! Choosing the variant honestly (docs/preregistration.md): leave-one-row-out — each Table III
+//! row judged under the declared variant that the fit measure picks on the other rows — and the
+//! permutation yardstick ([`qsweep_pipeline::analysis::selection`]) for the best variant's count. Written as
 //! `cross_validation.csv` and stated in the answer.
 
 use crate::derive::compare::fit::{fit_order, Fit, FitVerdict, RowFit, RowKey, Verdict};
 use crate::derive::compare::VariantDigest;
 use crate::derive::table::{Align, Column, Row, Table, Value};
 use qsweep_pipeline::analysis::selection::{yardstick, Yardstick, PERMUTATIONS, SEED};
-/// One held-out row: the reading chosen on the other rows and the row's verdicts under it.
+/// One held-out row: the variant chosen on the other rows and the row's verdicts under it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeldOut {
     /// The row.
     pub row: RowKey,
     /// Its representation's label of the algorithm (as Table III writes it).
     pub label: String,
-    /// The declared reading the fit measure picks on the other rows.
+    /// The declared variant the fit measure picks on the other rows.
     pub chosen: String,
     /// The row's verdict under it (the scale, at the headline n).
     pub verdict: Verdict,
@@ -22,17 +22,17 @@ pub struct HeldOut {
     pub fit_verdict: FitVerdict,
 }
 
-/// What choosing among the declared readings is worth.
+/// What choosing among the declared variants is worth.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Selection {
-    /// The best declared reading in sample (the fit measure's first).
+    /// The best declared variant in sample (the fit measure's first).
     pub best: String,
     /// Its rows judged in sample: (replicating, equivalent, within 2 SE).
     pub in_sample: (usize, usize, usize),
     /// Every row held out in turn, in report order.
     pub held_out: Vec<HeldOut>,
-    /// Declared readings compared.
-    pub readings: usize,
+    /// Declared variants compared.
+    pub variants: usize,
     /// The yardstick of the fit measure's first key (rows within 2 SE).
     pub yardstick_2se: Option<Yardstick>,
     /// The yardstick of replicating rows on the scale.
@@ -51,9 +51,9 @@ impl Selection {
     }
 }
 
-/// The selection over the declared readings of `variants` (none in an exploratory search, whose
-/// choice is judged on held-out rows of its own, or with fewer than two declared readings), over
-/// the rows every declared reading scores.
+/// The selection over the declared variants of `variants` (none in an exploratory search, whose
+/// choice is judged on held-out rows of its own, or with fewer than two declared variants), over
+/// the rows every declared variant scores.
 pub fn selection(exploratory: bool, variants: &[VariantDigest]) -> Option<Selection> {
     let declared: Vec<&VariantDigest> = variants.iter().filter(|v| !v.info.exploratory).collect();
     if exploratory || declared.len() < 2 {
@@ -77,7 +77,7 @@ pub fn selection(exploratory: bool, variants: &[VariantDigest]) -> Option<Select
             let fits: Vec<Fit> =
                 declared.iter().map(|v| Fit::from_rows(v.rows.iter().filter(|o| o.key() != k))).collect();
             let chosen = declared[fit_order(&fits)[0]];
-            let under = row_of(chosen, &k).expect("every declared reading scores the row");
+            let under = row_of(chosen, &k).expect("every declared variant scores the row");
             HeldOut {
                 label: r.algorithm.label(r.repr).to_string(),
                 row: k,
@@ -96,7 +96,7 @@ pub fn selection(exploratory: bool, variants: &[VariantDigest]) -> Option<Select
         best: best.info.id.clone(),
         in_sample: (best.fit.replicating_by_n[2], best.fit.scale[0], best.fit.within_2se),
         held_out,
-        readings: declared.len(),
+        variants: declared.len(),
         yardstick_2se: yardstick(&outcomes(&|o| o.fit_verdict == FitVerdict::Replicates), PERMUTATIONS, SEED),
         yardstick_scale: yardstick(
             &outcomes(&|o| o.headline().best.verdict.replicates()),
@@ -108,8 +108,8 @@ pub fn selection(exploratory: bool, variants: &[VariantDigest]) -> Option<Select
 
 /// The rule, as stated in captions.
 pub const SELECTION_RULE: &str = "Leave-one-row-out (docs/preregistration.md): for each Table III \
-row, the declared readings are ranked by the fit measure on the other rows; the first is that row's \
-chosen reading, and the row is judged under it (verdict: the scale at n_paper = 10; verdict_2se: the \
+row, the declared variants are ranked by the fit measure on the other rows; the first is that row's \
+chosen variant, and the row is judged under it (verdict: the scale at n_paper = 10; verdict_2se: the \
 old rule).";
 
 /// `cross_validation.csv`: one line per held-out row.
@@ -118,7 +118,7 @@ pub fn table(s: &Selection) -> Table {
         Column::new("System", "system", Align::Left),
         Column::new("Exp.", "experiment", Align::Left),
         Column::new("Algorithm", "algorithm", Align::Left),
-        Column::new("Chosen on the other rows", "chosen_reading", Align::Left),
+        Column::new("Chosen on the other rows", "chosen_variant", Align::Left),
         Column::new("Verdict", "verdict", Align::Left),
         Column::new("Verdict (old rule)", "verdict_2se", Align::Left),
     ];
@@ -142,7 +142,7 @@ pub fn table(s: &Selection) -> Table {
         title: "Leave-one-row-out".into(),
         caption: format!(
             "{SELECTION_RULE} Cross-validated: {rep} of {} rows replicate ({eq} equivalent), {se} within 2 SE; \
-             in sample under `{}`: {}, {}, {}. Highlighted: rows whose chosen reading is not `{}`.",
+             in sample under `{}`: {}, {}, {}. Highlighted: rows whose chosen variant is not `{}`.",
             s.held_out.len(),
             s.best,
             s.in_sample.0,

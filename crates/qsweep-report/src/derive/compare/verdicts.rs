@@ -1,12 +1,12 @@
-//! `verdicts_by_n.csv`: every reading's Table III rows judged at each assumed number of paper
-//! runs (docs/preregistration.md: the sensitivity to the paper's unstated n), each with the reading
+//! `verdicts_by_n.csv`: every variant's Table III rows judged at each assumed number of paper
+//! runs (docs/preregistration.md: the sensitivity to the paper's unstated n), each with the variant
 //! that comes closest to the paper for that row.
 
 use crate::derive::compare::fit::{RowFit, RowJudgement};
 use crate::derive::compare::VariantDigest;
 use crate::derive::table::{Align, Column, Row, Table, Value};
 
-/// The closest reading for a row at the `k`-th n of [`crate::derive::compare::fit::PAPER_N_SET`]: the best verdict, then the
+/// The closest variant for a row at the `k`-th n of [`crate::derive::compare::fit::PAPER_N_SET`]: the best verdict, then the
 /// smallest |ln(ours / paper)|, then pipeline order. Returns the digest and its row.
 fn closest<'v>(
     variants: &'v [VariantDigest],
@@ -21,7 +21,7 @@ fn closest<'v>(
     let mut best: Option<(&VariantDigest, &RowFit)> = None;
     for v in variants {
         let Some(o) = v.rows.iter().find(|o| o.key() == key) else { continue };
-        // Strictly closer only: ties keep the earlier reading (pipeline order).
+        // Strictly closer only: ties keep the earlier variant (pipeline order).
         if best.is_none_or(|(_, b)| closer(o, b)) {
             best = Some((v, o));
         }
@@ -30,14 +30,14 @@ fn closest<'v>(
 }
 
 /// The rule, as stated in captions.
-pub const BY_N_RULE: &str = "Every reading's Table III rows judged with the paper's std over an \
+pub const BY_N_RULE: &str = "Every variant's Table III rows judged with the paper's std over an \
 assumed n_paper = 3, 5 and 10 runs (the paper never states it). Ours: the best cell's estimate \
 (fresh seeds where present) that the verdicts judge, with n; verdicts, the contradictory pairs, \
-the row each pair costs, and the cause. Closest reading: of all readings (declared and exploratory), \
+the row each pair costs, and the cause. Closest variant: of all variants (declared and exploratory), \
 the one whose best cell has the best verdict for the row at that n, then the ratio closest to 1, \
 then pipeline order.";
 
-/// The long table, or `None` when no reading has a row with a reference.
+/// The long table, or `None` when no variant has a row with a reference.
 pub fn verdicts_by_n_table(variants: &[VariantDigest]) -> Option<Table> {
     if variants.iter().all(|v| v.rows.is_empty()) {
         return None;
@@ -56,7 +56,7 @@ pub fn verdicts_by_n_table(variants: &[VariantDigest]) -> Option<Table> {
         Column::new("Contradictory pair", "contradictory_pair", Align::Left),
         Column::new("Paper inconsistent", "paper_inconsistent", Align::Left),
         Column::new("Cause", "cause", Align::Left),
-        Column::new("Closest reading", "closest_reading", Align::Left),
+        Column::new("Closest variant", "closest_variant", Align::Left),
         Column::new("Closest exploratory", "closest_exploratory", Align::Left),
         Column::new("Closest ours/paper", "closest_ratio", Align::Right),
         Column::new("Closest verdict", "closest_verdict", Align::Left),

@@ -1,7 +1,7 @@
 //! The opening sentences of a comparison with reference values: the answer with its uncertainty,
-//! counted over the rows the forest plot ([`crate::render::compare::forest`]) draws, for the best declared reading
+//! counted over the rows the forest plot ([`crate::render::compare::forest`]) draws, for the best declared variant
 //! and the text as written — replicating rows on the verdict scale, how they move with the paper's
-//! unstated n, what choosing the reading is worth ([`crate::derive::compare::selection`]), the spreads — then the
+//! unstated n, what choosing the variant is worth ([`crate::derive::compare::selection`]), the spreads — then the
 //! figure with its caption.
 
 use crate::derive::compare::selection::Selection;
@@ -12,9 +12,9 @@ use crate::render::escape::html as escape_html;
 use qsweep_pipeline::analysis::equivalence::{MARGIN, MARGIN_2X};
 use qsweep_pipeline::plan::Plan;
 
-/// The plotted readings: the as-written one (the listed variant without a `set`, else the first)
+/// The plotted variants: the as-written one (the listed variant without a `set`, else the first)
 /// and the best-ranked declared one ([`crate::derive::compare::explore::chosen`]), one series when they are the
-/// same; empty when no reading has a row with a reference.
+/// same; empty when no variant has a row with a reference.
 pub fn series<'a>(plan: &Plan, variants: &'a [VariantDigest]) -> Vec<Series<'a>> {
     let written = crate::derive::compare::explore::as_written(plan)
         .and_then(|id| variants.iter().find(|v| v.info.id == id))
@@ -107,14 +107,14 @@ fn rows(n: usize, one: &str, many: &str) -> String {
     format!("{} {}", n_rows(n), if n == 1 { one } else { many })
 }
 
-/// The sentences on choosing the reading: leave-one-row-out and the yardstick.
+/// The sentences on choosing the variant: leave-one-row-out and the yardstick.
 fn chosen_sentences(s: &Selection) -> String {
     let (cv, cv_eq, cv_se) = s.cross_validated();
     let mut out = format!(
-        "Chosen without the row it judges (leave-one-row-out over the {} declared readings), {cv} of \
+        "Chosen without the row it judges (leave-one-row-out over the {} declared variants), {cv} of \
          {} rows replicate ({cv_eq} equivalent; {cv_se} within two standard errors), against {} ({}; {}) \
          for `{}` in sample.",
-        s.readings,
+        s.variants,
         s.held_out.len(),
         s.in_sample.0,
         s.in_sample.1,
@@ -123,9 +123,9 @@ fn chosen_sentences(s: &Selection) -> String {
     );
     if let Some(y) = s.yardstick_2se {
         out.push_str(&format!(
-            " The best of {} readings has {} within two standard errors; were all readings equally \
+            " The best of {} variants has {} within two standard errors; were all variants equally \
              good, the best would reach a median {} (95th percentile {}, p = {:.3}).",
-            s.readings,
+            s.variants,
             n_rows(y.observed),
             y.median,
             y.p95,
@@ -142,7 +142,7 @@ fn chosen_sentences(s: &Selection) -> String {
 }
 
 /// The opening: a few sentences stating the answer with its uncertainty (the best declared
-/// reading first, then the text as written for contrast), in plain text (the pages escape or
+/// variant first, then the text as written for contrast), in plain text (the pages escape or
 /// format it).
 pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
     let mut out = Vec::new();
@@ -155,11 +155,11 @@ pub fn opening(series: &[Series], selection: Option<&Selection>) -> String {
         if k == 0 {
             let who = match s.role {
                 "as written" => format!("As written ({})", s.info.id),
-                "best declared" => format!("Under the best-ranked declared reading, {}", s.info.id),
+                "best declared" => format!("Under the best-ranked declared variant, {}", s.info.id),
                 "chosen by the search" => {
-                    format!("Under the reading the search chose (ranked on its fit rows), {}", s.info.id)
+                    format!("Under the variant the search chose (ranked on its fit rows), {}", s.info.id)
                 }
-                _ => format!("As written ({}), also the best-ranked declared reading", s.info.id),
+                _ => format!("As written ({}), also the best-ranked declared variant", s.info.id),
             };
             out.push(format!(
                 "{who}, {rep10} of {} Table III rows replicate, taking the paper's means to average 10 \
@@ -224,14 +224,14 @@ pub fn caption(series: &[Series]) -> String {
     )
 }
 
-/// The opening of the comparison pages: the plotted readings and the forest plot's pixel size
+/// The opening of the comparison pages: the plotted variants and the forest plot's pixel size
 /// (`None` when not drawn).
 pub struct Answer<'a> {
-    /// The plotted readings ([`series`]); empty: no opening.
+    /// The plotted variants ([`series`]); empty: no opening.
     pub series: &'a [Series<'a>],
     /// The figure's pixel size, when drawn.
     pub figure: Option<(u32, u32)>,
-    /// What choosing the reading is worth (a comparison of declared readings).
+    /// What choosing the variant is worth (a comparison of declared variants).
     pub selection: Option<&'a Selection>,
 }
 

@@ -1,6 +1,6 @@
 //! The answer of a comparison with reference values, in a few sentences and one figure
 //! (`figures/forest.svg`, and `.png` with `--formats png`): a forest plot of every Table III row,
-//! ours ÷ reference on a log axis with its 95 % interval, for the as-written reading and the
+//! ours ÷ reference on a log axis with its 95 % interval, for the as-written variant and the
 //! best-ranked declared one, over the equivalence margin and the 2× band.
 //!
 //! The plotted numbers are `table3.csv`'s `ratio`, `ratio_lo` and `ratio_hi` ([`rows_of`] computes
@@ -33,7 +33,7 @@ const BOTTOM: u32 = 80;
 /// Where the plot area starts (the labels are right-aligned before it) and ends.
 const PLOT_X: (i32, i32) = (250, WIDTH as i32 - 30);
 
-/// Colours of the two series: the as-written reading and the best declared one (Okabe–Ito blue
+/// Colours of the two series: the as-written variant and the best declared one (Okabe–Ito blue
 /// and vermillion, told apart with colour-blindness too).
 pub const COLORS: [RGBColor; 2] = [RGBColor(0, 114, 178), RGBColor(213, 94, 0)];
 /// The 2× band's shade.
@@ -41,10 +41,10 @@ const BAND: RGBColor = RGBColor(236, 236, 236);
 /// The equivalence margin's shade.
 const MARGIN_SHADE: RGBColor = RGBColor(199, 229, 199);
 
-/// One plotted reading.
+/// One plotted variant.
 #[derive(Debug, Clone)]
 pub struct Series<'a> {
-    /// The reading.
+    /// The variant.
     pub info: &'a VariantInfo,
     /// Its role: "as written", "best declared" ("chosen by the search" in an exploratory
     /// search), or both.
@@ -244,7 +244,7 @@ impl Picture for Forest<'_> {
             let color = COLORS[k.min(1)];
             cv.line((x, y), (x + 24, y), color.stroke_width(2))?;
             cv.root.draw(&Circle::new((x + 12, y), 4, color.filled())).map_err(|e| e.to_string())?;
-            // A long reading id (a grid's) is cut to the figure's width.
+            // A long variant id (a grid's) is cut to the figure's width.
             let room = ((WIDTH as i32 - x - 40) / 7).max(8) as usize;
             let mut text = format!("{} ({})", s.info.id, s.role);
             if text.chars().count() > room {
@@ -449,7 +449,7 @@ systems:
         let t = Tally::of(&series[1]);
         assert!(
             text.starts_with(&format!(
-                "Under the best-ranked declared reading, fast, {} of 3 Table III rows replicate",
+                "Under the best-ranked declared variant, fast, {} of 3 Table III rows replicate",
                 t.replicating[2]
             )),
             "{text}"

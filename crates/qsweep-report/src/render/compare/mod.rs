@@ -6,12 +6,12 @@
 //!   the pipeline's `reference:` values ([`fit`]), best fit first;
 //! - `consistency.md`, `consistency.csv` (pipelines with reference values): every pair of Table III
 //!   rows whose grids overlap, with the Welch test of their published means ([`consistency`]);
-//! - `verdicts_by_n.csv` (with reference values, not in an exploratory search): every reading's rows judged with the paper's n
-//!   taken as 3, 5 and 10, each with the closest reading ([`verdicts`]); `cross_validation.csv`
-//!   (two or more declared readings): each row judged under the reading chosen on the others
+//! - `verdicts_by_n.csv` (with reference values, not in an exploratory search): every variant's rows judged with the paper's n
+//!   taken as 3, 5 and 10, each with the closest variant ([`verdicts`]); `cross_validation.csv`
+//!   (two or more declared variants): each row judged under the variant chosen on the others
 //!   ([`selection`]);
 //! - `figures/forest.svg` (and `.png`), where the pipeline has reference values: every Table III
-//!   row's ours ÷ reference with its interval, as written and under the best declared reading
+//!   row's ours ÷ reference with its interval, as written and under the best declared variant
 //!   ([`forest`]);
 //! - `figures/diff-<variant>-<system>.svg` (and `.png` with `--formats png`), for every variant
 //!   but the first: per cell, the change of mean episodes against the first variant ([`diff`]);
@@ -104,7 +104,7 @@ pub fn write_comparison(
     let mut figs = Vec::new();
     let chosen = explore::chosen(plan, variants).map(|c| c.id.as_str());
     if let Some(base) = variants.first() {
-        // A generated reading has its own folder and difference figures only when chosen.
+        // A generated variant has its own folder and difference figures only when chosen.
         for v in variants[1..].iter().filter(|v| has_folder(plan, chosen, &v.info.id)) {
             let diffs = if svg || png { all_diffs(base, v, memo) } else { Vec::new() };
             for system in v.systems() {
@@ -142,8 +142,8 @@ pub fn write_comparison(
 }
 
 /// Whether the report writes the folder of variant `id` (and its difference figures): every
-/// declared (not exploratory) variant of a pipeline without a grid; with a `variant_grid:`, only the chosen reading, so a
-/// grid of many readings does not write (or commit) a full report each; the rest are written on
+/// declared (not exploratory) variant of a pipeline without a grid; with a `variant_grid:`, only the chosen variant, so a
+/// grid of many variants does not write (or commit) a full report each; the rest are written on
 /// demand with `qsweep report PIPELINE --variant ID`.
 /// `chosen` is [`explore::chosen`]'s id, worked out once per page rather than once per variant.
 pub fn has_folder(plan: &Plan, chosen: Option<&str>, id: &str) -> bool {
@@ -162,11 +162,11 @@ type FigRef<'a> = (&'a VariantInfo, SystemKind, String, (u32, u32));
 
 /// The tables of the comparison pages.
 struct Tables<'a> {
-    /// The fit of every reading.
+    /// The fit of every variant.
     fit: &'a Table,
     /// An exploratory search's held-out rows.
     held_out: Option<&'a Table>,
-    /// The reading × claim matrix (pipelines with reference values).
+    /// The variant × claim matrix (pipelines with reference values).
     matrix: Option<&'a Table>,
     /// The pairs of Table III rows whose grids overlap (pipelines with reference values).
     consistency: Option<&'a Table>,
@@ -265,7 +265,7 @@ fn page(
         h.push_str(&captioned(t));
     }
     if let Some(t) = tables.matrix {
-        h.push_str("<h2 id=\"claims\">The paper's conclusions, per reading</h2>\n");
+        h.push_str("<h2 id=\"claims\">The paper's conclusions, per variant</h2>\n");
         h.push_str(&captioned(t));
     }
     if let Some(t) = tables.consistency {
@@ -388,7 +388,7 @@ fn readme(
         m.push_str(&render(t, &Markdown));
     }
     if let Some(t) = tables.matrix {
-        m.push_str("\n## The paper's conclusions, per reading\n\n");
+        m.push_str("\n## The paper's conclusions, per variant\n\n");
         m.push_str(&render(t, &Markdown));
     }
     if let Some(t) = tables.consistency {

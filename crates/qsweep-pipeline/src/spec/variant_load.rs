@@ -1,4 +1,4 @@
-//! The readings of a pipeline: each `variants:` entry (and each reading a grid generates) applied
+//! The variants of a pipeline: each `variants:` entry (and each variant a grid generates) applied
 //! to the pipeline text as overrides, checked, and loaded.
 
 use super::experiment::AXIS_SETTINGS;
