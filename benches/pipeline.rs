@@ -2,7 +2,7 @@
 //! paper grid with a warm cache, and the share of a real run spent outside the trials.
 //!
 //! Targets: planning, `status` and a no-op `run` each under 1 s on the full paper grid with all
-//! of its variants (8 readings of the paper, 79,560 distinct trials) and a warm cache; the report
+//! of its variants (8 variants of the paper, 79,560 distinct trials) and a warm cache; the report
 //! for that grid (every variant's report and the comparison) measured; planning + hashing +
 //! storing under 1% of trial compute on the quick pipeline, and so leasing each trial in the cache
 //! (what lets concurrent runs share it, `docs/sharing-a-cache.md`); the real report of `paper.yaml` from
@@ -90,9 +90,9 @@ fn committed_cache_figures(root: &Path, paper: &Path, cache: &Path) {
 
 /// Two changes to `paper.yaml` whose trials are all cached, each reported into a copy of the
 /// committed report and cache, from a folder where the pipeline is `pipelines/paper.yaml` (as the
-/// pages name it): one reading's `set` changed (gym-v1's Cart-Pole goal set to gym-v0's: that
-/// reading's cells change, issue 37's "≤ 2 s"), and a 20th reading added (gym-v0's settings under
-/// another id), against that reading's report alone (`--variant`; the target: ≤ 1 s more).
+/// pages name it): one variant's `set` changed (gym-v1's Cart-Pole goal set to gym-v0's: that
+/// variant's cells change, issue 37's "≤ 2 s"), and a 20th variant added (gym-v0's settings under
+/// another id), against that variant's report alone (`--variant`; the target: ≤ 1 s more).
 fn changed_pipelines(paper: &Path, cache: &Path, report: &Path) {
     let tmp = tempfile::tempdir().unwrap();
     let copy = |from: &Path, to: &Path| {
@@ -114,20 +114,20 @@ fn changed_pipelines(paper: &Path, cache: &Path, report: &Path) {
     };
     let v1 = "  - id: gym-v1\n    title: \"Gymnasium TimeLimits: CartPole-v1 500, MountainCar-v0 200\"\n    set:\n      \
               systems.cart-pole.success.steps: 500";
-    assert!(text.contains(v1), "paper.yaml's gym-v1 reading is not as this benchmark expects");
+    assert!(text.contains(v1), "paper.yaml's gym-v1 variant is not as this benchmark expects");
     let changed = run(text.replace(v1, &v1.replace("steps: 500", "steps: 200")), &[]);
     println!(
-        "one reading's set changed (gym-v1 as gym-v0), trials cached: the report {:.2} s wall, {:.2} s CPU \
+        "one variant's set changed (gym-v1 as gym-v0), trials cached: the report {:.2} s wall, {:.2} s CPU \
          (target ≤ 2 s): {}",
         changed.0, changed.1, changed.3
     );
-    let reading = "  - id: gym-v0-again\n    title: \"gym-v0 under another id\"\n    set:\n      \
+    let added = "  - id: gym-v0-again\n    title: \"gym-v0 under another id\"\n    set:\n      \
                    systems.cart-pole.success.steps: 200\n      systems.mountain-car.success.within: 200\n      \
                    systems.mountain-car.success.max_episode_steps: 200\n";
-    let all = run(format!("{text}{reading}"), &[]);
-    let alone = run(format!("{text}{reading}"), &["--variant", "gym-v0-again"]);
+    let all = run(format!("{text}{added}"), &[]);
+    let alone = run(format!("{text}{added}"), &["--variant", "gym-v0-again"]);
     println!(
-        "a 20th reading, trials cached: the report {:.2} s wall ({:.2} s CPU); that reading alone {:.2} s wall \
+        "a 20th variant, trials cached: the report {:.2} s wall ({:.2} s CPU); that variant alone {:.2} s wall \
          ({:.2} s CPU); {:.2} s more (target ≤ 1 s)",
         all.0,
         all.1,

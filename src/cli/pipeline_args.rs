@@ -167,7 +167,7 @@ pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
     let s = &o.summary;
     let page = if opts.formats.has(Format::Html) { "index.html" } else { "" };
     println!(
-        "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and reading \
+        "report: {} ({} of {} planned trials present, {} of {} cells; a trial counts once per cell and variant \
          that uses it, the distinct trials are the `executed`/`cached` counts; cells: {} recomputed, {} reused; \
          intervals: {} computed, {} reused; files: {} rewritten, {} unchanged)",
         opts.dir.join(page).display(),

@@ -1,5 +1,5 @@
 //! Issue #40 end to end: a pipeline whose two Ball-Beam experiments overlap, with the paper's two
-//! contradictory Q(0) values as references. Each reading's table3.csv gains ours at the paper's
+//! contradictory Q(0) values as references. Each variant's table3.csv gains ours at the paper's
 //! configuration, the verdicts and a cause per row; the comparison lists the pair in
 //! consistency.csv and opens with the tally of causes.
 

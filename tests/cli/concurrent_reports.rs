@@ -64,7 +64,7 @@ fn reports_of_different_plans_at_once_never_remove_each_others_trial_parts() {
     let sb = Sandbox::new();
     let p = sb.fixture("variants.yaml");
     let ps = p.to_str().unwrap();
-    // Both plans' trials in the cache; their readings' rows differ, so do their parts.
+    // Both plans' trials in the cache; their variants' rows differ, so do their parts.
     let more = ["--set", "seeds=3"];
     stdout(&mut sb.qsweep(&["run", ps, "--quiet", "--no-report"]));
     stdout(&mut sb.qsweep(&["run", ps, "--quiet", "--no-report", "--set", "seeds=3"]));
@@ -100,7 +100,7 @@ fn reports_of_different_plans_at_once_never_remove_each_others_trial_parts() {
             }
         }
     }
-    // A full report alone keeps only the parts it used: one per declared reading.
+    // A full report alone keeps only the parts it used: one per declared variant.
     stdout(&mut sb.qsweep(&["report", ps, "--quiet", "--out", "last"]));
     assert_eq!(parts(&sb).len(), 3, "{:?}", parts(&sb));
 }

@@ -1,5 +1,5 @@
 //! The comparison folder's opening and forest plot (`figures/forest.svg`), end to end: the dots
-//! the SVG draws, read back through its own axis, are the `ratio` column of each plotted reading's
+//! the SVG draws, read back through its own axis, are the `ratio` column of each plotted variant's
 //! `table3.csv`, and the pages open with the counts of those rows.
 
 use crate::helpers::{csv_rows, Sandbox};
@@ -50,7 +50,7 @@ fn forest_plot_dots_are_table3_ratios_and_the_page_opens_with_the_answer() {
     let ln_value = |x: f64| ln(v0) + (x - x0) / (x1 - x0) * (ln(v1) - ln(v0));
     let px = (ln(v1) - ln(v0)) / (x1 - x0); // ln units per pixel
 
-    // The plotted readings: as written, and the top-ranked declared one.
+    // The plotted variants: as written, and the top-ranked declared one.
     let variants = csv_rows(&std::fs::read_to_string(out.join("variants.csv")).unwrap());
     let best = variants.iter().find(|r| r["exploratory"] == "no").unwrap()["variant"].clone();
     let plotted = if best == "as-written" { vec!["as-written"] } else { vec!["as-written", best.as_str()] };
@@ -75,7 +75,7 @@ fn forest_plot_dots_are_table3_ratios_and_the_page_opens_with_the_answer() {
         };
         assert!(readme.contains(&said), "{said} in\n{readme}");
     }
-    // The answer and its figure come before the list of readings, on both pages.
+    // The answer and its figure come before the list of variants, on both pages.
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     let at = |page: &str, s: &str| page.find(s).unwrap_or_else(|| panic!("{s} in\n{page}"));
     assert!(at(&html, "id=\"answer\"") < at(&html, "src=\"figures/forest.svg\""));

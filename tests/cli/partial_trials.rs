@@ -1,4 +1,4 @@
-//! A comparison's `trials.parquet` when a reading's first experiment has no trials stored yet but
+//! A comparison's `trials.parquet` when a variant's first experiment has no trials stored yet but
 //! a later one has: the report writes the rows it has, it does not fail on the empty experiment.
 
 use crate::helpers::Sandbox;
@@ -9,7 +9,7 @@ use crate::helpers::Sandbox;
 #[test]
 fn a_part_whose_first_experiment_has_no_trials_still_writes_the_others() {
     let sb = Sandbox::new();
-    // tiny.yaml's trials are some of variants.yaml's: its reading's first experiment stays empty.
+    // tiny.yaml's trials are some of variants.yaml's: its variant's first experiment stays empty.
     let tiny = sb.fixture("tiny.yaml");
     sb.run_json(&tiny, &[]);
     let variants = sb.fixture("variants.yaml");

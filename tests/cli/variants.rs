@@ -233,7 +233,7 @@ fn trial_and_a_pipeline_cell_resolve_to_the_same_configuration() {
 
 /// `counting: failures` is a report setting: an exploratory variant that only sets it runs no
 /// trial, counts one episode fewer for every trial that reached the goal, is ranked after the
-/// declared readings, and gets its folder only on demand.
+/// declared variants, and gets its folder only on demand.
 #[test]
 fn an_exploratory_counting_variant_reruns_nothing_and_counts_one_fewer() {
     let sb = Sandbox::new();
@@ -258,14 +258,14 @@ fn an_exploratory_counting_variant_reruns_nothing_and_counts_one_fewer() {
     let err = String::from_utf8(first.stderr).unwrap();
     assert!(!err.contains("changes no trial"), "a report setting is not a no-op: {err}");
 
-    // Ranked after the declared reading, labelled; no folder of its own.
+    // Ranked after the declared variant, labelled; no folder of its own.
     let variants = std::fs::read_to_string(out_dir.join("variants.csv")).unwrap();
     let rows = crate::helpers::csv_rows(&variants);
     assert_eq!(rows.len(), 2, "{variants}");
     assert_eq!((rows[1]["variant"].as_str(), rows[1]["exploratory"].as_str()), ("failures", "yes"));
     assert_eq!(rows[0]["exploratory"], "no");
     assert!(out_dir.join("as-written/table3.csv").is_file());
-    assert!(!out_dir.join("failures").exists(), "an exploratory reading's folder is on demand");
+    assert!(!out_dir.join("failures").exists(), "an exploratory variant's folder is on demand");
 
     // On demand: its Table III counts one episode fewer wherever every trial converged.
     sb.qsweep(&["report", ws, "--variant", "failures", "--out", od, "--formats", "csv"]).assert().success();

@@ -226,7 +226,7 @@ pub fn read_cached<'a>(
 /// outcomes of some of them; against a cache, [`read_cached`]), as far as each round's trials are
 /// all cached, and plan the next round's; then plan the fresh-seed trials of every decided best
 /// cell ([`crate::fresh::plan_fresh`]). Without a race or a `fresh:` block the plan comes back as
-/// it is (a plan given up is not copied: a report of the paper's readings holds no second copy of
+/// it is (a plan given up is not copied: a report of the paper's variants holds no second copy of
 /// its 37,000 cells).
 pub fn replay<'p>(
     plan: impl Into<Cow<'p, Plan>>,

@@ -1,7 +1,7 @@
 //! The report's layout: which folders it writes, decided before any trial is read (the first steps of
 //! [`crate::stage::write_replayed`]): each folder's plan ([`folders_of`]) and the digest of its
 //! inputs ([`inputs_of`]), the whole report kept when every folder of a comparison is intact
-//! ([`all_intact`]), each reading's plan in full once something is computed ([`in_full`]), and the
+//! ([`all_intact`]), each variant's plan in full once something is computed ([`in_full`]), and the
 //! guard over every folder it replaces ([`guard`]).
 
 use crate::derive::compare::VariantInfo;
@@ -15,33 +15,33 @@ use qsweep_pipeline::plan::Plan;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
-/// One folder of a report: a reading's, or the whole plan's for a pipeline without variants.
+/// One folder of a report: a variant's, or the whole plan's for a pipeline without variants.
 pub(super) struct Folder<'p> {
-    /// Its reading (`None`: the whole plan).
+    /// Its variant (`None`: the whole plan).
     pub(super) info: Option<VariantInfo>,
-    /// Its plan: a reading's header ([`Plan::variant_header`], enough for the memos) until
+    /// Its plan: a variant's header ([`Plan::variant_header`], enough for the memos) until
     /// something is computed ([`in_full`]), the whole plan without variants.
     pub(super) plan: Cow<'p, Plan>,
 }
 
 impl Folder<'_> {
-    /// Its reading's id (`None`: the whole plan).
+    /// Its variant's id (`None`: the whole plan).
     pub(super) fn id(&self) -> Option<&str> {
         self.info.as_ref().map(|v| v.id.as_str())
     }
 
-    /// Whether its reading is exploratory.
+    /// Whether its variant is exploratory.
     pub(super) fn exploratory(&self) -> bool {
         self.info.as_ref().is_some_and(|v| v.exploratory)
     }
 }
 
-/// Whether the report compares readings: a pipeline with variants, all of them selected.
+/// Whether the report compares variants: a pipeline with variants, all of them selected.
 pub(super) fn with_comparison(plan: &Plan) -> bool {
     !plan.variants.is_empty() && !plan.variant_subset
 }
 
-/// Each folder's plan: the whole plan, or one reading's header per variant; a reading's cells
+/// Each folder's plan: the whole plan, or one variant's header per variant; a variant's cells
 /// are copied only once something is computed ([`in_full`]).
 pub(super) fn folders_of(plan: &Plan) -> Vec<Folder<'_>> {
     if plan.variants.is_empty() {
@@ -84,7 +84,7 @@ pub(super) fn intact(opts: &ReportOptions, dir: &Path, inputs: &blake3::Hash) ->
 }
 
 /// The outcome of a report with a comparison whose every folder is intact (the comparison's, each
-/// variant's with a folder, the chosen reading's): nothing to compute or write. `None` when one
+/// variant's with a folder, the chosen variant's): nothing to compute or write. `None` when one
 /// of them is not.
 pub(super) fn all_intact(
     plan: &Plan,
@@ -102,7 +102,7 @@ pub(super) fn all_intact(
     };
     for (f, h) in folders.iter().zip(&inputs.each) {
         let Some(v) = &f.info else { continue };
-        // The same rule as the stage's: a grid's readings and exploratory ones have no folder,
+        // The same rule as the stage's: a grid's variants and exploratory ones have no folder,
         // but the chosen one.
         let has_folder = !(plan.has_grid() || v.exploratory) || top.chosen.as_deref() == Some(v.id.as_str());
         if has_folder {
@@ -118,7 +118,7 @@ pub(super) fn all_intact(
     Some(out)
 }
 
-/// The folders with each reading's plan in full, once something is computed (the comparison's
+/// The folders with each variant's plan in full, once something is computed (the comparison's
 /// digests borrow them).
 pub(super) fn in_full<'p>(plan: &'p Plan, folders: Vec<Folder<'p>>) -> Vec<Folder<'p>> {
     folders
@@ -134,8 +134,8 @@ pub(super) fn in_full<'p>(plan: &'p Plan, folders: Vec<Folder<'p>>) -> Vec<Folde
 }
 
 /// Whether `folder` is written only once the comparison has chosen it: in a full report of a
-/// pipeline with a grid only the chosen reading gets a folder (written once chosen), and an
-/// exploratory reading gets none (`--variant` writes any on demand).
+/// pipeline with a grid only the chosen variant gets a folder (written once chosen), and an
+/// exploratory variant gets none (`--variant` writes any on demand).
 pub(super) fn deferred(plan: &Plan, folder: &Folder) -> bool {
     with_comparison(plan) && folder.info.as_ref().is_some_and(|v| plan.has_grid() || v.exploratory)
 }

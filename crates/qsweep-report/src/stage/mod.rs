@@ -14,14 +14,14 @@
 //! from one shared read without episode lengths), while the others are drawn one at a time
 //! (memory: one variant's episode lengths). Every bootstrap interval and claim set comes from the
 //! statistics' memo ([`Derived`](crate::memo::stats::Derived)) when its inputs are unchanged; the
-//! combined `trials.parquet` is spliced from one part per reading
+//! combined `trials.parquet` is spliced from one part per variant
 //! ([`TrialParts`](crate::memo::parts::TrialParts)), encoding only the changed ones; every file is
 //! written only when its bytes change. `--rebuild` ([`ReportOptions::rebuild`]) ignores every memo.
 //!
 //! [`write_replayed`] takes the report's steps one after another, each a named function: those
 //! decided before any trial is read in `layout.rs` (which folders, their memos, the guard), then
 //! those of the report under way in `steps.rs` (what each folder needs, the shared read, the
-//! summaries, the drawn folders, the chosen reading, the comparison, the statistics' memo).
+//! summaries, the drawn folders, the chosen variant, the comparison, the statistics' memo).
 
 mod layout;
 pub mod manifest;
@@ -81,7 +81,7 @@ pub fn write_replayed(
     }
     let plan = plan.plan();
     let comparison = with_comparison(plan);
-    // The memos are checked before anything is read: each folder's plan (a reading's header) and
+    // The memos are checked before anything is read: each folder's plan (a variant's header) and
     // the digest of its inputs.
     let folders = folders_of(plan);
     let inputs = inputs_of(plan, scan, opts.formats, &folders);
@@ -110,7 +110,7 @@ pub fn write_replayed(
             (None, _) => report.draw_folder(folder, target.as_ref(), inputs, need, &shared)?,
         }
     }
-    // Then the comparison: a grid's chosen reading gets its folder, and the comparison its files.
+    // Then the comparison: a grid's chosen variant gets its folder, and the comparison its files.
     let chosen = report.write_chosen(&folders, &inputs.each)?;
     if let Some(top) = &targets.top {
         report.write_comparison_folder(top, &inputs.top, chosen)?;

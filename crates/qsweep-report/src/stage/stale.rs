@@ -23,7 +23,7 @@ pub struct Staleness {
     pub memo: PathBuf,
     /// Cell intervals (each cell's sample and fresh-seed sample) the report shows.
     pub intervals: usize,
-    /// Those not in the memo: the cell (`reading:system/repr/algorithm/resolution/actions`, with
+    /// Those not in the memo: the cell (`variant:system/repr/algorithm/resolution/actions`, with
     /// `fresh` for its fresh-seed sample), each computed by the next report that recomputes it.
     pub stale: Vec<String>,
 }
@@ -40,17 +40,17 @@ pub fn staleness(
     let folders = folders(&plan, scan, dir, formats);
     let path = Derived::path(store.dir(), &plan.name);
     let memo = Derived::load(&path, crate::memo::ANALYSIS_VERSION, true);
-    // The cells whose intervals a report shows: every declared reading's (an exploratory one
+    // The cells whose intervals a report shows: every declared variant's (an exploratory one
     // shows none in a full report).
-    let readings: Vec<Plan> = if plan.variants.is_empty() {
+    let declared: Vec<Plan> = if plan.variants.is_empty() {
         vec![plan.clone()]
     } else {
         plan.variants.iter().filter(|v| !v.exploratory).map(|v| plan.only_variant(&v.id)).collect()
     };
-    let wanted: HashSet<Key> = readings.iter().flat_map(|r| r.trials().map(|(_, _, t)| t.key)).collect();
+    let wanted: HashSet<Key> = declared.iter().flat_map(|r| r.trials().map(|(_, _, t)| t.key)).collect();
     let outcomes = store.read_outcomes(scan, &wanted, false)?;
     let (mut intervals, mut stale) = (0, Vec::new());
-    for r in &readings {
+    for r in &declared {
         let data = ReportData::build_as(r, &outcomes, None);
         for (e, c) in data.experiments.iter().flat_map(|e| e.cells.iter().map(move |c| (e, c))) {
             let variant = e.exp.variant.as_deref();
@@ -71,7 +71,7 @@ pub fn staleness(
 }
 
 /// For each folder a report of `plan` (replayed) into `dir` in `formats` would write (each
-/// variant's with a folder, the comparison's, the chosen reading's as the comparison's memo names
+/// variant's with a folder, the comparison's, the chosen variant's as the comparison's memo names
 /// it), why it would be recomputed, or `None` when its memo is intact.
 fn folders(plan: &Plan, scan: &KeySet, dir: &Path, formats: Formats) -> Vec<(PathBuf, Option<String>)> {
     let inputs = Inputs::new(plan, scan);

@@ -3,13 +3,13 @@
 //!
 //! 1. [`Report::start`]: the statistics' memo loaded, the trial parts opened;
 //! 2. [`Report::needs`]: what each folder needs ([`FolderNeed`]), decided before any trial is read;
-//! 3. [`Report::read_shared`]: one read of the outcomes that the readings without episode lengths
+//! 3. [`Report::read_shared`]: one read of the outcomes that the variants without episode lengths
 //!    share;
-//! 4. [`Report::summarize_light`]: the readings that draw nothing and encode no rows, summarized
+//! 4. [`Report::summarize_light`]: the variants that draw nothing and encode no rows, summarized
 //!    for the comparison at once, in parallel ([`Summarized`]);
 //! 5. per folder, in order: [`Report::add_summarized`], [`Report::skip`] (an intact folder
 //!    without a comparison) or [`Report::draw_folder`];
-//! 6. [`Report::write_chosen`]: a grid's chosen reading gets its folder;
+//! 6. [`Report::write_chosen`]: a grid's chosen variant gets its folder;
 //! 7. [`Report::write_comparison_folder`]: the comparison's files;
 //! 8. [`Report::save_memo`]: the statistics' memo, and what the report did.
 
@@ -53,7 +53,7 @@ pub(super) struct FolderNeed {
     lengths: bool,
 }
 
-/// What the report keeps of a reading once its folder is written or kept: its counts, its rows of
+/// What the report keeps of a variant once its folder is written or kept: its counts, its rows of
 /// the combined `cells.parquet` and its digest for the comparison.
 pub(super) struct Summarized<'p> {
     counted: ReportSummary,
@@ -63,7 +63,7 @@ pub(super) struct Summarized<'p> {
 
 impl<'p> Summarized<'p> {
     /// What is kept of `data`, the report data of variant `v` (`sub`), with its `cells.parquet`
-    /// rows when `cells` (an exploratory reading's cells are written with its folder, on demand).
+    /// rows when `cells` (an exploratory variant's cells are written with its folder, on demand).
     fn of(
         v: &VariantInfo,
         sub: &'p Plan,
@@ -79,7 +79,7 @@ impl<'p> Summarized<'p> {
     }
 }
 
-/// Whether `folder`'s rows go into the combined `cells.parquet` (a declared reading's, with a
+/// Whether `folder`'s rows go into the combined `cells.parquet` (a declared variant's, with a
 /// comparison that writes it): its intervals are computed then.
 fn in_cells(plan: &Plan, formats: Formats, folder: &Folder) -> bool {
     with_comparison(plan) && formats.has(Format::Cells) && !folder.exploratory()
@@ -99,11 +99,11 @@ pub(super) struct Report<'a> {
     memo_path: PathBuf,
     /// A folder was skipped by its memo: it used no statistics, so the memo keeps what it holds.
     skipped: bool,
-    /// The combined `trials.parquet`, from one part per declared reading (with a comparison).
+    /// The combined `trials.parquet`, from one part per declared variant (with a comparison).
     parts: Option<TrialParts>,
-    /// Each reading's digest, for the comparison.
+    /// Each variant's digest, for the comparison.
     digests: Vec<VariantDigest<'a>>,
-    /// Each declared reading's rows of the combined `cells.parquet`.
+    /// Each declared variant's rows of the combined `cells.parquet`.
     cells: Vec<RecordBatch>,
 }
 
@@ -142,7 +142,7 @@ impl<'a> Report<'a> {
         };
         if report.parts.as_ref().is_some_and(|p| !p.kept()) {
             report.out.warnings.push(format!(
-                "the cache {} cannot keep trial parts: every reading's rows were encoded for this report",
+                "the cache {} cannot keep trial parts: every variant's rows were encoded for this report",
                 store.dir().display()
             ));
         }
@@ -169,7 +169,7 @@ impl<'a> Report<'a> {
             .zip(inputs)
             .map(|((f, target), h)| {
                 let kept = target.as_ref().and_then(|t| intact(self.opts, &t.dir, h));
-                // An exploratory reading's rows are its declared twin's: written with its folder.
+                // An exploratory variant's rows are its declared twin's: written with its folder.
                 let part = parts.filter(|_| f.info.is_some() && !f.exploratory()).map(|p| p.digest(&f.plan));
                 // A kept part holds a row per present trial (each cell's, its fresh ones included).
                 let rows = || f.plan.trials().filter(|(_, _, t)| self.scan.keys.contains(&t.key)).count();
@@ -182,8 +182,8 @@ impl<'a> Report<'a> {
             .collect()
     }
 
-    /// The outcomes of every reading that needs no episode lengths, read once for all of them
-    /// (readings share most trials); none without a comparison.
+    /// The outcomes of every variant that needs no episode lengths, read once for all of them
+    /// (variants share most trials); none without a comparison.
     pub(super) fn read_shared(&self, folders: &[Folder], needs: &[FolderNeed]) -> anyhow::Result<Read> {
         if !with_comparison(self.plan) {
             return Ok(HashMap::new());
@@ -197,7 +197,7 @@ impl<'a> Report<'a> {
         self.store.read_outcomes(self.scan, &wanted, false)
     }
 
-    /// The readings that draw nothing and encode no rows, summarized from the `shared` outcomes
+    /// The variants that draw nothing and encode no rows, summarized from the `shared` outcomes
     /// for the comparison: in parallel, each a pure function of its inputs (`None`: the others).
     pub(super) fn summarize_light(
         &self,
@@ -224,13 +224,13 @@ impl<'a> Report<'a> {
         self.out.cells_recomputed += counted.cells;
     }
 
-    /// Keep a reading's rows of the combined `cells.parquet` and its digest, for the comparison.
+    /// Keep a variant's rows of the combined `cells.parquet` and its digest, for the comparison.
     fn compare(&mut self, done: Summarized<'a>) {
         self.cells.extend(done.cells);
         self.digests.push(done.digest);
     }
 
-    /// A reading summarized at once ([`Report::summarize_light`]): its trial part reused, its kept
+    /// A variant summarized at once ([`Report::summarize_light`]): its trial part reused, its kept
     /// folder's files listed, its counts, rows and digest added.
     pub(super) fn add_summarized(&mut self, folder: &Folder, need: &FolderNeed, done: Summarized<'a>) {
         if let (Some(parts), Some(d)) = (&mut self.parts, &need.part) {
@@ -253,7 +253,7 @@ impl<'a> Report<'a> {
 
     /// Draw a folder as `need` says: read its outcomes (its own, with episode lengths where it
     /// needs them, or the `shared` ones), write its files (into `target`) and its part of the
-    /// combined `trials.parquet` at once, then its manifest and memo (from `inputs`); a reading's
+    /// combined `trials.parquet` at once, then its manifest and memo (from `inputs`); a variant's
     /// summary goes to the comparison.
     pub(super) fn draw_folder(
         &mut self,
@@ -311,7 +311,7 @@ impl<'a> Report<'a> {
         Ok(())
     }
 
-    /// The chosen reading of a grid gets its folder once the comparison has chosen it: kept when
+    /// The chosen variant of a grid gets its folder once the comparison has chosen it: kept when
     /// its memo says it is intact, else guarded and drawn. Its id, if there is one.
     pub(super) fn write_chosen(
         &mut self,
@@ -344,9 +344,9 @@ impl<'a> Report<'a> {
         Ok(Some(id.as_str()))
     }
 
-    /// The comparison's folder (`top`): every declared reading's rows of `cells.parquet`, the
+    /// The comparison's folder (`top`): every declared variant's rows of `cells.parquet`, the
     /// combined `trials.parquet` spliced from its parts, the comparison's pages and figures, then
-    /// its manifest and memo (from `inputs`, naming the `chosen` reading).
+    /// its manifest and memo (from `inputs`, naming the `chosen` variant).
     pub(super) fn write_comparison_folder(
         &mut self,
         top: &Target,

@@ -101,7 +101,7 @@ impl Target {
     }
 
     /// Write the manifest and the memo (from `inputs`, with the folder's `counted` summary and the
-    /// comparison's `chosen` reading), remove the kept report's files that were not written again,
+    /// comparison's `chosen` variant), remove the kept report's files that were not written again,
     /// say what changed, and list the folder's files (under the variant's id) in the outcome's
     /// summary.
     #[allow(clippy::too_many_arguments)]
