@@ -211,7 +211,7 @@ done
 log "race: 3 chained round arrays and the report equal the single-machine run's"
 
 # Two overlapping pipelines submitted together on one empty cache (quick.yaml and the same with a
-# third seed: two thirds of the second's trials are the first's): claims let each trial be
+# third seed: two thirds of the second's trials are the first's): key leases let each trial be
 # computed once, whichever task reaches it first (issue 39).
 log "two overlapping pipelines submitted together on one cache"
 for seeds in 2 3; do
@@ -238,7 +238,7 @@ keys = pd.concat(pd.read_parquet(f, columns=["key"]) for f in glob.glob(sys.argv
 print(f"[slurm-test] overlap: {len(keys)} rows, {keys.nunique()} distinct trials (want {sys.argv[2]} of each)")
 sys.exit(0 if len(keys) == keys.nunique() == int(sys.argv[2]) else 1)
 PY
-[ -z "$(ls -A cache-overlap/_claims 2>/dev/null)" ] || fail "claims left behind: $(ls cache-overlap/_claims)"
+[ -z "$(ls -A cache-overlap/_leases 2>/dev/null)" ] || fail "key leases left behind: $(ls cache-overlap/_leases)"
 cmp report-overlap-2/table3.csv report-single/table3.csv || fail "the overlapped quick.yaml report differs"
-log "overlap: every shared trial computed once, no claims left, the same Table III"
+log "overlap: every shared trial computed once, no key leases left, the same Table III"
 log "PASS"
