@@ -25,6 +25,8 @@ const PIPELINE_LAYERS: &[&[&str]] = &[
     &["exec"],
     &["run"],
     &["bench", "slurm", "status"],
+    // Test fixtures (`test-support`), above everything they build.
+    &["testing"],
 ];
 
 fn layer(module: &str) -> Option<usize> {

@@ -25,6 +25,8 @@ pub mod run;
 pub mod slurm;
 pub mod spec;
 pub mod status;
+#[cfg(any(test, feature = "test-support"))]
+pub mod testing;
 
 #[cfg(test)]
 mod settings_tests;

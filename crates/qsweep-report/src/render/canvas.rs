@@ -171,8 +171,28 @@ impl<DB: DrawingBackend> Canvas<DB> {
         self.text(&text, (cx, y), size, color, HPos::Center, VPos::Center);
     }
 
+    /// `band` at the bottom of a figure `h` pixels tall, placed by [`Legend::place`] for the
+    /// figure's width: each entry's swatch drawn by `swatch` (given the entry's index and the
+    /// swatch's left edge and centre line; it returns the colour of the entry's text), then its
+    /// text lines.
+    pub(crate) fn legend(
+        &mut self,
+        band: &Legend,
+        h: u32,
+        mut swatch: impl FnMut(&mut Self, usize, (i32, i32)) -> Result<RGBColor, String>,
+    ) -> Res {
+        let (w, _) = self.root.dim_in_pixel();
+        let (placed, band_h) = band.place(w);
+        let top = (h - band_h) as i32;
+        for p in &placed {
+            let color = swatch(self, p.entry, (p.x, top + p.y))?;
+            self.lines(p, top, &band.entries[p.entry], color);
+        }
+        Ok(())
+    }
+
     /// A legend entry's text lines, placed by [`Legend::place`] in the band whose top is at `top`.
-    pub(crate) fn lines(&mut self, p: &text_fit::Placed, top: i32, e: &Entry, color: RGBColor) {
+    fn lines(&mut self, p: &text_fit::Placed, top: i32, e: &Entry, color: RGBColor) {
         for (k, l) in p.lines.iter().enumerate() {
             let y = top + p.y + k as i32 * Legend::line_h(e.size);
             self.text(l, (p.text_x, y), e.size, color, HPos::Left, VPos::Center);

@@ -320,15 +320,10 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
 
 /// The legend band at the bottom of a figure `h` pixels tall ([`legend_band`]).
 fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32) -> Res {
-    let band = legend_band();
-    let (w, _) = cv.root.dim_in_pixel();
-    let (placed, band_h) = band.place(w);
-    let top = (h - band_h) as i32;
-    for p in &placed {
-        let (x, y) = (p.x, top + p.y);
-        match p.entry {
+    cv.legend(&legend_band(), h, |cv, entry, (x, y)| {
+        match entry {
             0 | 1 => {
-                let a = [Algorithm::Q0, Algorithm::QLambda][p.entry];
+                let a = [Algorithm::Q0, Algorithm::QLambda][entry];
                 cv.rect((x, y - 7), (x + 26, y + 7), colour(a).mix(0.22).filled())?;
                 cv.line((x, y), (x + 26, y), colour(a).stroke_width(2))?;
             }
@@ -338,9 +333,9 @@ fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32) -> Res {
             }
             _ => {}
         }
-        cv.lines(p, top, &band.entries[p.entry], if p.entry == 3 { SUBTLE } else { INK });
-    }
-    Ok(())
+        // The note under the swatches is set apart in grey.
+        Ok(if entry == 3 { SUBTLE } else { INK })
+    })
 }
 
 #[cfg(test)]

@@ -16,23 +16,17 @@
 /// Text for HTML element content and attribute values (quoted with `"` or `'`): `&`, `<`, `>`,
 /// `"` and `'` as character references.
 pub fn html(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            _ => out.push(c),
-        }
-    }
-    out
+    markup(s, "&#39;")
 }
 
 /// Text for SVG (XML) character data and attribute values: `&`, `<`, `>`, `"` and `'` as XML's
 /// predefined entities.
 pub fn xml(s: &str) -> String {
+    markup(s, "&apos;")
+}
+
+/// `&`, `<`, `>` and `"` as entities, and `'` as `apos` (HTML and XML spell it differently).
+fn markup(s: &str, apos: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -40,7 +34,7 @@ pub fn xml(s: &str) -> String {
             '<' => out.push_str("&lt;"),
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
+            '\'' => out.push_str(apos),
             _ => out.push(c),
         }
     }

@@ -397,13 +397,8 @@ pub fn nice_ticks(lo: f64, hi: f64) -> (Vec<f64>, usize) {
 
 /// The legend band at the bottom of a figure `h` pixels tall ([`legend_band`]).
 fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32, raced: bool) -> Res {
-    let band = legend_band(raced);
-    let (w, _) = cv.root.dim_in_pixel();
-    let (placed, band_h) = band.place(w);
-    let top = (h - band_h) as i32;
-    for p in &placed {
-        let (x, y) = (p.x, top + p.y);
-        match p.entry {
+    cv.legend(&legend_band(raced), h, |cv, entry, (x, y)| {
+        match entry {
             0 => {
                 cv.rect((x, y - 9), (x + 26, y + 9), viridis(0.6).filled())?;
                 cv.rect((x + 1, y - 8), (x + 25, y + 8), BEST.stroke_width(3))?;
@@ -419,9 +414,8 @@ fn legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32, raced: bool) -> Res {
             }
             _ => {}
         }
-        cv.lines(p, top, &band.entries[p.entry], INK);
-    }
-    Ok(())
+        Ok(INK)
+    })
 }
 
 #[cfg(test)]

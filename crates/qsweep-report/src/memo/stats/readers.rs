@@ -44,13 +44,13 @@ impl Reading {
         let start = Instant::now();
         loop {
             let Some(file) = open(dir, &path) else { return Self { _file: None } };
-            match flock(&file, Mode::Shared) {
+            match lock::try_lock_shared(&file) {
                 // The folder may have been removed (by `qsweep gc`) while we waited: a lock on a
                 // lock file no longer at its path holds nothing; take the new one.
-                Ok(true) if lock::is_at(&file, &path) => return Self { _file: Some(file) },
-                Ok(true) => {}
-                Ok(false) if start.elapsed() < WAIT => std::thread::sleep(Duration::from_millis(20)),
-                Ok(false) | Err(_) => return Self { _file: None },
+                Ok(Lock::Taken) if lock::is_at(&file, &path) => return Self { _file: Some(file) },
+                Ok(Lock::Taken) => {}
+                Ok(Lock::Busy) if start.elapsed() < WAIT => std::thread::sleep(Duration::from_millis(20)),
+                Ok(Lock::Busy | Lock::Unsupported) | Err(_) => return Self { _file: None },
             }
         }
     }
@@ -78,11 +78,11 @@ pub struct Guard {
 pub fn alone(dir: &Path) -> Alone {
     let path = dir.join(LOCK_FILE);
     let Some(file) = open(dir, &path) else { return Alone::Unknown };
-    match flock(&file, Mode::Exclusive) {
-        Ok(true) if lock::is_at(&file, &path) => Alone::Yes(Guard { _file: file }),
+    match lock::try_lock(&file) {
+        Ok(Lock::Taken) if lock::is_at(&file, &path) => Alone::Yes(Guard { _file: file }),
         // Removed meanwhile (by another `qsweep gc`): nothing left to prune.
-        Ok(true) | Ok(false) => Alone::No,
-        Err(_) => Alone::Unknown,
+        Ok(Lock::Taken | Lock::Busy) => Alone::No,
+        Ok(Lock::Unsupported) | Err(_) => Alone::Unknown,
     }
 }
 
@@ -91,7 +91,7 @@ pub fn alone(dir: &Path) -> Alone {
 pub fn in_use(dir: &Path) -> bool {
     let path = dir.join(LOCK_FILE);
     let file = File::options().read(true).write(true).open(&path).or_else(|_| File::open(&path));
-    file.is_ok_and(|f| matches!(flock(&f, Mode::Exclusive), Ok(false)))
+    file.is_ok_and(|f| matches!(lock::try_lock(&f), Ok(Lock::Busy)))
 }
 
 /// The lock file at `path` in `dir`, opened (made if missing) for reading and, where allowed,
@@ -105,26 +105,6 @@ fn open(dir: &Path, path: &Path) -> Option<File> {
             rw().ok()
         }
         Err(_) => File::open(path).ok(),
-    }
-}
-
-#[derive(Clone, Copy)]
-enum Mode {
-    Shared,
-    Exclusive,
-}
-
-/// Try to lock `file` without waiting (the cache's leases' `flock`): `Ok(true)` taken,
-/// `Ok(false)` held by another open file, `Err` where the file system refuses locks.
-fn flock(file: &File, mode: Mode) -> std::io::Result<bool> {
-    let got = match mode {
-        Mode::Shared => lock::try_lock_shared(file)?,
-        Mode::Exclusive => lock::try_lock(file)?,
-    };
-    match got {
-        Lock::Taken => Ok(true),
-        Lock::Busy => Ok(false),
-        Lock::Unsupported => Err(std::io::Error::from(ErrorKind::Unsupported)),
     }
 }
 

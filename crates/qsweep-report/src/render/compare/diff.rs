@@ -264,13 +264,8 @@ fn diverging_bar<DB: DrawingBackend>(cv: &mut Canvas<DB>, a: (i32, i32), b: (i32
 
 /// The legend band at the bottom of a difference figure `h` pixels tall ([`legend_band`]).
 fn diff_legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32) -> Res {
-    let band = legend_band();
-    let (w, _) = cv.root.dim_in_pixel();
-    let (placed, band_h) = band.place(w);
-    let top = (h - band_h) as i32;
-    for p in &placed {
-        let (x, y) = (p.x, top + p.y);
-        match p.entry {
+    cv.legend(&legend_band(), h, |cv, entry, (x, y)| {
+        match entry {
             0 => cv.rect((x, y - 9), (x + 26, y + 9), diverging(0.8).filled())?,
             1 => cv.rect((x, y - 9), (x + 26, y + 9), diverging(-0.8).filled())?,
             2 => {
@@ -281,7 +276,6 @@ fn diff_legend<DB: DrawingBackend>(cv: &mut Canvas<DB>, h: u32) -> Res {
             3 => cv.rect((x, y - 9), (x + 26, y + 9), MISSING.filled())?,
             _ => {}
         }
-        cv.lines(p, top, &band.entries[p.entry], INK);
-    }
-    Ok(())
+        Ok(INK)
+    })
 }
