@@ -4,12 +4,12 @@
 //! Targets: planning, `status` and a no-op `run` each under 1 s on the full paper grid with all
 //! of its variants (8 variants of the paper, 79,560 distinct trials) and a warm cache; the report
 //! for that grid (every variant's report and the comparison) measured; planning + hashing +
-//! storing under 1% of trial compute on the quick pipeline, and so leasing each trial in the cache
-//! (what lets concurrent runs share it, `docs/sharing-a-cache.md`); the real report of `paper.yaml` from
-//! the committed cache (every variant, real trials): the no-op `run` (≤ 1 s, ≤ 1.3× the CPU of
-//! `status`, ≤ 120 MB) and the report recomputed with and without the statistics' memo; the paper
-//! race (`paper-race.yaml`) against `max_seeds` seeds in every cell, in trials and in simulated
-//! steps (target: at most 25 % of the trials).
+//! storing under 1% of trial compute on the quick pipeline, and so leasing the trials in the
+//! cache, in batches (what lets concurrent runs share it, `docs/sharing-a-cache.md`); the real
+//! report of `paper.yaml` from the committed cache (every variant, real trials): the no-op `run`
+//! (≤ 1 s, ≤ 1.3× the CPU of `status`, ≤ 120 MB) and the report recomputed with and without the
+//! statistics' memo; the paper race (`paper-race.yaml`) against `max_seeds` seeds in every cell,
+//! in trials and in simulated steps (target: at most 25 % of the trials).
 
 use qsweep_engine::{Outcome, StopReason};
 use qsweep_pipeline::cache::{Store, TrialRecord};
