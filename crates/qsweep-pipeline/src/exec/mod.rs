@@ -3,9 +3,9 @@
 //! bounded by count and by time (so an interrupted run keeps them), and reports [`Event`]s to the
 //! caller's [`Reporter`].
 //!
-//! With leases ([`ExecOptions::leases`]) a run that shares its cache with others leases each trial
-//! before running it, sets aside those another run is computing, and waits for them at the end
-//! ([`leased`]).
+//! With leases ([`ExecOptions::leases`]) a run that shares its cache with others leases its trials,
+//! a few at a time, before running them, sets aside those another run is computing, and waits for
+//! them at the end ([`leased`]).
 //!
 //! Results never depend on the number of threads: each trial is a pure function of its config and
 //! seed, and batches are written in completion order, which only affects segment layout.
@@ -39,8 +39,9 @@ pub struct ExecOptions {
     pub batch_trials: usize,
     /// ...or after this long since the last flush, whichever comes first.
     pub batch_interval: Duration,
-    /// Lease each trial in the cache before running it, so that concurrent runs on the cache
-    /// never compute one twice (`None`: run every job, as a library user without a shared cache).
+    /// Lease each trial in the cache before running it (in batches, [`leased::batch_len`]), so
+    /// that concurrent runs on the cache never compute one twice (`None`: run every job, as a
+    /// library user without a shared cache).
     pub leases: Option<Arc<Leases>>,
 }
 
@@ -112,7 +113,7 @@ pub fn execute(
     let threads = opts.jobs.max(1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let leases = opts.leases.as_deref();
-    let sched = Scheduler::new(jobs, order, leases);
+    let sched = Scheduler::new(jobs, order, threads, leases);
     let stop = AtomicBool::new(false);
     let (tx, rx) = mpsc::channel::<TrialRecord>();
     let mut report = ExecReport::default();
@@ -293,6 +294,41 @@ mod tests {
             got.into_iter().map(|r| (r.key, r.outcome)).collect::<Vec<_>>()
         };
         assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn rows_are_the_same_with_leases_taken_in_batches_as_without_leases() {
+        let mut configs = Vec::new();
+        for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
+            for actions in [2, 3] {
+                let mut c =
+                    TrialConfig::paper(SystemKind::BallBeam, repr, Algorithm::Q0, vec![2, 3], actions);
+                c.limits.max_episodes = 10;
+                configs.push(c);
+            }
+        }
+        // 12 trials on 1 thread: batches of 3 at first, then of 1.
+        let jobs = jobs_for(&configs);
+        let dir = tempfile::tempdir().unwrap();
+        let store = crate::cache::Store::open(dir.path()).unwrap();
+        let run = |leases: Option<Arc<Leases>>| {
+            let opts = ExecOptions { jobs: 1, leases, ..Default::default() };
+            let mut got: Vec<TrialRecord> = Vec::new();
+            let sink = |b: &[TrialRecord]| {
+                got.extend(b.iter().cloned());
+                Ok(())
+            };
+            let r = execute(&jobs, &opts, sink, &mut Vec::<Event>::new()).unwrap();
+            assert_eq!((r.executed, r.elsewhere), (jobs.len(), 0));
+            got.sort_by_key(|r| r.key);
+            // Everything but the timings, which no two runs share.
+            got.into_iter()
+                .map(|r| (r.key, r.engine_version, r.config_json(), r.seed, r.outcome))
+                .collect::<Vec<_>>()
+        };
+        let leases = Leases::open(&store).unwrap();
+        assert_eq!(run(Some(Arc::clone(&leases))), run(None));
+        assert_eq!(leases.held(), 0, "every lease is released once its trial is stored");
     }
 
     #[test]

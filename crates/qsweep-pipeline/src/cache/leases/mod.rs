@@ -4,8 +4,10 @@
 //! Before a run computes a trial it leases the trial's key: a small file `_leases/<key>` in the
 //! cache directory, made atomically (written and locked under a temporary name, then hard-linked
 //! into place, which fails if the key is leased already) and holding the holder's host and pid.
-//! Another run that meets the lease skips the trial, does its other work, and at the end waits
-//! for the key to be stored (see [`crate::exec`]). The holder removes its leases once their trials
+//! Keys are leased a few at a time ([`Leases::try_take_batch`]): one file per batch, linked under
+//! each of its keys (`batch.rs`), so a lease costs a link instead of a file. Another run that
+//! meets the lease skips the trial, does its other work, and at the end waits for the key to be
+//! stored (see [`crate::exec`]). The holder removes its leases once their trials
 //! are stored, and at once on Ctrl-C / SIGTERM ([`release_registered`]).
 //!
 //! A lease is live while its holder keeps an advisory lock on it ([`lock`]: dropped by the
@@ -15,17 +17,19 @@
 //! stay the only truth: a trial stored twice (only possible where neither layer can see a live
 //! holder) is identical and dropped on read. `docs/sharing-a-cache.md` is the user's account.
 
+mod batch;
 pub mod lease;
 pub mod lock;
 mod seen;
 
+use self::batch::Batch;
 use self::lease::{is_stale, process_alive, Holder, LEASE};
 use self::lock::{is_at, try_lock, Lock};
 use super::store::{KeySet, Store};
 use super::Key;
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{ErrorKind, Read, Write};
+use std::io::{ErrorKind, Read};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, Weak};
 use std::time::SystemTime;
@@ -95,7 +99,9 @@ fn inspect(path: &Path, me: &Holder) -> std::io::Result<(File, Liveness)> {
 pub struct Leases {
     dir: PathBuf,
     me: Holder,
-    held: Mutex<HashMap<Key, File>>,
+    /// Each leased key's file; the keys of one batch share one file (one lock, one heartbeat),
+    /// closed, and so unlocked, once the last of them is released.
+    held: Mutex<HashMap<Key, Arc<File>>>,
     seen: Mutex<Seen>,
 }
 
@@ -125,68 +131,74 @@ impl Leases {
 
     /// Lease `key`: [`Take::Taken`] when this run now holds it, [`Take::Busy`] when a live holder
     /// does, [`Take::Stored`] when it turns out to be stored already. A dead holder's lease is
-    /// taken over.
+    /// taken over. A batch of one ([`Self::try_take_batch`]).
     pub fn try_take(&self, key: Key) -> std::io::Result<Take> {
-        let path = self.path(&key);
-        for _ in 0..4 {
-            match self.create(&path) {
-                Ok(file) => {
-                    // Whoever stored the key removed its lease after storing it: look again.
-                    if lock_ok(&self.seen).contains(&key) {
-                        remove_own(&file, &path);
-                        return Ok(Take::Stored);
-                    }
-                    lock_ok(&self.held).insert(key, file);
-                    return Ok(Take::Taken);
+        self.try_take_batch(&[key]).pop().unwrap_or(Ok(Take::Busy))
+    }
+
+    /// Lease each of `keys` (distinct), answering for each as [`Self::try_take`] does. The batch
+    /// costs one lease file, however many keys it leases: the file is made once and hard-linked
+    /// under each key's name (`batch.rs`), and what is stored is looked at once, after every link.
+    /// An error on one key (its lease could not be made) leaves the others leased.
+    pub fn try_take_batch(&self, keys: &[Key]) -> Vec<std::io::Result<Take>> {
+        let mut file = Batch::new(&self.dir, &self.me);
+        let mut linked: Vec<std::io::Result<Option<Arc<File>>>> =
+            keys.iter().map(|k| self.link(&self.path(k), &mut file)).collect();
+        drop(file);
+        if !linked.iter().any(|l| matches!(l, Ok(Some(_)))) {
+            return linked.into_iter().map(|l| l.map(|_| Take::Busy)).collect();
+        }
+        // Whoever stored a key removed its lease after storing it, so a key stored before its link
+        // here shows now: look once for the batch (a segment written since is read once).
+        let mut seen = lock_ok(&self.seen);
+        seen.refresh();
+        let mut held = lock_ok(&self.held);
+        keys.iter()
+            .zip(linked.iter_mut())
+            .map(|(key, l)| match std::mem::replace(l, Ok(None)) {
+                Ok(Some(file)) if seen.knows(key) => {
+                    remove_own(&file, &self.path(key));
+                    Ok(Take::Stored)
                 }
+                Ok(Some(file)) => {
+                    held.insert(*key, file);
+                    Ok(Take::Taken)
+                }
+                Ok(None) => Ok(Take::Busy),
+                Err(e) => Err(e),
+            })
+            .collect()
+    }
+
+    /// Put this batch's lease at `path`: the file when it is now ours, `None` when a live holder
+    /// has it. A dead holder's lease there is removed and replaced.
+    fn link(&self, path: &Path, batch: &mut Batch) -> std::io::Result<Option<Arc<File>>> {
+        for _ in 0..4 {
+            match batch.link(path) {
+                Ok(file) => return Ok(Some(file)),
                 Err(e) if e.kind() == ErrorKind::AlreadyExists => {}
                 Err(e) if e.kind() == ErrorKind::NotFound => {
-                    // Someone removed the folder (by hand): make it again.
+                    // Someone removed the folder (by hand), and the batch's file with it: make both
+                    // again.
                     std::fs::create_dir_all(&self.dir)?;
+                    batch.forget();
                     continue;
                 }
                 Err(e) => return Err(e),
             }
-            let (file, liveness) = match inspect(&path, &self.me) {
+            let (file, liveness) = match inspect(path, &self.me) {
                 Ok(found) => found,
                 Err(e) if e.kind() == ErrorKind::NotFound => continue,
                 Err(e) => return Err(e),
             };
             if liveness == Liveness::Live {
-                return Ok(Take::Busy);
+                return Ok(None);
             }
             // Take over: remove the dead lease (only if it is still the file judged) and make ours.
-            remove_own(&file, &path);
+            remove_own(&file, path);
         }
         // Others keep making and removing it: treat it as busy and look again later.
-        Ok(Take::Busy)
-    }
-
-    /// Make the lease file at `path` with this process as holder, locked; fails with
-    /// `AlreadyExists` if there is one.
-    fn create(&self, path: &Path) -> std::io::Result<File> {
-        let nanos = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let tmp = self.dir.join(format!("{}{name}.{}.{nanos}", crate::atomic::TEMP_PREFIX, self.me.pid));
-        let made = (|| {
-            let mut file = File::options().read(true).write(true).create_new(true).open(&tmp)?;
-            // A fresh file nobody else has open: the lock is ours (or locks are unsupported).
-            try_lock(&file)?;
-            file.write_all(self.me.to_text().as_bytes())?;
-            std::fs::hard_link(&tmp, path).map(|()| file)
-        })();
-        let _ = std::fs::remove_file(&tmp);
-        match made {
-            Err(e) if e.kind() == ErrorKind::Unsupported || e.raw_os_error() == Some(libc::EPERM) => {
-                // No hard links on this file system: create the file in place (the holder's line
-                // follows a moment later; an empty lease counts as live within its lease).
-                let mut file = File::options().read(true).write(true).create_new(true).open(path)?;
-                try_lock(&file)?;
-                file.write_all(self.me.to_text().as_bytes())?;
-                Ok(file)
-            }
-            other => other,
-        }
+        Ok(None)
     }
 
     /// Release the leases of `keys` (their trials are stored).
@@ -207,10 +219,15 @@ impl Leases {
         }
     }
 
-    /// Renew the lease of every lease held (call every [`lease::HEARTBEAT`]).
+    /// Renew the lease of every lease held (call every [`lease::HEARTBEAT`]): once per batch,
+    /// since a batch's keys are links to one file and share its modification time.
     pub fn heartbeat(&self) {
         let now = SystemTime::now();
-        for file in lock_ok(&self.held).values() {
+        let held = lock_ok(&self.held);
+        let mut files: Vec<&Arc<File>> = held.values().collect();
+        files.sort_by_key(|f| Arc::as_ptr(f));
+        files.dedup_by_key(|f| Arc::as_ptr(f));
+        for file in files {
             let _ = file.set_modified(now);
         }
     }

@@ -33,17 +33,14 @@ impl Seen {
         Self { dir: dir.to_path_buf(), segments, keys, mtime: None }
     }
 
-    /// Whether `key` is stored, reading the segments added since the last look if the cache
-    /// directory changed.
-    pub fn contains(&mut self, key: &Key) -> bool {
-        if self.keys.contains(key) {
-            return true;
-        }
-        self.refresh();
+    /// Whether `key` was stored as of the last look ([`Self::refresh`]): a batch of leases looks
+    /// once for all its keys.
+    pub fn knows(&self, key: &Key) -> bool {
         self.keys.contains(key)
     }
 
-    fn refresh(&mut self) {
+    /// Read the segments added since the last look, if the cache directory changed.
+    pub fn refresh(&mut self) {
         let Ok(mtime) = std::fs::metadata(&self.dir).and_then(|m| m.modified()) else { return };
         if self.mtime == Some(mtime) {
             return;

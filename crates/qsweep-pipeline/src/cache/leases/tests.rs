@@ -204,3 +204,140 @@ fn sweep_removes_dead_leases_and_old_temp_files_and_keeps_live_ones() {
     want.sort();
     assert_eq!(left, want);
 }
+
+fn keys(range: std::ops::Range<u8>) -> Vec<Key> {
+    range.map(key).collect()
+}
+
+fn taken(takes: &[std::io::Result<Take>]) -> Vec<bool> {
+    takes.iter().map(|t| matches!(t, Ok(Take::Taken))).collect()
+}
+
+/// The inode behind a lease file: the keys of one batch share one.
+fn inode(path: &Path) -> u64 {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(path).unwrap().ino()
+}
+
+#[test]
+fn a_batch_is_one_locked_file_linked_under_each_key_and_looks_like_a_lone_lease() {
+    let (_d, store) = store();
+    let a = Leases::open(&store).unwrap();
+    let b = Leases::open(&store).unwrap();
+    let ks = keys(1..9);
+    assert_eq!(taken(&a.try_take_batch(&ks)), vec![true; 8]);
+    assert_eq!(a.held(), 8);
+    let first = inode(&lease_file(&store, &ks[0]));
+    for k in &ks {
+        let path = lease_file(&store, k);
+        assert_eq!(inode(&path), first, "one file for the batch");
+        assert_eq!(Holder::parse(&std::fs::read_to_string(&path).unwrap()), Some(Holder::me()));
+        // Judged as a lone lease is: locked by a live holder.
+        let (_f, liveness) = inspect(&path, &Holder::me()).unwrap();
+        assert_eq!(liveness, Liveness::Live);
+    }
+    assert_eq!(running_elsewhere(&store, &ks), 8);
+    // Only the links are left in the folder, no temporary name.
+    assert_eq!(std::fs::read_dir(store.dir().join(LEASES_DIR)).unwrap().count(), 8);
+    // One heartbeat renews every key of the batch.
+    let f = File::options().write(true).open(lease_file(&store, &ks[3])).unwrap();
+    f.set_modified(SystemTime::now() - LEASE * 2).unwrap();
+    assert!(is_stale(
+        std::fs::metadata(lease_file(&store, &ks[7])).unwrap().modified().unwrap(),
+        SystemTime::now(),
+        LEASE
+    ));
+    a.heartbeat();
+    let age = std::fs::metadata(lease_file(&store, &ks[7])).unwrap().modified().unwrap().elapsed().unwrap();
+    assert!(age < Duration::from_secs(5), "{age:?}");
+    // A released key is free at once; the batch's other keys stay held (its file stays locked).
+    a.release(&ks[..2]);
+    assert_eq!(taken(&b.try_take_batch(&ks)), [vec![true; 2], vec![false; 6]].concat());
+    a.release(&ks[2..]);
+    assert_eq!(taken(&b.try_take_batch(&ks[2..])), vec![true; 6]);
+}
+
+#[test]
+fn batches_of_two_runs_never_overlap_whatever_their_order() {
+    let (_d, store) = store();
+    let all = keys(0..200);
+    let mut backwards = all.clone();
+    backwards.reverse();
+    // Both runs hold what they leased until both are done, as runs hold unstored trials.
+    let done = std::sync::Barrier::new(2);
+    let runs: Vec<Vec<Key>> = std::thread::scope(|s| {
+        let handles: Vec<_> = [all.clone(), backwards]
+            .into_iter()
+            .map(|order| {
+                let (store, done) = (&store, &done);
+                s.spawn(move || {
+                    let leases = Leases::open(store).unwrap();
+                    let mut mine = Vec::new();
+                    for batch in order.chunks(16) {
+                        let takes = leases.try_take_batch(batch);
+                        mine.extend(
+                            batch
+                                .iter()
+                                .zip(&takes)
+                                .filter(|(_, t)| matches!(t, Ok(Take::Taken)))
+                                .map(|(k, _)| *k),
+                        );
+                    }
+                    assert_eq!(leases.held(), mine.len());
+                    done.wait();
+                    mine
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let (a, b): (std::collections::HashSet<Key>, std::collections::HashSet<Key>) =
+        (runs[0].iter().copied().collect(), runs[1].iter().copied().collect());
+    assert!(a.is_disjoint(&b), "a key leased by both runs");
+    assert_eq!(a.len() + b.len(), all.len(), "every key leased by one of them");
+}
+
+#[test]
+fn a_killed_holders_batch_is_taken_over_key_by_key_and_swept() {
+    let (_d, store) = store();
+    // What a SIGKILLed run leaves of a batch: one unlocked file (the kernel dropped its lock)
+    // naming a holder on this machine, linked under each key it had not released.
+    let dead = Holder { host: Holder::me().host, pid: u32::MAX - 1 };
+    let ks = keys(10..16);
+    let first = fake_lease(&store, &ks[0], &dead, Duration::ZERO);
+    for k in &ks[1..] {
+        std::fs::hard_link(&first, lease_file(&store, k)).unwrap();
+    }
+    assert_eq!(running_elsewhere(&store, &ks), 0);
+    let a = Leases::open(&store).unwrap();
+    assert_eq!(taken(&a.try_take_batch(&ks[..3])), vec![true; 3]);
+    for k in &ks[..3] {
+        assert_eq!(
+            Holder::parse(&std::fs::read_to_string(lease_file(&store, k)).unwrap()),
+            Some(Holder::me())
+        );
+    }
+    // The rest are debris until someone needs them: gc removes them, the live batch stays.
+    assert_eq!(sweep(&store, false).unwrap(), Swept { removed: 3, live: 3 });
+    let b = Leases::open(&store).unwrap();
+    assert_eq!(taken(&b.try_take_batch(&ks)), [vec![false; 3], vec![true; 3]].concat());
+    // A holder that is dropped (a run that ends or is interrupted) frees its whole batch.
+    drop(a);
+    assert_eq!(taken(&b.try_take_batch(&ks[..3])), vec![true; 3]);
+}
+
+#[test]
+fn a_batch_looks_once_at_what_is_stored_and_keeps_no_stored_key() {
+    let (_d, store) = store();
+    let recs = records();
+    let scan = store.keys().unwrap();
+    let a = Leases::open(&store).unwrap();
+    a.reset_view(&scan, false);
+    // Another run stores two of the trials after this run's scan.
+    store.write_segment(&recs[..2]).unwrap();
+    let ks: Vec<Key> = recs.iter().map(|r| r.key).collect();
+    let takes: Vec<Take> = a.try_take_batch(&ks).into_iter().map(Result::unwrap).collect();
+    assert_eq!(takes, vec![Take::Stored, Take::Stored, Take::Taken]);
+    assert_eq!(a.held(), 1);
+    assert!(!lease_file(&store, &ks[0]).exists() && lease_file(&store, &ks[2]).exists());
+}
