@@ -12,7 +12,7 @@
 //! run holds no more than it is about to start and the runs sharing a cache finish together.
 
 use super::job::Job;
-use crate::cache::leases::{Leases, Take};
+use crate::cache::leases::{lock_ok, Leases, Take};
 use crate::cache::Key;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -200,11 +200,6 @@ impl<'a> Scheduler<'a> {
             Polled::Wait
         }
     }
-}
-
-/// A poisoned lock only means another worker panicked; the lists themselves are still sound.
-fn lock_ok<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 #[cfg(test)]

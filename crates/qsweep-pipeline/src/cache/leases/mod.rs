@@ -142,7 +142,7 @@ impl Leases {
     /// An error on one key (its lease could not be made) leaves the others leased.
     pub fn try_take_batch(&self, keys: &[Key]) -> Vec<std::io::Result<Take>> {
         let mut file = Batch::new(&self.dir, &self.me);
-        let mut linked: Vec<std::io::Result<Option<Arc<File>>>> =
+        let linked: Vec<std::io::Result<Option<Arc<File>>>> =
             keys.iter().map(|k| self.link(&self.path(k), &mut file)).collect();
         drop(file);
         if !linked.iter().any(|l| matches!(l, Ok(Some(_)))) {
@@ -154,8 +154,8 @@ impl Leases {
         seen.refresh();
         let mut held = lock_ok(&self.held);
         keys.iter()
-            .zip(linked.iter_mut())
-            .map(|(key, l)| match std::mem::replace(l, Ok(None)) {
+            .zip(linked)
+            .map(|(key, l)| match l {
                 Ok(Some(file)) if seen.knows(key) => {
                     remove_own(&file, &self.path(key));
                     Ok(Take::Stored)
@@ -265,8 +265,9 @@ fn remove_own(file: &File, path: &Path) {
     }
 }
 
-/// A poisoned lock only means another thread panicked; the map itself is still sound.
-fn lock_ok<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+/// A poisoned lock only means another thread panicked; the maps and lists it guards are still
+/// sound (shared with the scheduler, `exec::leased`).
+pub(crate) fn lock_ok<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
