@@ -76,8 +76,18 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
         let v =
             crate::json::BenchReport { format_version: crate::json::BenchReport::FORMAT_VERSION, results };
         println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("{}", simd_line());
     }
     Ok(qsweep_pipeline::error::exit::OK)
+}
+
+/// The table's last line: which vector kernels ran.
+fn simd_line() -> String {
+    format!(
+        "vector kernels: {} (QSWEEP_SIMD: off, avx2, avx512 or auto)",
+        qsweep_engine::simd::level().name()
+    )
 }
 
 /// `qsweep bench --pipeline P`: time the plan's most expensive cells.
@@ -131,6 +141,7 @@ fn run_pipeline(a: BenchArgs, pipeline: PathBuf) -> anyhow::Result<u8> {
     } else {
         let share: f64 = results.iter().map(|r| r.share).sum();
         println!("these cells: {:.1}% of the pipeline's cost", 100.0 * share);
+        println!("{}", simd_line());
     }
     Ok(qsweep_pipeline::error::exit::OK)
 }

@@ -31,6 +31,11 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Measure the engine's steps per second on the standard configurations.
+    ///
+    /// The learner's and the fuzzy activation's kernels run with the vector instructions that
+    /// `QSWEEP_SIMD` names: `auto` (default: AVX2 where the CPU has it), `off` (the build's
+    /// baseline), `avx2` or `avx512`, capped by the CPU. The level never changes a result, only
+    /// the speed; the table's last line names it.
     Bench(bench::BenchArgs),
     /// Longest survival over every deterministic policy of a small crisp table, from the start state.
     Feasible(feasible::FeasibleArgs),

@@ -21,6 +21,22 @@ fn json_lists_config_steps_seconds_and_rate() {
     }
 }
 
+/// The table names the vector level it ran with; `QSWEEP_SIMD` picks it, capped by the CPU, and a
+/// value it does not know falls back to the baseline with a warning that names the accepted ones.
+#[test]
+fn the_table_names_its_vector_level() {
+    let args = ["bench", "--steps", "2000", "--repeat", "1", "--filter", "mountain-car/fuzzy/q0/2^2"];
+    let out = qsweep().args(args).env("QSWEEP_SIMD", "off").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.lines().last().unwrap().starts_with("vector kernels: off ("), "{text}");
+    let out = qsweep().args(args).env("QSWEEP_SIMD", "sse9").output().unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("vector kernels: off ("));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("QSWEEP_SIMD=\"sse9\": expected off, avx2, avx512 or auto"), "{err}");
+}
+
 #[test]
 fn unknown_filter_and_bad_budget_are_usage_errors() {
     Test::new()

@@ -19,11 +19,12 @@ pub mod math;
 pub mod repr;
 pub mod rng;
 pub mod rules;
+pub mod simd;
 pub mod solved;
 pub mod trial;
 
 pub use config::{Algorithm, TrialConfig};
-pub use trial::{run_trial, Counting, Outcome, StopReason};
+pub use trial::{run_trial, run_trial_at, Counting, Outcome, StopReason};
 
 #[cfg(test)]
 mod pinned_tests;

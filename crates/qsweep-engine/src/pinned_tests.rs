@@ -8,7 +8,8 @@
 use super::config::{Algorithm, Success, TieBreak, TraceKind, TrialConfig};
 use super::env::SystemKind;
 use super::repr::ReprKind;
-use super::run_trial;
+use super::simd::Simd;
+use super::{run_trial, run_trial_at};
 
 /// FNV-1a over the episode lengths: a compact fingerprint that still changes with any length.
 fn fingerprint(lengths: &[u32]) -> u64 {
@@ -198,6 +199,28 @@ fn outcomes_are_pinned_bit_for_bit() {
         let got = (o.episodes, o.total_steps, fingerprint(&o.episode_lengths), o.stop.name());
         if got != (pin.1, pin.2, pin.3, pin.4) {
             wrong.push(format!("{label}: got {got:?}, lengths {:?}", o.episode_lengths));
+        }
+    }
+    assert!(wrong.is_empty(), "outcomes changed:\n{}", wrong.join("\n"));
+}
+
+/// Every vector level the CPU has gives the pinned outcomes (the default level is checked above).
+#[test]
+fn every_simd_level_gives_the_pinned_outcomes() {
+    let mut wrong = Vec::new();
+    for simd in Simd::available() {
+        for (i, ((label, c), pin)) in cases().iter().zip(PINS).enumerate() {
+            let o = run_trial_at(c, i as u64, simd);
+            let got = (o.episodes, o.total_steps, fingerprint(&o.episode_lengths), o.stop.name());
+            if got != (pin.1, pin.2, pin.3, pin.4) {
+                wrong.push(format!("{} at {simd:?}: got {got:?}", label));
+            }
+        }
+        let c = TrialConfig::paper(SystemKind::CartPole, ReprKind::Fuzzy, Algorithm::Q0, vec![4; 4], 2);
+        let o = run_trial_at(&c, 2, simd);
+        let got = (o.episodes, o.total_steps, fingerprint(&o.episode_lengths), o.stop.name());
+        if got != CART_POLE_EXAMPLE {
+            wrong.push(format!("the CPU-dependent Cart-Pole trial at {simd:?}: got {got:?}"));
         }
     }
     assert!(wrong.is_empty(), "outcomes changed:\n{}", wrong.join("\n"));

@@ -9,6 +9,7 @@ use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartK
 use super::learner::Learner;
 use super::repr::{Crisp, Encode, Fuzzy, ReprKind};
 use super::rng::TrialRng;
+use super::simd::{self, Simd};
 use super::solved::SolvedWindow;
 use serde::{Deserialize, Serialize};
 
@@ -74,18 +75,29 @@ pub struct Outcome {
 
 /// Run one trial. The configuration must be valid (`TrialConfig::validate`).
 pub fn run_trial(cfg: &TrialConfig, seed: u64) -> Outcome {
+    run_trial_at(cfg, seed, simd::level())
+}
+
+/// [`run_trial`] with the learner's and the activation's kernels at `simd` (capped by what the CPU
+/// has): the same outcome at every level, only the speed differs ([`crate::simd`]).
+pub fn run_trial_at(cfg: &TrialConfig, seed: u64, simd: Simd) -> Outcome {
     match &cfg.env {
-        EnvParams::BallBeam(p) => with_repr(cfg, seed, BallBeam::new(p.clone())),
-        EnvParams::CartPole(p) => with_repr(cfg, seed, CartPole::new(p.clone())),
-        EnvParams::MountainCar(p) => with_repr(cfg, seed, MountainCar::new(p.clone())),
+        EnvParams::BallBeam(p) => with_repr(cfg, seed, BallBeam::new(p.clone()), simd),
+        EnvParams::CartPole(p) => with_repr(cfg, seed, CartPole::new(p.clone()), simd),
+        EnvParams::MountainCar(p) => with_repr(cfg, seed, MountainCar::new(p.clone()), simd),
     }
 }
 
-fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E) -> Outcome {
+fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -> Outcome {
     let r = &cfg.repr;
     match r.kind {
-        ReprKind::Crisp => run(cfg, seed, env, Crisp::with_binning(&r.resolution, &r.ranges, r.binning)),
-        ReprKind::Fuzzy => run(cfg, seed, env, Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune)),
+        ReprKind::Crisp => {
+            run(cfg, seed, env, Crisp::with_binning(&r.resolution, &r.ranges, r.binning), simd)
+        }
+        ReprKind::Fuzzy => {
+            let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
+            run(cfg, seed, env, repr, simd)
+        }
     }
 }
 
@@ -116,8 +128,9 @@ fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize,
     (a, true)
 }
 
-fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R) -> Outcome {
-    let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner);
+fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R, simd: Simd) -> Outcome {
+    let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
+        .with_simd(simd);
     episodes(cfg, seed, env, repr, &mut learner)
 }
 

@@ -28,6 +28,7 @@ mod traces;
 
 use super::config::LearnerConfig;
 use super::repr::Features;
+use super::simd::{dispatch, Simd};
 use traces::{DenseTraces, SparseTraces, TraceRule};
 
 /// Dense traces when the table has at most this many parameters (features × actions) per feature a
@@ -53,6 +54,8 @@ pub struct Learner {
     alpha: f64,
     /// α·δ of the last update.
     last_step: f64,
+    /// The vector instructions the kernels use (never changes a result; [`crate::simd`]).
+    simd: Simd,
 }
 
 /// Where the eligibility traces live.
@@ -80,7 +83,14 @@ impl Learner {
         } else {
             Traces::Sparse(SparseTraces::new(n))
         };
-        Self { n_actions, q: vec![cfg.q_init; n], traces, rule, alpha: cfg.alpha, last_step: 0.0 }
+        let q = vec![cfg.q_init; n];
+        Self { n_actions, q, traces, rule, alpha: cfg.alpha, last_step: 0.0, simd: crate::simd::level() }
+    }
+
+    /// The same learner with its kernels at `simd` (capped by what the CPU has).
+    pub fn with_simd(mut self, simd: Simd) -> Self {
+        self.simd = simd.capped();
+        self
     }
 
     /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action).
@@ -125,32 +135,22 @@ impl Learner {
         let step = self.alpha * delta;
         self.last_step = step;
         let (index, weight) = phi.rules();
-        let (q, na, rule) = (&mut self.q[..], self.n_actions, self.rule);
+        let (q, na, rule, simd) = (&mut self.q[..], self.n_actions, self.rule, self.simd);
         match &mut self.traces {
             // Q(0): the trace of this step is extend(0, w) = w (weights are never negative).
-            Traces::None => {
-                for (&i, &w) in index.iter().zip(weight) {
-                    q[i as usize * na + action] += step * w;
-                }
-            }
-            Traces::Dense(t) => t.update(q, na, rule, (index, weight), action, step),
+            // A crisp row is one addition, cheaper inline than through a kernel call.
+            Traces::None if F::ONE_HOT => q[index[0] as usize * na + action] += step * weight[0],
+            Traces::None => q0_update_at(simd, q, na, index, weight, action, step),
+            Traces::Dense(t) => t.update(q, na, rule, (index, weight), action, step, simd),
             Traces::Sparse(t) => t.update(q, na, rule, (index, weight), action, step),
         }
     }
 
-    /// Q(s, ·) for several active features: a kernel per action count.
+    /// Q(s, ·) for several active features: a kernel per action count, at the learner's vector
+    /// width.
     #[inline(never)]
     fn q_values_many(&self, index: &[u32], weight: &[f64], out: &mut [f64]) {
-        macro_rules! unrolled {
-            ($($n:literal)*) => {
-                match self.n_actions {
-                    $($n => q_values_fixed::<$n>(&self.q, index, weight, out),)*
-                    _ => q_values_any(&self.q, self.n_actions, index, weight, out),
-                }
-            };
-        }
-        const _: () = assert!(MAX_UNROLLED_ACTIONS == 16);
-        unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+        q_values_at(self.simd, &self.q, self.n_actions, index, weight, out);
     }
 
     /// Clear every trace (episode start; Watkins's cut), after applying what they still owe.
@@ -183,6 +183,59 @@ impl Learner {
     }
 }
 
+dispatch! {
+    /// [`q_values_by_count`] at `simd`'s vector width (the same sums in the same order).
+    fn q_values_at => q_values_by_count(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64])
+}
+
+/// Q(s, ·) for several active features: a kernel per action count.
+#[inline(always)]
+fn q_values_by_count(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64]) {
+    macro_rules! unrolled {
+        ($($n:literal)*) => {
+            match na {
+                $($n => q_values_fixed::<$n>(q, index, weight, out),)*
+                _ => q_values_any(q, na, index, weight, out),
+            }
+        };
+    }
+    const _: () = assert!(MAX_UNROLLED_ACTIONS == 16);
+    unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+}
+
+dispatch! {
+    /// [`q0_update_by_count`] at `simd`'s vector width.
+    fn q0_update_at => q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], action: usize, step: f64)
+}
+
+/// The Q(0) update q[i·na + action] += step·w over an activation, with the row width a constant
+/// for up to [`MAX_UNROLLED_ACTIONS`] actions (one bounds check per rule, no multiplication).
+#[inline(always)]
+fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], action: usize, step: f64) {
+    #[inline(always)]
+    fn fixed<const N: usize>(q: &mut [f64], index: &[u32], weight: &[f64], action: usize, step: f64) {
+        let rows = q.as_chunks_mut::<N>().0;
+        debug_assert!(action < N);
+        let a = action.min(N - 1);
+        for (&i, &w) in index.iter().zip(weight) {
+            rows[i as usize][a] += step * w;
+        }
+    }
+    macro_rules! unrolled {
+        ($($n:literal)*) => {
+            match na {
+                $($n => fixed::<$n>(q, index, weight, action, step),)*
+                _ => {
+                    for (&i, &w) in index.iter().zip(weight) {
+                        q[i as usize * na + action] += step * w;
+                    }
+                }
+            }
+        };
+    }
+    unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+}
+
 /// Interleaved partial sums per action for `N` actions: enough independent additions in flight to
 /// hide their latency (with many actions the actions' own sums already are).
 const fn lanes(n: usize) -> usize {
@@ -195,29 +248,24 @@ const fn lanes(n: usize) -> usize {
     }
 }
 
-/// `L` interleaved partial sums of Σᵢ wᵢ·q[iᵢ·stride + offset + a] for a = 0..N: rule j goes to
-/// partial sum j mod L, each summed in activation order from 0.
+/// `L` interleaved partial sums of Σᵢ wᵢ·q[iᵢ·N + a] for a = 0..N: rule j goes to partial sum
+/// j mod L, each summed in activation order from 0.
 #[inline(always)]
-fn lane_sums<const N: usize, const L: usize>(
-    q: &[f64],
-    stride: usize,
-    offset: usize,
-    index: &[u32],
-    weight: &[f64],
-) -> [[f64; N]; L] {
+fn lane_sums<const N: usize, const L: usize>(q: &[f64], index: &[u32], weight: &[f64]) -> [[f64; N]; L] {
     let mut acc = [[0.0f64; N]; L];
-    let row = |i: u32| -> &[f64; N] { q[i as usize * stride + offset..][..N].try_into().expect("N actions") };
-    let (mut ic, mut wc) = (index.chunks_exact(L), weight.chunks_exact(L));
-    for (ii, ww) in (&mut ic).zip(&mut wc) {
+    // Rows as arrays: one bounds check per rule, not two.
+    let rows: &[[f64; N]] = q.as_chunks::<N>().0;
+    let (ic, wc) = (index.as_chunks::<L>(), weight.as_chunks::<L>());
+    for (ii, ww) in ic.0.iter().zip(wc.0) {
         for l in 0..L {
-            let (r, w) = (row(ii[l]), ww[l]);
+            let (r, w) = (&rows[ii[l] as usize], ww[l]);
             for a in 0..N {
                 acc[l][a] += w * r[a];
             }
         }
     }
-    for (l, (&i, &w)) in ic.remainder().iter().zip(wc.remainder()).enumerate() {
-        let r = row(i);
+    for (l, (&i, &w)) in ic.1.iter().zip(wc.1).enumerate() {
+        let r = &rows[i as usize];
         for a in 0..N {
             acc[l][a] += w * r[a];
         }
@@ -232,22 +280,23 @@ fn q_values_fixed<const N: usize>(q: &[f64], index: &[u32], weight: &[f64], out:
     let out: &mut [f64; N] = (&mut out[..N]).try_into().expect("N actions");
     match const { lanes(N) } {
         4 => {
-            let s = lane_sums::<N, 4>(q, N, 0, index, weight);
+            let s = lane_sums::<N, 4>(q, index, weight);
             for a in 0..N {
                 out[a] = (s[0][a] + s[1][a]) + (s[2][a] + s[3][a]);
             }
         }
         2 => {
-            let s = lane_sums::<N, 2>(q, N, 0, index, weight);
+            let s = lane_sums::<N, 2>(q, index, weight);
             for a in 0..N {
                 out[a] = s[0][a] + s[1][a];
             }
         }
-        _ => *out = lane_sums::<N, 1>(q, N, 0, index, weight)[0],
+        _ => *out = lane_sums::<N, 1>(q, index, weight)[0],
     }
 }
 
 /// Q(s, ·) for any action count, summing in `out` directly.
+#[inline(always)]
 fn q_values_any(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64]) {
     out.fill(0.0);
     for (&i, &w) in index.iter().zip(weight) {

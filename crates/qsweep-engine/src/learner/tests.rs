@@ -302,3 +302,49 @@ fn unrolled_q_values_match_the_plain_sum() {
         }
     }
 }
+
+/// The bits of a learner's parameters, its traces and one Q(s, ·).
+type Bits = (Vec<u64>, Vec<u64>, Vec<u64>);
+
+/// Every vector level gives the baseline's bits: parameters, traces and Q(s, ·), for every
+/// action-count kernel (1–16 unrolled, more through the general one), both trace layouts, long
+/// activations and an overflowing α·δ.
+#[test]
+fn every_simd_level_gives_the_baselines_bits() {
+    use crate::simd::Simd;
+    for na in (1..=18).chain([25]) {
+        for (lambda, alpha, active) in [(0.9, 0.1, 1), (0.9, 0.1, 300), (0.0, 0.1, 300), (0.6, 1e308, 40)] {
+            let cfg = config(lambda, false, 1e-10);
+            let cfg = LearnerConfig { alpha, ..cfg };
+            let nf = 400;
+            let mut learners: Vec<(Simd, Learner)> = Simd::available()
+                .into_iter()
+                .flat_map(|s| {
+                    [
+                        (s, Learner::new(nf, na, active, &cfg).with_simd(s)),
+                        (s, Learner::new(nf, na, 1, &cfg).with_simd(s)),
+                    ]
+                })
+                .collect();
+            let mut qs = vec![0.0; na];
+            for step in 0..150 {
+                let phi = activations(step, nf, if step % 4 == 0 { 1 } else { 1 + (step * 13) % 257 });
+                let delta = math::sin(step as f64 * 0.61) * if alpha > 1.0 { 10.0 } else { 1.0 };
+                // Per layout (the layouts may differ in the sign of a zero q; `every_trace_layout…`).
+                let mut seen: [Option<Bits>; 2] = [None, None];
+                for (k, (simd, l)) in learners.iter_mut().enumerate() {
+                    l.update(&phi, step % na, delta);
+                    l.q_values(&phi, &mut qs);
+                    let got = (bits(&l.q), bits(&l.traces_for_next_step()), bits(&qs));
+                    match &seen[k % 2] {
+                        None => seen[k % 2] = Some(got),
+                        Some(want) => assert!(
+                            got == *want,
+                            "{simd:?}, {na} actions, λ {lambda}, α {alpha}, step {step}"
+                        ),
+                    }
+                }
+            }
+        }
+    }
+}

@@ -8,6 +8,7 @@
 //! on nothing learned at step t+1, so it is done in the same pass that applies step t's update.
 
 use crate::config::{LearnerConfig, TraceKind};
+use crate::simd::{dispatch, Simd};
 
 /// How traces decay and grow (eqs. 7 and 20 with the cutoff), shared by every layout.
 #[derive(Debug, Clone, Copy)]
@@ -89,6 +90,7 @@ impl DenseTraces {
     /// Parameters without a live trace have trace exactly 0, so decaying them is a no-op, and q
     /// moves exactly where the list-based update moves it (see the comment on the sweep).
     #[inline(never)]
+    #[allow(clippy::too_many_arguments)] // the sparse layout's signature plus the vector level
     pub(super) fn update(
         &mut self,
         q: &mut [f64],
@@ -97,6 +99,7 @@ impl DenseTraces {
         (index, weight): (&[u32], &[f64]),
         action: usize,
         step: f64,
+        simd: Simd,
     ) {
         let trace = &mut self.e[..];
         for (&i, &w) in index.iter().zip(weight) {
@@ -108,10 +111,7 @@ impl DenseTraces {
         // a zero q, which no sum can see. Only a non-finite step (an overflowing α·δ) makes step·0
         // a NaN: then exactly the list-based entries move.
         if step.is_finite() {
-            for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
-                *q += step * *e;
-                *e = rule.decayed(*e);
-            }
+            dense_sweep(simd, q, trace, rule, step);
         } else {
             for &i in index {
                 let k = i as usize * na + action;
@@ -126,6 +126,20 @@ impl DenseTraces {
                 *e = rule.decayed(*e);
             }
         }
+    }
+}
+
+dispatch! {
+    /// The dense pass at `simd`'s vector width: per parameter q ← q + step·e, then e decayed.
+    fn dense_sweep => sweep(q: &mut [f64], trace: &mut [f64], rule: TraceRule, step: f64)
+}
+
+/// [`dense_sweep`]'s body: every element on its own, so any vector width gives the same bits.
+#[inline(always)]
+fn sweep(q: &mut [f64], trace: &mut [f64], rule: TraceRule, step: f64) {
+    for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
+        *q += step * *e;
+        *e = rule.decayed(*e);
     }
 }
 

@@ -10,6 +10,7 @@
 
 use super::activation::{strides, Activations, Encode, Representation};
 use crate::math;
+use crate::simd::{dispatch, Simd};
 
 /// Most fuzzy sets a single variable may have.
 pub const MAX_SETS: usize = 64;
@@ -67,6 +68,8 @@ pub struct Fuzzy {
     n_features: usize,
     /// Largest window of any variable.
     max_window: usize,
+    /// The vector instructions the activation uses (never changes a result; [`crate::simd`]).
+    simd: Simd,
 }
 
 impl Fuzzy {
@@ -107,7 +110,13 @@ impl Fuzzy {
             .collect();
         let n_features = sets.iter().map(|&s| s as usize).product();
         let max_window = vars.iter().map(Variable::max_window).max().unwrap_or(1);
-        Self { vars, strides: strides(sets), n_features, max_window }
+        Self { vars, strides: strides(sets), n_features, max_window, simd: crate::simd::level() }
+    }
+
+    /// The same rule base with its activation at `simd` (capped by what the CPU has).
+    pub fn with_simd(mut self, simd: Simd) -> Self {
+        self.simd = simd.capped();
+        self
     }
 
     /// Centre of set `k` of variable `j`.
@@ -167,9 +176,9 @@ impl Representation for Fuzzy {
 
     fn activate(&self, state: &[f64], out: &mut Activations) {
         if self.max_window <= SMALL_WINDOW {
-            self.activate_with::<SMALL_WINDOW>(state, out);
+            activate_small(self.simd, self, state, out);
         } else {
-            self.activate_with::<MAX_SETS>(state, out);
+            activate_large(self.simd, self, state, out);
         }
     }
 }
@@ -233,6 +242,26 @@ impl Fuzzy {
             }
         }
     }
+}
+
+dispatch! {
+    /// [`Fuzzy::activate_with`] for windows of up to [`SMALL_WINDOW`] sets, at `simd`'s width.
+    fn activate_small => activate_with_small(f: &Fuzzy, state: &[f64], out: &mut Activations)
+}
+
+dispatch! {
+    /// [`Fuzzy::activate_with`] for any window, at `simd`'s width.
+    fn activate_large => activate_with_large(f: &Fuzzy, state: &[f64], out: &mut Activations)
+}
+
+#[inline(always)]
+fn activate_with_small(f: &Fuzzy, state: &[f64], out: &mut Activations) {
+    f.activate_with::<SMALL_WINDOW>(state, out);
+}
+
+#[inline(always)]
+fn activate_with_large(f: &Fuzzy, state: &[f64], out: &mut Activations) {
+    f.activate_with::<MAX_SETS>(state, out);
 }
 
 /// `y.ceil().max(0.0) as usize` without the `ceil` library call: 0 for y ≤ 0 and NaN, else the

@@ -190,7 +190,7 @@ fn split_grids(run: Vec<Cell<'_>>) -> Vec<Vec<Cell<'_>>> {
 /// top, if its cells tile a rectangle row by row (rows drawn downwards or upwards).
 fn lattice(g: &[Cell]) -> Option<(Vec<i64>, Vec<i64>, Vec<usize>)> {
     let nx = g.iter().take_while(|c| c.y == g[0].y).count();
-    if g.len() < MIN_CELLS || g.len() % nx != 0 {
+    if g.len() < MIN_CELLS || !g.len().is_multiple_of(nx) {
         return None;
     }
     let mut xs: Vec<i64> = g[..nx].iter().map(|c| c.x).collect();
