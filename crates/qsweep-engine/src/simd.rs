@@ -1,10 +1,11 @@
-//! Which vector instructions the learner's kernels run with: the build's baseline (SSE2 on x86-64),
-//! AVX2 or AVX-512, chosen once per process from what the CPU has, or forced by `QSWEEP_SIMD`.
+//! Which vector instructions the learner's kernels and the fuzzy activation run with: the build's
+//! baseline (SSE2 on x86-64), AVX2 or AVX-512, chosen once per process from what the CPU has, or
+//! forced by `QSWEEP_SIMD`.
 //!
 //! The choice never changes a result. Only kernels whose every output is a fixed sequence of
-//! IEEE-754 operations on its own inputs are dispatched (the dense trace pass: per parameter one
-//! multiply-add and one decay), or whose sums keep the engine's order of additions whatever the
-//! register width (Q(s, ·): the same partial sums, each in activation order). A vector lane does
+//! IEEE-754 operations on its own inputs are dispatched (the dense trace pass, the Q(0) update and
+//! the activation, element by element), or whose sums keep the engine's order of additions whatever
+//! the register width (Q(s, ·): the same partial sums, each in activation order). A vector lane does
 //! exactly what the scalar code does to that element, and Rust never fuses a multiply and an add
 //! (no FMA) nor reassociates, so every level gives the same bits (`learner::tests` and
 //! `pinned_tests` run every level the CPU has and compare).

@@ -215,10 +215,10 @@ fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], a
     #[inline(always)]
     fn fixed<const N: usize>(q: &mut [f64], index: &[u32], weight: &[f64], action: usize, step: f64) {
         let rows = q.as_chunks_mut::<N>().0;
-        debug_assert!(action < N);
-        let a = action.min(N - 1);
+        // Checked once here, so the loop checks only the row.
+        assert!(action < N, "action {action} of {N}");
         for (&i, &w) in index.iter().zip(weight) {
-            rows[i as usize][a] += step * w;
+            rows[i as usize][action] += step * w;
         }
     }
     macro_rules! unrolled {
