@@ -241,17 +241,7 @@ pub fn exp(x: f64) -> f64 {
     if x < EXP_UNDERFLOW {
         return 0.0;
     }
-    // k = round(x·32/ln2): adding 1.5·2⁵² rounds it into the low bits of the sum's significand.
-    let shifted = x * INV_LN2_32 + TO_INT;
-    let k = (shifted.to_bits() as i64).wrapping_sub(TO_INT.to_bits() as i64);
-    let kd = shifted - TO_INT;
-    let r = (x - kd * LN2_32_HI) - kd * LN2_32_LO;
-    // e^r − 1 = r + r²(1/2 + r/6 + …): the high powers in parallel with the low ones (Estrin).
-    let r2 = r * r;
-    let p = r + r2 * ((0.5 + r * (1.0 / 6.0)) + r2 * ((1.0 / 24.0 + r * (1.0 / 120.0)) + r2 * (1.0 / 720.0)));
-    let (hi, lo) = EXP2_J32[(k & 31) as usize];
-    let v = hi + (hi * p + lo);
-    let m = k >> 5;
+    let (v, m) = exp_parts(x);
     if m > 1023 {
         (v * 2.0) * pow2(m - 1)
     } else if m >= -1022 {
@@ -259,6 +249,60 @@ pub fn exp(x: f64) -> f64 {
     } else {
         // Subnormal result: the first product is exact, so only the second one rounds.
         (v * pow2(m + 1000)) * pow2(-1000)
+    }
+}
+
+/// e^x = v · 2^m for a finite x in exp's range: v = 2^(j/32)·e^r, m = ⌊k/32⌋.
+#[inline(always)]
+fn exp_parts(x: f64) -> (f64, i64) {
+    let (k, p) = exp_reduce(x);
+    (exp_table(k, p), k >> 5)
+}
+
+/// x = k·ln2/32 + r: k, and e^r − 1.
+#[inline(always)]
+fn exp_reduce(x: f64) -> (i64, f64) {
+    // k = round(x·32/ln2): adding 1.5·2⁵² rounds it into the low bits of the sum's significand.
+    let shifted = x * INV_LN2_32 + TO_INT;
+    let k = (shifted.to_bits() as i64).wrapping_sub(TO_INT.to_bits() as i64);
+    let kd = shifted - TO_INT;
+    let r = (x - kd * LN2_32_HI) - kd * LN2_32_LO;
+    // e^r − 1 = r + r²(1/2 + r/6 + …): the high powers in parallel with the low ones (Estrin).
+    let r2 = r * r;
+    (k, r + r2 * ((0.5 + r * (1.0 / 6.0)) + r2 * ((1.0 / 24.0 + r * (1.0 / 120.0)) + r2 * (1.0 / 720.0))))
+}
+
+/// 2^(j/32)·(1 + p) for j = k mod 32, from the table held to double-double precision.
+#[inline(always)]
+fn exp_table(k: i64, p: f64) -> f64 {
+    let (hi, lo) = EXP2_J32[(k & 31) as usize];
+    hi + (hi * p + lo)
+}
+
+/// Where [`exp_lanes`] takes its branch-free path: e^x is a normal float (−1022 ≤ m ≤ 1023 in
+/// [`exp_parts`]) for every x in [−EXP_LANE_BOUND, EXP_LANE_BOUND].
+const EXP_LANE_BOUND: f64 = 700.0;
+
+/// [`exp`] of every element, bit for bit: when all of them lie within ±[`EXP_LANE_BOUND`] (as
+/// fuzzy memberships' arguments do), one branch-free pass that the compiler can run as vector
+/// lanes; otherwise element by element.
+#[inline(always)]
+pub fn exp_lanes<const N: usize>(x: &mut [f64; N]) {
+    // A NaN fails both comparisons and takes the element-by-element path.
+    if x.iter().all(|&v| (-EXP_LANE_BOUND..=EXP_LANE_BOUND).contains(&v)) {
+        // exp_parts in two loops over the lanes: the arithmetic of the first is the same in
+        // every lane (vector code); only the second's table lookup is lane by lane.
+        let (mut k, mut p) = ([0i64; N], [0.0f64; N]);
+        for i in 0..N {
+            (k[i], p[i]) = exp_reduce(x[i]);
+        }
+        for i in 0..N {
+            x[i] = exp_table(k[i], p[i]) * pow2(k[i] >> 5);
+        }
+    } else {
+        for v in x.iter_mut() {
+            *v = exp(*v);
+        }
     }
 }
 
@@ -404,6 +448,51 @@ mod tests {
             assert!(e >= prev, "exp({x}) = {e} < {prev}");
             prev = e;
             x += 1.0 / 1024.0 / 3.0;
+        }
+    }
+
+    crate::simd::dispatch! {
+        /// exp_lanes over four lanes compiled at `simd`'s width, as the activation inlines it.
+        fn exp_lanes_at => exp_lanes_4(x: &mut [f64; 4])
+    }
+
+    #[inline(always)]
+    fn exp_lanes_4(x: &mut [f64; 4]) {
+        exp_lanes(x);
+    }
+
+    /// exp_lanes is exp, bit for bit, lane by lane, at every vector level: on its fast path
+    /// (every lane within ±EXP_LANE_BOUND, its edges included), and on the element-by-element
+    /// path that one special lane (NaN, ±∞, overflow, underflow, subnormal results) sends all
+    /// four lanes down.
+    #[test]
+    fn exp_lanes_gives_the_bits_of_exp_at_every_level() {
+        let mut inputs: Vec<f64> = (0..20_000).map(|i| -EXP_LANE_BOUND + f64::from(i) * 0.0700037).collect();
+        inputs.extend((0..4000).map(|i| -f64::from(i) * 1e-3 / 3.0));
+        inputs.extend([0.0, -0.0, 1e-300, -1e-300, EXP_LANE_BOUND, -EXP_LANE_BOUND]);
+        let special = [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            709.9,
+            -708.5,
+            -720.0,
+            -745.2,
+            700.000001,
+            -700.000001,
+        ];
+        for simd in crate::simd::Simd::available() {
+            for (c, chunk) in inputs.chunks_exact(4).enumerate() {
+                let mut lanes: [f64; 4] = chunk.try_into().unwrap();
+                if c % 7 == 0 {
+                    lanes[c % 4] = special[c / 7 % special.len()];
+                }
+                let want = lanes.map(exp);
+                exp_lanes_at(simd, &mut lanes);
+                for (got, want) in lanes.iter().zip(&want) {
+                    assert_eq!(got.to_bits(), want.to_bits(), "{simd:?}: {chunk:?} → {got:e} vs {want:e}");
+                }
+            }
         }
     }
 }

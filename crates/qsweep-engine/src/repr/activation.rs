@@ -14,14 +14,15 @@ pub struct Activations {
 }
 
 /// Per-variable windows of normalised memberships: variable j activates sets
-/// `first[j] .. first[j] + len[j]` with memberships `mu[offset_j ..][.. len[j]]`, the offsets
-/// being the running sum of `len`.
+/// `first[j] .. first[j] + len[j]` with memberships `mu[j · width ..][.. len[j]]`.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Factors {
     /// Variables (0: unknown).
     pub(crate) vars: usize,
     pub(crate) first: [u32; 4],
     pub(crate) len: [u32; 4],
+    /// Room per variable in `mu` (the activation's scratch width).
+    pub(crate) width: usize,
     pub(crate) mu: Vec<f64>,
 }
 
@@ -42,17 +43,15 @@ impl Activations {
         let (a, b) = (&self.factors, &other.factors);
         if a.vars > 0 && a.vars == b.vars {
             let mut product = 1.0;
-            let (mut oa, mut ob) = (0, 0);
             for j in 0..a.vars {
                 let (fa, fb) = (a.first[j] as usize, b.first[j] as usize);
                 let (ea, eb) = (fa + a.len[j] as usize, fb + b.len[j] as usize);
+                let (oa, ob) = (j * a.width, j * b.width);
                 let mut dot = 0.0;
                 for k in fa.max(fb)..ea.min(eb) {
                     dot += a.mu[oa + k - fa] * b.mu[ob + k - fb];
                 }
                 product *= dot;
-                oa += a.len[j] as usize;
-                ob += b.len[j] as usize;
             }
             return product;
         }

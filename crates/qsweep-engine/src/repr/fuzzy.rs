@@ -22,6 +22,11 @@ const MAX_VARS: usize = 4;
 /// path with small scratch arrays.
 const SMALL_WINDOW: usize = 8;
 
+/// Memberships whose exponentials are computed together ([`math::exp_lanes`]); every window's
+/// scratch holds a multiple of it.
+const EXP_LANES: usize = 4;
+const _: () = assert!(SMALL_WINDOW.is_multiple_of(EXP_LANES) && MAX_SETS.is_multiple_of(EXP_LANES));
+
 /// `width` that makes neighbouring memberships cross at 0.5: `1 / (2·sqrt(2·ln 2))`.
 pub const HALF_CROSSING_WIDTH: f64 = 0.424_660_900_144_009_5;
 
@@ -128,7 +133,7 @@ impl Fuzzy {
     /// `mu` and returns (its first set, its length), the length at most the variable's
     /// `max_window`, which `mu` must hold.
     #[inline(always)]
-    fn memberships(&self, j: usize, value: f64, mu: &mut [f64]) -> (usize, usize) {
+    fn memberships<const W: usize>(&self, j: usize, value: f64, mu: &mut [f64; W]) -> (usize, usize) {
         let v = &self.vars[j];
         if v.n == 1 {
             mu[0] = 1.0;
@@ -146,11 +151,25 @@ impl Fuzzy {
             (first, last)
         };
         let m = last + 1 - first;
-        let mut sum = 0.0;
         for (w, &c) in mu[..m].iter_mut().zip(&v.centres[first..=last]) {
             let d = x - c;
-            *w = math::exp(-(d * d) * v.inv_two_sigma_sq);
-            sum += *w;
+            *w = -(d * d) * v.inv_two_sigma_sq;
+        }
+        // The exponentials EXP_LANES at a time, then their sum in window order. The lanes past
+        // the window are never read; zeros there keep them on exp_lanes' fast path (written one
+        // by one: a fill of a run-time length becomes a memset call).
+        let lanes = m.div_ceil(EXP_LANES) * EXP_LANES;
+        for k in 1..EXP_LANES {
+            if m + k <= lanes {
+                mu[m + k - 1] = 0.0;
+            }
+        }
+        for chunk in mu[..lanes].as_chunks_mut::<EXP_LANES>().0 {
+            math::exp_lanes(chunk);
+        }
+        let mut sum = 0.0;
+        for &w in &mu[..m] {
+            sum += w;
         }
         if sum.is_nan() || sum <= 0.0 {
             // Every membership underflowed (a very narrow width): the nearest set takes it all.
@@ -193,50 +212,82 @@ impl Encode for Fuzzy {
 }
 
 impl Fuzzy {
-    /// [`activate`](Representation::activate) with scratch room for `W` sets per variable. Every
-    /// variable's memberships are computed first: they are independent, so their latency chains
-    /// (the exponentials, the normalising division) overlap. The weights are the outer product,
-    /// with the last variable (stride 1) innermost so that a run of rules is a run of table rows.
+    /// [`activate`](Representation::activate) with scratch room for `W` sets per variable, the
+    /// loops compiled for the rule base's number of variables.
     #[inline(always)]
     fn activate_with<const W: usize>(&self, state: &[f64], out: &mut Activations) {
-        let nv = self.vars.len();
-        // Slots 4 − nv .. 4 hold the variables in order; the slots before them are padding of one
-        // set with membership 1 and stride 0 (x · 1 = x exactly).
-        let pad = MAX_VARS - nv;
-        let mut mu = [[1.0f64; W]; MAX_VARS];
-        let mut len = [1usize; MAX_VARS];
-        let mut stride = [0u32; MAX_VARS];
+        const _: () = assert!(MAX_VARS == 4);
+        match self.vars.len() {
+            1 => self.activate_vars::<W, 1>(state, out),
+            2 => self.activate_vars::<W, 2>(state, out),
+            3 => self.activate_vars::<W, 3>(state, out),
+            _ => self.activate_vars::<W, 4>(state, out),
+        }
+    }
+
+    /// The activation of `NV` variables. Every variable's memberships are computed first: they
+    /// are independent, so their latency chains (the exponentials, the normalising division)
+    /// overlap. The weights are the outer product, each rule's the product of its memberships in
+    /// variable order, ((μ₀·μ₁)·μ₂)·μ₃, with the last variable (stride 1) innermost so that a run of
+    /// rules is a run of table rows.
+    #[inline(always)]
+    fn activate_vars<const W: usize, const NV: usize>(&self, state: &[f64], out: &mut Activations) {
+        let Activations { index, weight, factors: f } = out;
+        let mut len = [0usize; NV];
+        let mut stride = [0u32; NV];
         let mut base = 0u32;
-        let f = &mut out.factors;
-        f.vars = nv;
-        f.mu.clear();
-        for (j, &value) in state[..nv].iter().enumerate() {
-            let slot = pad + j;
-            let (first, m) = self.memberships(j, value, &mut mu[slot]);
-            len[slot] = m;
-            stride[slot] = self.strides[j];
-            base += first as u32 * self.strides[j];
+        f.vars = NV;
+        f.width = W;
+        // The same length every step (a rule base's W and NV are fixed): this allocates once.
+        f.mu.resize(NV * W, 0.0);
+        let mu: &mut [[f64; W]] = f.mu.as_chunks_mut::<W>().0;
+        for j in 0..NV {
+            let (first, m) = self.memberships(j, state[j], &mut mu[j]);
+            len[j] = m;
+            stride[j] = self.strides[j];
+            base += first as u32 * stride[j];
             f.first[j] = first as u32;
             f.len[j] = m as u32;
-            f.mu.extend_from_slice(&mu[slot][..m]);
         }
-        let [m0, m1, m2, m3] = len;
-        let total = m0 * m1 * m2 * m3;
+        let total: usize = len.iter().product();
         // Resizing from the last step's length writes only the difference.
-        out.index.resize(total, 0);
-        out.weight.resize(total, 0.0);
-        let (mu3, s3) = (&mu[3][..m3], stride[3]);
-        let mut rows = out.index.chunks_exact_mut(m3).zip(out.weight.chunks_exact_mut(m3));
-        for (k0, &p0) in mu[0][..m0].iter().enumerate() {
-            let o0 = base + k0 as u32 * stride[0];
-            for (k1, &p1) in mu[1][..m1].iter().enumerate() {
-                let (p01, o01) = (p0 * p1, o0 + k1 as u32 * stride[1]);
-                for (k2, &p2) in mu[2][..m2].iter().enumerate() {
-                    let (p012, o012) = (p01 * p2, o01 + k2 as u32 * stride[2]);
-                    let Some((ri, rw)) = rows.next() else { unreachable!("total rows") };
-                    for (k3, ((i, w), &m)) in ri.iter_mut().zip(rw.iter_mut()).zip(mu3).enumerate() {
-                        *i = o012 + k3 as u32 * s3;
-                        *w = p012 * m;
+        index.resize(total, 0);
+        weight.resize(total, 0.0);
+        let (mu_last, s_last) = (&mu[NV - 1][..len[NV - 1]], stride[NV - 1]);
+        let mut rows = index.chunks_exact_mut(mu_last.len()).zip(weight.chunks_exact_mut(mu_last.len()));
+        // One run of rules: the last variable's sets after the others' product `p` at offset `o`.
+        let mut run = |p: f64, o: u32| {
+            let Some((ri, rw)) = rows.next() else { unreachable!("total rows") };
+            for (k, ((i, w), &m)) in ri.iter_mut().zip(rw.iter_mut()).zip(mu_last).enumerate() {
+                *i = o + k as u32 * s_last;
+                *w = p * m;
+            }
+        };
+        // A single variable's weight is 1·μ = μ exactly, as the products below are for more.
+        let mu_of = |j: usize| &mu[j][..len[j]];
+        match NV {
+            1 => run(1.0, base),
+            2 => {
+                for (k0, &p0) in mu_of(0).iter().enumerate() {
+                    run(p0, base + k0 as u32 * stride[0]);
+                }
+            }
+            3 => {
+                for (k0, &p0) in mu_of(0).iter().enumerate() {
+                    let o0 = base + k0 as u32 * stride[0];
+                    for (k1, &p1) in mu_of(1).iter().enumerate() {
+                        run(p0 * p1, o0 + k1 as u32 * stride[1]);
+                    }
+                }
+            }
+            _ => {
+                for (k0, &p0) in mu_of(0).iter().enumerate() {
+                    let o0 = base + k0 as u32 * stride[0];
+                    for (k1, &p1) in mu_of(1).iter().enumerate() {
+                        let (p01, o01) = (p0 * p1, o0 + k1 as u32 * stride[1]);
+                        for (k2, &p2) in mu_of(2).iter().enumerate() {
+                            run(p01 * p2, o01 + k2 as u32 * stride[2]);
+                        }
                     }
                 }
             }
@@ -414,6 +465,57 @@ mod tests {
                 let factored = a.overlap(&b);
                 assert!((factored - by_rule).abs() <= 1e-15, "{sets:?} {i}: {factored} vs {by_rule}");
                 assert!((a.overlap(&a) - a.weight.iter().map(|w| w * w).sum::<f64>()).abs() <= 1e-15);
+            }
+        }
+    }
+
+    /// The activation is the same bits at every vector level, and does not depend on what the
+    /// reused buffers held before (the memberships' scratch persists between steps): a state
+    /// activated after a run of others gives what it gives into fresh buffers.
+    #[test]
+    fn activation_is_the_same_at_every_level_and_after_any_history() {
+        let ranges = [[-2.4, 2.4], [-2.0, 2.0], [-0.2, 0.2], [-3.0, 3.0]];
+        let bases: [(&[u32], f64); 7] = [
+            (&[4, 4], 1e-3),
+            (&[10, 10], 1e-3),
+            (&[3], 0.0),
+            (&[5, 2, 7], 1e-6),
+            (&[4, 4, 4, 4], 1e-3),
+            (&[10, 4, 10, 4], 0.0),
+            (&[64, 3], 1e-12),
+        ];
+        for (sets, prune) in bases {
+            let r = &ranges[..sets.len()];
+            let states: Vec<[f64; 4]> = (0..300)
+                .map(|i| {
+                    let t = f64::from(i) * 0.731;
+                    let far = if i % 17 == 0 { 40.0 } else { 1.0 };
+                    [
+                        far * 2.6 * math::sin(t),
+                        2.2 * math::cos(1.3 * t),
+                        0.25 * math::sin(2.1 * t),
+                        3.3 * math::cos(t),
+                    ]
+                })
+                .collect();
+            let levels: Vec<Fuzzy> = Simd::available()
+                .into_iter()
+                .map(|simd| Fuzzy::new(sets, r, HALF_CROSSING_WIDTH, prune).with_simd(simd))
+                .collect();
+            let mut reused: Vec<Activations> = levels.iter().map(|_| Activations::default()).collect();
+            let mut prev = Activations::default();
+            for state in &states {
+                let mut fresh = Activations::default();
+                levels[0].activate(state, &mut fresh);
+                let bits = |a: &Activations| {
+                    (a.index.clone(), a.weight.iter().map(|w| w.to_bits()).collect::<Vec<_>>())
+                };
+                for (f, a) in levels.iter().zip(&mut reused) {
+                    f.activate(state, a);
+                    assert_eq!(bits(a), bits(&fresh), "{sets:?} at {:?}, state {state:?}", f.simd);
+                    assert_eq!(a.overlap(&prev).to_bits(), fresh.overlap(&prev).to_bits());
+                }
+                prev = fresh;
             }
         }
     }
