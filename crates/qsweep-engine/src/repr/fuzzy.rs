@@ -78,11 +78,11 @@ pub struct Fuzzy {
 }
 
 impl Fuzzy {
-    /// `sets[j]` Gaussians over `ranges[j]` with σ = `width` × centre spacing; memberships below
-    /// `prune` are skipped (0 keeps every rule).
+    /// `sets[j]` Gaussians over `ranges[j]` (1 to 4 state variables) with σ = `width` × centre
+    /// spacing; memberships below `prune` are skipped (0 keeps every rule).
     pub fn new(sets: &[u32], ranges: &[[f64; 2]], width: f64, prune: f64) -> Self {
         assert_eq!(sets.len(), ranges.len());
-        assert!(sets.len() <= MAX_VARS, "at most {MAX_VARS} state variables");
+        assert!((1..=MAX_VARS).contains(&sets.len()), "1 to {MAX_VARS} state variables");
         let vars: Vec<Variable> = sets
             .iter()
             .zip(ranges)
@@ -221,6 +221,7 @@ impl Fuzzy {
             1 => self.activate_vars::<W, 1>(state, out),
             2 => self.activate_vars::<W, 2>(state, out),
             3 => self.activate_vars::<W, 3>(state, out),
+            // `new` admits 1 to MAX_VARS variables.
             _ => self.activate_vars::<W, 4>(state, out),
         }
     }
