@@ -285,9 +285,9 @@ fn exp_table(k: i64, p: f64) -> f64 {
 /// [`exp_parts`]) for every x in [−EXP_LANE_BOUND, EXP_LANE_BOUND].
 const EXP_LANE_BOUND: f64 = 700.0;
 
-/// [`exp`] of every element, bit for bit: when all of them lie within ±[`EXP_LANE_BOUND`] (as
-/// fuzzy memberships' arguments do), one branch-free pass that the compiler can run as vector
-/// lanes; otherwise element by element.
+/// [`exp`] of every element, bit for bit: when all of them lie within ±700 (as fuzzy memberships'
+/// arguments do), one branch-free pass that the compiler can run as vector lanes; otherwise
+/// element by element.
 #[inline(always)]
 pub fn exp_lanes<const N: usize>(x: &mut [f64; N]) {
     // A NaN fails both comparisons and takes the element-by-element path.
