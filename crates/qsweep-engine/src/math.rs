@@ -489,10 +489,10 @@ mod tests {
                 if c % 7 == 0 {
                     lanes[c % 4] = special[c / 7 % special.len()];
                 }
-                let want = lanes.map(exp);
+                let (input, want) = (lanes, lanes.map(exp));
                 exp_lanes_at(simd, &mut lanes);
                 for (got, want) in lanes.iter().zip(&want) {
-                    assert_eq!(got.to_bits(), want.to_bits(), "{simd:?}: {chunk:?} → {got:e} vs {want:e}");
+                    assert_eq!(got.to_bits(), want.to_bits(), "{simd:?}: {input:?} → {got:e} vs {want:e}");
                 }
             }
         }
