@@ -77,8 +77,9 @@ fn cases() -> Vec<(String, TrialConfig)> {
             }
         }
     }
-    // Fuzzy rule bases much larger than one activation, so the learner keeps sparse traces (the
-    // cases above all fit its dense layout). Appended so the earlier cases keep their seeds.
+    // Fuzzy rule bases much larger than one activation, whose traces the learner keeps in chunks
+    // (as at 9 sets of 2 variables above; the other cases above get the dense layout). Appended so
+    // the earlier cases keep their seeds.
     for system in SystemKind::ALL {
         for algorithm in [Algorithm::Q0, Algorithm::QLambda] {
             let dim = system.dim();
@@ -97,7 +98,7 @@ fn cases() -> Vec<(String, TrialConfig)> {
             let name = |v: &str| format!("{system} fuzzy {} {v}", algorithm.name());
             let mut c = base(if dim == 2 { 20 } else { 7 }, 3);
             c.repr.prune = 1e-2;
-            out.push((name("sparse traces, prune 1e-2"), c));
+            out.push((name("chunked traces, prune 1e-2"), c));
             if algorithm == Algorithm::QLambda {
                 let mut c = base(if dim == 2 { 16 } else { 7 }, 4);
                 c.repr.prune = 1e-3;
@@ -105,13 +106,13 @@ fn cases() -> Vec<(String, TrialConfig)> {
                 c.learner.watkins_cut = true;
                 c.learner.epsilon = 0.1;
                 c.learner.trace_cutoff = 1e-4;
-                out.push((name("sparse traces, replacing, watkins, cutoff 1e-4"), c));
+                out.push((name("chunked traces, replacing, watkins, cutoff 1e-4"), c));
                 if dim == 2 {
                     // Narrow sets and a tiny prune: far rules' weights underflow to exactly 0.
                     let mut c = base(40, 3);
                     c.repr.width = 0.1;
                     c.repr.prune = 1e-300;
-                    out.push((name("sparse traces, zero weights"), c));
+                    out.push((name("chunked traces, zero weights"), c));
                 }
             }
         }
@@ -175,17 +176,17 @@ const PINS: &[(&str, u32, u64, u64, &str)] = &[
     ("mountain-car fuzzy q-lambda fine, ties first, q_init, step cap", 4, 19828, 0x700f65490f5cf957, "max-total-steps"),
     ("mountain-car fuzzy q-lambda replacing, watkins, ε 0.1", 25, 77995, 0x36c7431620c87b92, "max-episodes"),
     ("mountain-car fuzzy q-lambda exact, wide sets", 5, 14602, 0x5e0a201161ec9030, "goal"),
-    ("ball-beam fuzzy q0 sparse traces, prune 1e-2", 22, 5595, 0x267e551d6b8d4406, "goal"),
-    ("ball-beam fuzzy q-lambda sparse traces, prune 1e-2", 4, 3336, 0x6128a81de27ca596, "goal"),
-    ("ball-beam fuzzy q-lambda sparse traces, replacing, watkins, cutoff 1e-4", 4, 3762, 0x471f52f96469e9fb, "goal"),
-    ("ball-beam fuzzy q-lambda sparse traces, zero weights", 6, 4112, 0xaac73084965919d2, "goal"),
-    ("cart-pole fuzzy q0 sparse traces, prune 1e-2", 40, 2190, 0xc5c25e83064464e3, "max-episodes"),
-    ("cart-pole fuzzy q-lambda sparse traces, prune 1e-2", 18, 12650, 0x5cbd2fb705630dc6, "goal"),
-    ("cart-pole fuzzy q-lambda sparse traces, replacing, watkins, cutoff 1e-4", 40, 13633, 0x5894e85fdd4f9cd2, "max-episodes"),
-    ("mountain-car fuzzy q0 sparse traces, prune 1e-2", 12, 47895, 0x0505e59f492fff72, "max-episodes"),
-    ("mountain-car fuzzy q-lambda sparse traces, prune 1e-2", 12, 45865, 0xd9e7bd7b288e2c48, "max-episodes"),
-    ("mountain-car fuzzy q-lambda sparse traces, replacing, watkins, cutoff 1e-4", 12, 47769, 0x93a457d110f05007, "max-episodes"),
-    ("mountain-car fuzzy q-lambda sparse traces, zero weights", 12, 48000, 0x867ef600eaec20c5, "max-episodes"),
+    ("ball-beam fuzzy q0 chunked traces, prune 1e-2", 22, 5595, 0x267e551d6b8d4406, "goal"),
+    ("ball-beam fuzzy q-lambda chunked traces, prune 1e-2", 4, 3336, 0x6128a81de27ca596, "goal"),
+    ("ball-beam fuzzy q-lambda chunked traces, replacing, watkins, cutoff 1e-4", 4, 3762, 0x471f52f96469e9fb, "goal"),
+    ("ball-beam fuzzy q-lambda chunked traces, zero weights", 6, 4112, 0xaac73084965919d2, "goal"),
+    ("cart-pole fuzzy q0 chunked traces, prune 1e-2", 40, 2190, 0xc5c25e83064464e3, "max-episodes"),
+    ("cart-pole fuzzy q-lambda chunked traces, prune 1e-2", 18, 12650, 0x5cbd2fb705630dc6, "goal"),
+    ("cart-pole fuzzy q-lambda chunked traces, replacing, watkins, cutoff 1e-4", 40, 13633, 0x5894e85fdd4f9cd2, "max-episodes"),
+    ("mountain-car fuzzy q0 chunked traces, prune 1e-2", 12, 47895, 0x0505e59f492fff72, "max-episodes"),
+    ("mountain-car fuzzy q-lambda chunked traces, prune 1e-2", 12, 45865, 0xd9e7bd7b288e2c48, "max-episodes"),
+    ("mountain-car fuzzy q-lambda chunked traces, replacing, watkins, cutoff 1e-4", 12, 47769, 0x93a457d110f05007, "max-episodes"),
+    ("mountain-car fuzzy q-lambda chunked traces, zero weights", 12, 48000, 0x867ef600eaec20c5, "max-episodes"),
 ];
 
 #[test]

@@ -4,8 +4,9 @@
 //! is exactly λ = 0: the traces then hold only the current activation, so the update is eq. (5)/(19).
 //!
 //! Parameters are laid out rule-major (`q[feature · n_actions + action]`) so all actions of a rule
-//! are contiguous. Where the traces live is chosen per table ([`Learner::new`]; see [`traces`]);
-//! the layouts give bit-identical results.
+//! are contiguous. Where the traces live (a full sweep, chunks or a list; the private `traces`
+//! module) is chosen per table and vector level ([`Learner::new`]); the layouts give
+//! bit-identical results.
 //!
 //! # Rounding (engine 2)
 //! Engine 1 summed Q(s, ·) strictly in activation order and re-summed Q(s′, a) after a Q(0)
@@ -29,17 +30,16 @@ mod traces;
 use super::config::LearnerConfig;
 use super::repr::Features;
 use super::simd::{dispatch, Simd};
-use traces::{DenseTraces, SparseTraces, TraceRule};
+use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
-/// Dense traces when the table has at most this many parameters (features × actions) per feature a
-/// single state can activate, and at most [`DENSE_MAX_PARAMS`] in all: then most traces are live in
-/// practice and a linear sweep beats list bookkeeping. A step extends the traces of one
-/// action only, so the rule counts parameters, not features (by features alone a 10-action table
-/// swept ten times the parameters its traces use).
-pub const DENSE_TRACE_RATIO: usize = 10;
-
-/// The most parameters a dense trace sweep covers (see [`DENSE_TRACE_RATIO`]).
+/// The most parameters a dense trace sweep covers: larger tables keep their traces in chunks
+/// or a list ([`Learner::new`]).
 pub const DENSE_MAX_PARAMS: usize = 4096;
+
+/// At the baseline vector level, dense traces when the table has at most this many parameters
+/// per feature a single state can activate (and at most [`DENSE_MAX_PARAMS`]); else a list. A
+/// step extends the traces of one action only, so the rule counts parameters, not features.
+pub const DENSE_TRACE_RATIO: usize = 10;
 
 /// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
 const MAX_UNROLLED_ACTIONS: usize = 16;
@@ -47,7 +47,10 @@ const MAX_UNROLLED_ACTIONS: usize = 16;
 /// Q parameters and eligibility traces of one trial.
 #[derive(Debug, Clone)]
 pub struct Learner {
+    n_features: usize,
     n_actions: usize,
+    /// The most features one state activates (with the vector level, chooses the trace layout).
+    max_active: usize,
     q: Vec<f64>,
     traces: Traces,
     rule: TraceRule,
@@ -63,33 +66,69 @@ pub struct Learner {
 enum Traces {
     /// γλ = 0 (Q(0)): a trace never outlives its step, so none is stored.
     None,
-    /// One trace per parameter, swept in full every step.
+    /// One trace per parameter, swept in full every step: rule bases whose traces are mostly live.
     Dense(DenseTraces),
-    /// Only the live traces, packed.
+    /// Only the live traces, packed: crisp tables, which start one trace a step.
     Sparse(SparseTraces),
+    /// One trace per parameter, swept only in the chunks that hold a live one: larger rule bases,
+    /// whose live traces lie in runs around the recent states.
+    Chunked(ChunkTraces),
+}
+
+impl Traces {
+    /// The layout for a table of `n_features × n_actions` parameters whose states activate at most
+    /// `max_active` features, with kernels at `simd`: none under Q(0); a list for one feature a
+    /// state (crisp tables); a full sweep when one state can activate every feature and the table
+    /// has at most [`DENSE_MAX_PARAMS`] parameters; else chunks, except at the baseline level,
+    /// whose 2-wide vectors make a chunk cost more than the few live traces it may hold (there
+    /// the [`DENSE_TRACE_RATIO`] rule chooses a full sweep or a list). Every layout gives the same
+    /// results; the rule is measured speed (docs/speed.md).
+    fn for_table(
+        n_features: usize,
+        n_actions: usize,
+        max_active: usize,
+        rule: TraceRule,
+        simd: Simd,
+    ) -> Self {
+        let n = n_features * n_actions;
+        if rule.decay == 0.0 {
+            Self::None
+        } else if max_active <= 1 {
+            Self::Sparse(SparseTraces::new(n))
+        } else if simd == Simd::Baseline {
+            if n <= DENSE_MAX_PARAMS && n <= DENSE_TRACE_RATIO * max_active {
+                Self::Dense(DenseTraces::new(n))
+            } else {
+                Self::Sparse(SparseTraces::new(n))
+            }
+        } else if max_active >= n_features && n <= DENSE_MAX_PARAMS {
+            Self::Dense(DenseTraces::new(n))
+        } else {
+            Self::Chunked(ChunkTraces::new(n))
+        }
+    }
 }
 
 impl Learner {
     /// A learner over `n_features × n_actions` parameters, all set to `cfg.q_init`, for a
-    /// representation that activates at most `max_active` features per state (chooses the trace
-    /// layout).
+    /// representation that activates at most `max_active` features per state, which with the
+    /// vector level chooses the trace layout: none under Q(0), a list for one feature a state, a
+    /// full sweep where one state can activate every feature, else chunks of parameters (at the
+    /// baseline level a full sweep or a list, by [`DENSE_TRACE_RATIO`]).
     pub fn new(n_features: usize, n_actions: usize, max_active: usize, cfg: &LearnerConfig) -> Self {
-        let n = n_features * n_actions;
         let rule = TraceRule::of(cfg);
-        let traces = if rule.decay == 0.0 {
-            Traces::None
-        } else if max_active > 1 && n <= DENSE_MAX_PARAMS && n <= DENSE_TRACE_RATIO * max_active {
-            Traces::Dense(DenseTraces::new(n))
-        } else {
-            Traces::Sparse(SparseTraces::new(n))
-        };
-        let q = vec![cfg.q_init; n];
-        Self { n_actions, q, traces, rule, alpha: cfg.alpha, last_step: 0.0, simd: crate::simd::level() }
+        let simd = crate::simd::level();
+        let traces = Traces::for_table(n_features, n_actions, max_active, rule, simd);
+        let q = vec![cfg.q_init; n_features * n_actions];
+        Self { n_features, n_actions, max_active, q, traces, rule, alpha: cfg.alpha, last_step: 0.0, simd }
     }
 
-    /// The same learner with its kernels at `simd` (capped by what the CPU has).
+    /// The same learner with its kernels at `simd` (capped by what the CPU has), and the trace
+    /// layout that suits them. Only before the first update: the traces start empty again.
     pub fn with_simd(mut self, simd: Simd) -> Self {
         self.simd = simd.capped();
+        self.traces =
+            Traces::for_table(self.n_features, self.n_actions, self.max_active, self.rule, self.simd);
         self
     }
 
@@ -124,7 +163,7 @@ impl Learner {
                     qs[action] += self.last_step * shared;
                 }
             }
-            Traces::Dense(_) | Traces::Sparse(_) => self.q_values(phi, qs),
+            Traces::Dense(_) | Traces::Sparse(_) | Traces::Chunked(_) => self.q_values(phi, qs),
         }
     }
 
@@ -143,6 +182,7 @@ impl Learner {
             Traces::None => q0_update_at(simd, q, na, index, weight, action, step),
             Traces::Dense(t) => t.update(q, na, rule, (index, weight), action, step, simd),
             Traces::Sparse(t) => t.update(q, na, rule, (index, weight), action, step),
+            Traces::Chunked(t) => t.update(q, na, rule, (index, weight), action, step, simd),
         }
     }
 
@@ -160,6 +200,7 @@ impl Learner {
             Traces::None => {}
             Traces::Dense(t) => t.clear(),
             Traces::Sparse(t) => t.clear(),
+            Traces::Chunked(t) => t.clear(),
         }
     }
 
@@ -179,6 +220,7 @@ impl Learner {
             Traces::None => vec![0.0; self.q.len()],
             Traces::Dense(t) => t.values(),
             Traces::Sparse(t) => t.values(self.q.len()),
+            Traces::Chunked(t) => t.values(),
         }
     }
 }

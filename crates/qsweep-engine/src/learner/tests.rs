@@ -6,7 +6,8 @@ use crate::config::{Algorithm, TraceKind, TrialConfig};
 use crate::env::SystemKind;
 use crate::math;
 use crate::repr::{Activations, OneHot, ReprKind};
-use traces::TraceRule;
+use crate::simd::Simd;
+use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
 fn config(lambda: f64, replacing: bool, cutoff: f64) -> LearnerConfig {
     let mut c =
@@ -94,6 +95,23 @@ impl ListLearner {
     }
 }
 
+/// A learner at `simd` with its traces in `layout` (under Q(0) none, whatever the layout).
+fn with_layout(layout: &str, nf: usize, na: usize, cfg: &LearnerConfig, simd: Simd) -> Learner {
+    let mut l = Learner::new(nf, na, 2, cfg).with_simd(simd);
+    let n = nf * na;
+    if l.rule.decay != 0.0 {
+        l.traces = match layout {
+            "dense" => Traces::Dense(DenseTraces::new(n)),
+            "sparse" => Traces::Sparse(SparseTraces::new(n)),
+            "chunked" => Traces::Chunked(ChunkTraces::new(n)),
+            _ => unreachable!("{layout}"),
+        };
+    }
+    l
+}
+
+const LAYOUTS: [&str; 3] = ["dense", "sparse", "chunked"];
+
 fn bits(v: &[f64]) -> Vec<u64> {
     v.iter().map(|x| x.to_bits()).collect()
 }
@@ -112,41 +130,36 @@ fn every_trace_layout_matches_the_list_based_learner_bit_for_bit() {
     for (lambda, replacing, cutoff, alpha) in settings {
         let mut cfg = config(lambda, replacing, cutoff);
         cfg.alpha = alpha;
-        let (nf, na) = (24, 3);
+        // 23 features: 69 parameters, eight full chunks and a partial one.
+        let (nf, na) = (23, 3);
         let mut oracle = ListLearner::new(nf, na, &cfg);
-        let mut dense = Learner::new(nf, na, nf, &cfg);
-        let mut sparse = Learner::new(nf, na, 1, &cfg);
-        if lambda > 0.0 {
-            assert!(matches!(dense.traces, Traces::Dense(_)));
-            assert!(matches!(sparse.traces, Traces::Sparse(_)));
-        }
-        let (mut qd, mut qs) = (vec![0.0; na], vec![0.0; na]);
+        let mut learners = LAYOUTS.map(|lay| with_layout(lay, nf, na, &cfg, crate::simd::level()));
+        let (mut want, mut got) = (vec![0.0; na], vec![0.0; na]);
         for step in 0..400 {
             // Single-feature steps (the crisp path) mixed with several-feature ones.
             let phi = activations(step, nf, if step % 3 == 0 { 1 } else { 1 + step % 6 });
             let delta = math::sin((step as f64) * 0.37) * if alpha > 1.0 { 10.0 } else { 1.0 };
-            for l in [&mut dense, &mut sparse] {
-                l.update(&phi, step % na, delta);
-            }
             oracle.update(&phi, step % na, delta);
             let what = format!("λ {lambda} replacing {replacing} α {alpha} step {step}");
-            if lambda > 0.0 {
-                // Ours are stored decayed for the next step; the oracle decays at its start.
-                let next: Vec<f64> = oracle.trace.iter().map(|&e| dense.rule.decayed(e)).collect();
-                assert_eq!(dense.traces_for_next_step(), next, "{what}");
-                assert_eq!(sparse.traces_for_next_step(), next, "{what}");
-            }
+            // Ours are stored decayed for the next step; the oracle decays at its start.
+            let next: Vec<f64> = oracle.trace.iter().map(|&e| learners[0].rule.decayed(e)).collect();
             // Signs of zero may differ where q stays 0 (no sum can tell); nothing else may.
             let zero_sign =
                 |v: &[f64]| bits(&v.iter().map(|x| if *x == 0.0 { 0.0 } else { *x }).collect::<Vec<_>>());
-            assert_eq!(zero_sign(&dense.q), zero_sign(&oracle.q), "{what}");
-            assert_eq!(zero_sign(&sparse.q), zero_sign(&oracle.q), "{what}");
-            dense.q_values(&phi, &mut qd);
-            sparse.q_values(&phi, &mut qs);
-            assert_eq!(bits(&qd), bits(&qs), "{what}");
+            for (k, l) in learners.iter_mut().enumerate() {
+                l.update(&phi, step % na, delta);
+                let what = format!("{} layout, {what}", layout(l));
+                if lambda > 0.0 {
+                    assert_eq!(l.traces_for_next_step(), next, "{what}");
+                }
+                assert_eq!(zero_sign(&l.q), zero_sign(&oracle.q), "{what}");
+                l.q_values(&phi, if k == 0 { &mut want } else { &mut got });
+                if k > 0 {
+                    assert_eq!(bits(&got), bits(&want), "{what}");
+                }
+            }
             if step % 97 == 0 {
-                dense.clear_traces();
-                sparse.clear_traces();
+                learners.iter_mut().for_each(Learner::clear_traces);
                 oracle.clear_traces();
             }
         }
@@ -183,19 +196,37 @@ fn keeps_is_the_literal_decay_is_non_zero() {
 
 /// Regression: the layout was chosen by features alone, so a 10-action table swept every
 /// parameter each step (Cart-Pole fuzzy Q(λ) 6⁴ × 10 actions, the costliest cell of
-/// `paper.yaml`, ran 3.6× the instructions it needs). The choice counts parameters now.
+/// `paper.yaml`, ran 3.6× the instructions it needs). With vector kernels only a rule base whose
+/// window can cover every rule gets the full sweep, and larger ones sweep only their live chunks;
+/// at the baseline level parameters per active feature choose between a full sweep and a list.
 #[test]
-fn many_action_tables_keep_their_traces_in_a_list() {
-    let cfg = config(0.5, false, 1e-10);
-    let layout = |nf, na, active| layout(&Learner::new(nf, na, active, &cfg));
-    assert_eq!(layout(1296, 10, 625), "sparse", "6⁴ × 10");
-    assert_eq!(layout(1296, 4, 625), "sparse", "6⁴ × 4");
-    assert_eq!(layout(625, 10, 625), "sparse", "5⁴ × 10");
-    assert_eq!(layout(2401, 2, 625), "sparse", "7⁴ × 2");
-    assert_eq!(layout(1296, 2, 625), "dense", "6⁴ × 2");
-    assert_eq!(layout(256, 8, 256), "dense", "4⁴ × 8");
-    assert_eq!(layout(81, 10, 81), "dense", "3⁴ × 10");
-    assert_eq!(layout(100, 3, 1), "sparse", "crisp: one feature a step");
+fn many_action_tables_sweep_only_their_live_traces() {
+    let rule = TraceRule::of(&config(0.5, false, 1e-10));
+    let layout = |nf, na, active, simd| match Traces::for_table(nf, na, active, rule, simd) {
+        Traces::Dense(_) => "dense",
+        Traces::Sparse(_) => "sparse",
+        Traces::Chunked(_) => "chunked",
+        Traces::None => "none",
+    };
+    let cases = [
+        // features, actions, most active, with vector kernels, at the baseline
+        (1296, 10, 625, "chunked", "sparse", "6⁴ × 10"),
+        (1296, 4, 625, "chunked", "sparse", "6⁴ × 4"),
+        (625, 10, 625, "chunked", "sparse", "5⁴ × 10: over DENSE_MAX_PARAMS"),
+        (2401, 2, 625, "chunked", "sparse", "7⁴ × 2"),
+        (1296, 2, 625, "chunked", "dense", "6⁴ × 2"),
+        (1600, 2, 400, "chunked", "dense", "10×4×10×4 × 2"),
+        (100, 10, 25, "chunked", "sparse", "10² × 10"),
+        (256, 8, 256, "dense", "dense", "4⁴ × 8"),
+        (81, 10, 81, "dense", "dense", "3⁴ × 10"),
+        (16, 3, 16, "dense", "dense", "4² × 3"),
+        (100, 3, 1, "sparse", "sparse", "crisp: one feature a step"),
+    ];
+    for (nf, na, active, vector, baseline, what) in cases {
+        assert_eq!(layout(nf, na, active, Simd::Avx2), vector, "{what}");
+        assert_eq!(layout(nf, na, active, Simd::Avx512), vector, "{what}");
+        assert_eq!(layout(nf, na, active, Simd::Baseline), baseline, "{what}");
+    }
     assert!(matches!(Learner::new(1296, 10, 625, &config(0.0, false, 1e-10)).traces, Traces::None));
 }
 
@@ -208,6 +239,7 @@ fn layout(l: &Learner) -> &'static str {
     match l.traces {
         Traces::Dense(_) => "dense",
         Traces::Sparse(_) => "sparse",
+        Traces::Chunked(_) => "chunked",
         Traces::None => "none",
     }
 }
@@ -307,37 +339,32 @@ fn unrolled_q_values_match_the_plain_sum() {
 type Bits = (Vec<u64>, Vec<u64>, Vec<u64>);
 
 /// Every vector level gives the baseline's bits: parameters, traces and Q(s, ·), for every
-/// action-count kernel (1–16 unrolled, more through the general one), both trace layouts, long
+/// action-count kernel (1–16 unrolled, more through the general one), every trace layout, long
 /// activations and an overflowing α·δ.
 #[test]
 fn every_simd_level_gives_the_baselines_bits() {
     use crate::simd::Simd;
     for na in (1..=18).chain([25]) {
-        for (lambda, alpha, active) in [(0.9, 0.1, 1), (0.9, 0.1, 300), (0.0, 0.1, 300), (0.6, 1e308, 40)] {
+        for (lambda, alpha) in [(0.9, 0.1), (0.0, 0.1), (0.6, 1e308)] {
             let cfg = config(lambda, false, 1e-10);
             let cfg = LearnerConfig { alpha, ..cfg };
             let nf = 400;
             let mut learners: Vec<(Simd, Learner)> = Simd::available()
                 .into_iter()
-                .flat_map(|s| {
-                    [
-                        (s, Learner::new(nf, na, active, &cfg).with_simd(s)),
-                        (s, Learner::new(nf, na, 1, &cfg).with_simd(s)),
-                    ]
-                })
+                .flat_map(|s| LAYOUTS.map(|lay| (s, with_layout(lay, nf, na, &cfg, s))))
                 .collect();
             let mut qs = vec![0.0; na];
             for step in 0..150 {
                 let phi = activations(step, nf, if step % 4 == 0 { 1 } else { 1 + (step * 13) % 257 });
                 let delta = math::sin(step as f64 * 0.61) * if alpha > 1.0 { 10.0 } else { 1.0 };
                 // Per layout (the layouts may differ in the sign of a zero q; `every_trace_layout…`).
-                let mut seen: [Option<Bits>; 2] = [None, None];
+                let mut seen: [Option<Bits>; 3] = [None, None, None];
                 for (k, (simd, l)) in learners.iter_mut().enumerate() {
                     l.update(&phi, step % na, delta);
                     l.q_values(&phi, &mut qs);
                     let got = (bits(&l.q), bits(&l.traces_for_next_step()), bits(&qs));
-                    match &seen[k % 2] {
-                        None => seen[k % 2] = Some(got),
+                    match &seen[k % 3] {
+                        None => seen[k % 3] = Some(got),
                         Some(want) => assert!(
                             got == *want,
                             "{simd:?}, {na} actions, λ {lambda}, α {alpha}, step {step}"

@@ -1,8 +1,9 @@
-//! Eligibility traces, eqs. (7)/(20) with the cutoff, in two layouts: one trace per parameter,
-//! swept every step (small tables whose traces are mostly live), or the live traces as a packed
-//! list (everything else, crisp tables included). Both apply exactly the literal rule, trace by
-//! trace: each trace is decayed by one multiplication by γλ per step and dropped when the decayed
-//! value falls below the cutoff, so the two layouts give bit-identical results.
+//! Eligibility traces, eqs. (7)/(20) with the cutoff, in three layouts: one trace per parameter,
+//! swept every step (rule bases whose traces are mostly live); the same, swept only in the chunks
+//! of parameters that hold a live trace (larger rule bases); or the live traces as a packed list
+//! (crisp tables). All apply exactly the literal rule, trace by trace: each trace is decayed by
+//! one multiplication by γλ per step and dropped when the decayed value falls below the cutoff, so
+//! the layouts give bit-identical results.
 //!
 //! The traces are stored already decayed for the next step: the decay e ← γλe of step t+1 depends
 //! on nothing learned at step t+1, so it is done in the same pass that applies step t's update.
@@ -140,6 +141,150 @@ fn sweep(q: &mut [f64], trace: &mut [f64], rule: TraceRule, step: f64) {
     for (q, e) in q.iter_mut().zip(trace.iter_mut()) {
         *q += step * *e;
         *e = rule.decayed(*e);
+    }
+}
+
+/// Parameters per chunk of [`ChunkTraces`]: one AVX-512 register of f64, two AVX2 ones.
+pub(super) const CHUNK: usize = 8;
+
+/// One trace per parameter, as in [`DenseTraces`], but swept only where a chunk of [`CHUNK`]
+/// parameters holds a live trace: a fuzzy activation's traces lie in short runs of the table
+/// (the last variable's window), so most chunks of a large table hold none and a full sweep would
+/// add step·0 to them. The listed chunks are swept whole, parameter by parameter as the dense
+/// sweep does, so the layouts give the same bits.
+#[derive(Debug, Clone)]
+pub(super) struct ChunkTraces {
+    /// One trace per parameter (0 where none is live), `n` of them.
+    e: Vec<f64>,
+    /// The chunks holding a live trace, or one extended this step, in no particular order.
+    live: Vec<u32>,
+    /// Per chunk: whether it is in `live`.
+    listed: Vec<bool>,
+}
+
+impl ChunkTraces {
+    pub(super) fn new(n: usize) -> Self {
+        Self { e: vec![0.0; n], live: Vec::new(), listed: vec![false; n.div_ceil(CHUNK)] }
+    }
+
+    pub(super) fn clear(&mut self) {
+        let n = self.e.len();
+        for &c in &self.live {
+            let c = c as usize;
+            self.e[c * CHUNK..((c + 1) * CHUNK).min(n)].fill(0.0);
+            self.listed[c] = false;
+        }
+        self.live.clear();
+    }
+
+    /// Every trace as it enters the next update.
+    pub(super) fn values(&self) -> Vec<f64> {
+        self.e.clone()
+    }
+
+    /// Extend the activation's traces, listing their chunks, then sweep the listed chunks: q ←
+    /// q + step·e and decay e, element by element, and unlist a chunk whose traces all vanished.
+    /// Exactly the dense layout's operations on the parameters it could move (elsewhere every
+    /// trace is 0), including its treatment of a non-finite step.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)] // the dense layout's signature
+    pub(super) fn update(
+        &mut self,
+        q: &mut [f64],
+        na: usize,
+        rule: TraceRule,
+        (index, weight): (&[u32], &[f64]),
+        action: usize,
+        step: f64,
+        simd: Simd,
+    ) {
+        let Self { e, live, listed } = self;
+        for (&i, &w) in index.iter().zip(weight) {
+            let k = i as usize * na + action;
+            e[k] = rule.extend(e[k], w);
+            let c = k / CHUNK;
+            if !listed[c] {
+                listed[c] = true;
+                live.push(c as u32);
+            }
+        }
+        if step.is_finite() {
+            chunk_sweep(simd, q, e, live, listed, rule, step);
+        } else {
+            // As the dense layout: the entries extended by a zero weight move too (step·0 = NaN).
+            for &i in index {
+                let k = i as usize * na + action;
+                if e[k] == 0.0 {
+                    q[k] += step * e[k];
+                }
+            }
+            let n = e.len();
+            for &c in live.iter() {
+                let r = c as usize * CHUNK..((c as usize + 1) * CHUNK).min(n);
+                for (q, e) in q[r.clone()].iter_mut().zip(&mut e[r]) {
+                    if *e != 0.0 {
+                        *q += step * *e;
+                    }
+                    *e = rule.decayed(*e);
+                }
+            }
+            unlist_empty(e, live, listed);
+        }
+    }
+}
+
+/// Drop from `live` the chunks whose traces are all 0.
+fn unlist_empty(e: &[f64], live: &mut Vec<u32>, listed: &mut [bool]) {
+    let n = e.len();
+    live.retain(|&c| {
+        let c = c as usize;
+        let keep = e[c * CHUNK..((c + 1) * CHUNK).min(n)].iter().any(|&x| x != 0.0);
+        listed[c] = keep;
+        keep
+    });
+}
+
+dispatch! {
+    /// [`sweep_listed`] at `simd`'s vector width.
+    fn chunk_sweep => sweep_listed(q: &mut [f64], e: &mut [f64], live: &mut Vec<u32>, listed: &mut [bool], rule: TraceRule, step: f64)
+}
+
+/// The dense sweep over the listed chunks only; a chunk left with no live trace is unlisted
+/// (replaced by the last listed one, not yet visited).
+#[inline(always)]
+fn sweep_listed(
+    q: &mut [f64],
+    e: &mut [f64],
+    live: &mut Vec<u32>,
+    listed: &mut [bool],
+    rule: TraceRule,
+    step: f64,
+) {
+    let ((qc, q_tail), (ec, e_tail)) = (q.as_chunks_mut::<CHUNK>(), e.as_chunks_mut::<CHUNK>());
+    let full = ec.len();
+    let mut r = 0;
+    while let Some(&c) = live.get(r) {
+        let c = c as usize;
+        let any = if c < full {
+            let (q, e) = (&mut qc[c], &mut ec[c]);
+            let mut any = false;
+            for j in 0..CHUNK {
+                q[j] += step * e[j];
+                e[j] = rule.decayed(e[j]);
+                any |= e[j] != 0.0;
+            }
+            any
+        } else {
+            // The last, partial chunk.
+            sweep(q_tail, e_tail, rule, step);
+            e_tail.iter().any(|&x| x != 0.0)
+        };
+        if any {
+            r += 1;
+        } else {
+            listed[c] = false;
+            live.swap_remove(r);
+        }
     }
 }
 
