@@ -32,8 +32,8 @@ use super::repr::Features;
 use super::simd::{dispatch, Simd};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
-/// The most parameters a dense trace sweep covers: larger tables keep their traces in chunks
-/// or a list ([`Learner::new`]).
+/// At the baseline vector level, the most parameters a dense trace sweep covers: larger tables
+/// keep their traces in a list ([`Learner::new`]).
 pub const DENSE_MAX_PARAMS: usize = 4096;
 
 /// At the baseline vector level, dense traces when the table has at most this many parameters
@@ -66,23 +66,25 @@ pub struct Learner {
 enum Traces {
     /// γλ = 0 (Q(0)): a trace never outlives its step, so none is stored.
     None,
-    /// One trace per parameter, swept in full every step: rule bases whose traces are mostly live.
+    /// One trace per parameter, swept in full every step (at the baseline level, rule bases whose
+    /// traces are mostly live).
     Dense(DenseTraces),
-    /// Only the live traces, packed: crisp tables, which start one trace a step.
+    /// Only the live traces, packed: crisp tables, which start one trace a step (and at the
+    /// baseline level, large rule bases).
     Sparse(SparseTraces),
-    /// One trace per parameter, swept only in the chunks that hold a live one: larger rule bases,
-    /// whose live traces lie in runs around the recent states.
+    /// One trace per parameter, swept only in the chunks that hold a live one, or in full once
+    /// most do: rule bases, whose live traces lie in runs around the recent states.
     Chunked(ChunkTraces),
 }
 
 impl Traces {
     /// The layout for a table of `n_features × n_actions` parameters whose states activate at most
     /// `max_active` features, with kernels at `simd`: none under Q(0); a list for one feature a
-    /// state (crisp tables); a full sweep when one state can activate every feature and the table
-    /// has at most [`DENSE_MAX_PARAMS`] parameters; else chunks, except at the baseline level,
-    /// whose 2-wide vectors make a chunk cost more than the few live traces it may hold (there
-    /// the [`DENSE_TRACE_RATIO`] rule chooses a full sweep or a list). Every layout gives the same
-    /// results; the rule is measured speed (docs/speed.md).
+    /// state (crisp tables); else chunks (which turn into a full sweep once most are live),
+    /// except at the baseline level, whose 2-wide vectors make a chunk cost more than the few
+    /// live traces it may hold in a table of many actions: there the [`DENSE_TRACE_RATIO`] rule
+    /// chooses a full sweep or a list. Every layout gives the same results; the rule is measured
+    /// speed (docs/speed.md).
     fn for_table(
         n_features: usize,
         n_actions: usize,
@@ -101,8 +103,6 @@ impl Traces {
             } else {
                 Self::Sparse(SparseTraces::new(n))
             }
-        } else if max_active >= n_features && n <= DENSE_MAX_PARAMS {
-            Self::Dense(DenseTraces::new(n))
         } else {
             Self::Chunked(ChunkTraces::new(n))
         }
@@ -112,9 +112,9 @@ impl Traces {
 impl Learner {
     /// A learner over `n_features × n_actions` parameters, all set to `cfg.q_init`, for a
     /// representation that activates at most `max_active` features per state, which with the
-    /// vector level chooses the trace layout: none under Q(0), a list for one feature a state, a
-    /// full sweep where one state can activate every feature, else chunks of parameters (at the
-    /// baseline level a full sweep or a list, by [`DENSE_TRACE_RATIO`]).
+    /// vector level chooses the trace layout: none under Q(0), a list for one feature a state,
+    /// else chunks of parameters, swept where they hold a live trace (at the baseline level a
+    /// full sweep or a list, by [`DENSE_TRACE_RATIO`]).
     pub fn new(n_features: usize, n_actions: usize, max_active: usize, cfg: &LearnerConfig) -> Self {
         let rule = TraceRule::of(cfg);
         let simd = crate::simd::level();

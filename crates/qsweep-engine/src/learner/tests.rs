@@ -134,6 +134,8 @@ fn every_trace_layout_matches_the_list_based_learner_bit_for_bit() {
         let (nf, na) = (23, 3);
         let mut oracle = ListLearner::new(nf, na, &cfg);
         let mut learners = LAYOUTS.map(|lay| with_layout(lay, nf, na, &cfg, crate::simd::level()));
+        // Steps the chunked layout took listing its chunks, and sweeping every one.
+        let mut chunk_modes = [0, 0];
         let (mut want, mut got) = (vec![0.0; na], vec![0.0; na]);
         for step in 0..400 {
             // Single-feature steps (the crisp path) mixed with several-feature ones.
@@ -148,6 +150,9 @@ fn every_trace_layout_matches_the_list_based_learner_bit_for_bit() {
                 |v: &[f64]| bits(&v.iter().map(|x| if *x == 0.0 { 0.0 } else { *x }).collect::<Vec<_>>());
             for (k, l) in learners.iter_mut().enumerate() {
                 l.update(&phi, step % na, delta);
+                if let Traces::Chunked(t) = &l.traces {
+                    chunk_modes[usize::from(t.sweeps_all())] += 1;
+                }
                 let what = format!("{} layout, {what}", layout(l));
                 if lambda > 0.0 {
                     assert_eq!(l.traces_for_next_step(), next, "{what}");
@@ -162,6 +167,9 @@ fn every_trace_layout_matches_the_list_based_learner_bit_for_bit() {
                 learners.iter_mut().for_each(Learner::clear_traces);
                 oracle.clear_traces();
             }
+        }
+        if lambda > 0.0 {
+            assert!(chunk_modes[0] > 0 && chunk_modes[1] > 0, "both chunked modes ran: {chunk_modes:?}");
         }
     }
 }
@@ -196,9 +204,9 @@ fn keeps_is_the_literal_decay_is_non_zero() {
 
 /// Regression: the layout was chosen by features alone, so a 10-action table swept every
 /// parameter each step (Cart-Pole fuzzy Q(λ) 6⁴ × 10 actions, the costliest cell of
-/// `paper.yaml`, ran 3.6× the instructions it needs). With vector kernels only a rule base whose
-/// window can cover every rule gets the full sweep, and larger ones sweep only their live chunks;
-/// at the baseline level parameters per active feature choose between a full sweep and a list.
+/// `paper.yaml`, ran 3.6× the instructions it needs). With vector kernels a rule base sweeps only
+/// its live chunks (all of them once most are live); at the baseline level parameters per active
+/// feature choose between a full sweep and a list.
 #[test]
 fn many_action_tables_sweep_only_their_live_traces() {
     let rule = TraceRule::of(&config(0.5, false, 1e-10));
@@ -217,9 +225,9 @@ fn many_action_tables_sweep_only_their_live_traces() {
         (1296, 2, 625, "chunked", "dense", "6⁴ × 2"),
         (1600, 2, 400, "chunked", "dense", "10×4×10×4 × 2"),
         (100, 10, 25, "chunked", "sparse", "10² × 10"),
-        (256, 8, 256, "dense", "dense", "4⁴ × 8"),
-        (81, 10, 81, "dense", "dense", "3⁴ × 10"),
-        (16, 3, 16, "dense", "dense", "4² × 3"),
+        (256, 8, 256, "chunked", "dense", "4⁴ × 8: chunks until most are live, then the full sweep"),
+        (81, 10, 81, "chunked", "dense", "3⁴ × 10"),
+        (16, 3, 16, "chunked", "dense", "4² × 3"),
         (100, 3, 1, "sparse", "sparse", "crisp: one feature a step"),
     ];
     for (nf, na, active, vector, baseline, what) in cases {

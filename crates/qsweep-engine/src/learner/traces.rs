@@ -1,9 +1,9 @@
 //! Eligibility traces, eqs. (7)/(20) with the cutoff, in three layouts: one trace per parameter,
-//! swept every step (rule bases whose traces are mostly live); the same, swept only in the chunks
-//! of parameters that hold a live trace (larger rule bases); or the live traces as a packed list
-//! (crisp tables). All apply exactly the literal rule, trace by trace: each trace is decayed by
-//! one multiplication by γλ per step and dropped when the decayed value falls below the cutoff, so
-//! the layouts give bit-identical results.
+//! swept every step; the same, swept only in the chunks of parameters that hold a live trace
+//! (rule bases, with vector kernels); or the live traces as a packed list (crisp tables). All
+//! apply exactly the literal rule, trace by trace: each trace is decayed by one multiplication by
+//! γλ per step and dropped when the decayed value falls below the cutoff, so the layouts give
+//! bit-identical results.
 //!
 //! The traces are stored already decayed for the next step: the decay e ← γλe of step t+1 depends
 //! on nothing learned at step t+1, so it is done in the same pass that applies step t's update.
@@ -107,6 +107,23 @@ impl DenseTraces {
             let k = i as usize * na + action;
             trace[k] = rule.extend(trace[k], w);
         }
+        self.sweep_all(q, na, rule, index, action, step, simd);
+    }
+
+    /// The pass of [`update`](Self::update) after the extension of `index`'s traces for `action`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn sweep_all(
+        &mut self,
+        q: &mut [f64],
+        na: usize,
+        rule: TraceRule,
+        index: &[u32],
+        action: usize,
+        step: f64,
+        simd: Simd,
+    ) {
+        let trace = &mut self.e[..];
         // The list-based update adds step·e to every non-zero trace and to the current
         // activation's entries. Adding step·0 = ±0 everywhere else is exact too, up to the sign of
         // a zero q, which no sum can see. Only a non-finite step (an overflowing α·δ) makes step·0
@@ -151,41 +168,64 @@ pub(super) const CHUNK: usize = 8;
 /// parameters holds a live trace: a fuzzy activation's traces lie in short runs of the table
 /// (the last variable's window), so most chunks of a large table hold none and a full sweep would
 /// add step·0 to them. The listed chunks are swept whole, parameter by parameter as the dense
-/// sweep does, so the layouts give the same bits.
+/// sweep does, so the layouts give the same bits. Once [`FULL_SHARE`] of the chunks are listed
+/// the whole table is swept, as [`DenseTraces`] does, until the traces are cleared: a small table
+/// (or a long episode's wide trajectory) fills its chunks, and then the list only costs.
 #[derive(Debug, Clone)]
 pub(super) struct ChunkTraces {
-    /// One trace per parameter (0 where none is live), `n` of them.
-    e: Vec<f64>,
-    /// The chunks holding a live trace, or one extended this step, in no particular order.
+    /// The traces, one per parameter (0 where none is live).
+    dense: DenseTraces,
+    /// The chunks holding a live trace, or one extended this step, in no particular order
+    /// (while not `full`).
     live: Vec<u32>,
     /// Per chunk: whether it is in `live`.
     listed: Vec<bool>,
+    /// Whether every chunk is swept (and the list no longer kept) until the next clear.
+    full: bool,
 }
+
+/// The share of chunks listed at which [`ChunkTraces`] sweeps the whole table instead.
+const FULL_SHARE: (usize, usize) = (3, 4);
 
 impl ChunkTraces {
     pub(super) fn new(n: usize) -> Self {
-        Self { e: vec![0.0; n], live: Vec::new(), listed: vec![false; n.div_ceil(CHUNK)] }
+        let listed = vec![false; n.div_ceil(CHUNK)];
+        Self { dense: DenseTraces::new(n), live: Vec::new(), listed, full: false }
     }
 
     pub(super) fn clear(&mut self) {
-        let n = self.e.len();
-        for &c in &self.live {
-            let c = c as usize;
-            self.e[c * CHUNK..((c + 1) * CHUNK).min(n)].fill(0.0);
-            self.listed[c] = false;
+        if self.full {
+            self.dense.clear();
+            self.listed.fill(false);
+            self.full = false;
+        } else {
+            let e = &mut self.dense.e;
+            let n = e.len();
+            for &c in &self.live {
+                let c = c as usize;
+                e[c * CHUNK..((c + 1) * CHUNK).min(n)].fill(0.0);
+                self.listed[c] = false;
+            }
         }
         self.live.clear();
     }
 
     /// Every trace as it enters the next update.
     pub(super) fn values(&self) -> Vec<f64> {
-        self.e.clone()
+        self.dense.values()
+    }
+
+    /// Whether the next update sweeps every chunk (most were listed since the last clear).
+    #[cfg(test)]
+    pub(super) fn sweeps_all(&self) -> bool {
+        self.full
     }
 
     /// Extend the activation's traces, listing their chunks, then sweep the listed chunks: q ←
     /// q + step·e and decay e, element by element, and unlist a chunk whose traces all vanished.
     /// Exactly the dense layout's operations on the parameters it could move (elsewhere every
-    /// trace is 0), including its treatment of a non-finite step.
+    /// trace is 0), including its treatment of a non-finite step; once [`FULL_SHARE`] of the
+    /// chunks are listed, the dense layout's update itself.
     #[inline(never)]
     #[allow(clippy::too_many_arguments)] // the dense layout's signature
     pub(super) fn update(
@@ -198,7 +238,11 @@ impl ChunkTraces {
         step: f64,
         simd: Simd,
     ) {
-        let Self { e, live, listed } = self;
+        if self.full {
+            return self.dense.update(q, na, rule, (index, weight), action, step, simd);
+        }
+        let Self { dense, live, listed, .. } = self;
+        let e = &mut dense.e[..];
         for (&i, &w) in index.iter().zip(weight) {
             let k = i as usize * na + action;
             e[k] = rule.extend(e[k], w);
@@ -207,6 +251,11 @@ impl ChunkTraces {
                 listed[c] = true;
                 live.push(c as u32);
             }
+        }
+        if live.len() * FULL_SHARE.1 >= listed.len() * FULL_SHARE.0 {
+            // The extension is done; the dense layout's pass over every parameter follows.
+            self.full = true;
+            return self.dense.sweep_all(q, na, rule, index, action, step, simd);
         }
         if step.is_finite() {
             chunk_sweep(simd, q, e, live, listed, rule, step);
