@@ -102,11 +102,7 @@ impl DenseTraces {
         step: f64,
         simd: Simd,
     ) {
-        let trace = &mut self.e[..];
-        for (&i, &w) in index.iter().zip(weight) {
-            let k = i as usize * na + action;
-            trace[k] = rule.extend(trace[k], w);
-        }
+        extend(&mut self.e, na, rule, (index, weight), action, |_| {});
         self.sweep_all(q, na, rule, index, action, step, simd);
     }
 
@@ -242,43 +238,43 @@ impl ChunkTraces {
             return self.dense.update(q, na, rule, (index, weight), action, step, simd);
         }
         let Self { dense, live, listed, .. } = self;
-        let e = &mut dense.e[..];
-        for (&i, &w) in index.iter().zip(weight) {
-            let k = i as usize * na + action;
-            e[k] = rule.extend(e[k], w);
+        extend(&mut dense.e, na, rule, (index, weight), action, |k| {
             let c = k / CHUNK;
             if !listed[c] {
                 listed[c] = true;
                 live.push(c as u32);
             }
-        }
+        });
         if live.len() * FULL_SHARE.1 >= listed.len() * FULL_SHARE.0 {
             // The extension is done; the dense layout's pass over every parameter follows.
             self.full = true;
-            return self.dense.sweep_all(q, na, rule, index, action, step, simd);
-        }
-        if step.is_finite() {
-            chunk_sweep(simd, q, e, live, listed, rule, step);
+            dense.sweep_all(q, na, rule, index, action, step, simd);
+        } else if step.is_finite() {
+            chunk_sweep(simd, q, &mut dense.e, live, listed, rule, step);
         } else {
-            // As the dense layout: the entries extended by a zero weight move too (step·0 = NaN).
-            for &i in index {
-                let k = i as usize * na + action;
-                if e[k] == 0.0 {
-                    q[k] += step * e[k];
-                }
-            }
-            let n = e.len();
-            for &c in live.iter() {
-                let r = c as usize * CHUNK..((c as usize + 1) * CHUNK).min(n);
-                for (q, e) in q[r.clone()].iter_mut().zip(&mut e[r]) {
-                    if *e != 0.0 {
-                        *q += step * *e;
-                    }
-                    *e = rule.decayed(*e);
-                }
-            }
-            unlist_empty(e, live, listed);
+            // Rare (an overflowing α·δ): the dense layout's literal pass, which moves only the
+            // non-zero traces and this step's entries, all of them in listed chunks.
+            dense.sweep_all(q, na, rule, index, action, step, simd);
+            unlist_empty(&dense.e, live, listed);
         }
+    }
+}
+
+/// eq. (20) (or replacing) for the activation's traces of `action`, calling `touched` with each
+/// parameter extended.
+#[inline(always)]
+fn extend(
+    e: &mut [f64],
+    na: usize,
+    rule: TraceRule,
+    (index, weight): (&[u32], &[f64]),
+    action: usize,
+    mut touched: impl FnMut(usize),
+) {
+    for (&i, &w) in index.iter().zip(weight) {
+        let k = i as usize * na + action;
+        e[k] = rule.extend(e[k], w);
+        touched(k);
     }
 }
 
