@@ -47,7 +47,6 @@ const MAX_UNROLLED_ACTIONS: usize = 16;
 /// Q parameters and eligibility traces of one trial.
 #[derive(Debug, Clone)]
 pub struct Learner {
-    n_features: usize,
     n_actions: usize,
     /// The most features one state activates (with the vector level, chooses the trace layout).
     max_active: usize,
@@ -78,21 +77,14 @@ enum Traces {
 }
 
 impl Traces {
-    /// The layout for a table of `n_features × n_actions` parameters whose states activate at most
-    /// `max_active` features, with kernels at `simd`: none under Q(0); a list for one feature a
+    /// The layout for a table of `n` parameters whose states activate at most `max_active`
+    /// features, with kernels at `simd`: none under Q(0); a list for one feature a
     /// state (crisp tables); else chunks (which turn into a full sweep once most are live),
     /// except at the baseline level, whose 2-wide vectors make a chunk cost more than the few
     /// live traces it may hold in a table of many actions: there the [`DENSE_TRACE_RATIO`] rule
     /// chooses a full sweep or a list. Every layout gives the same results; the rule is measured
     /// speed (docs/speed.md).
-    fn for_table(
-        n_features: usize,
-        n_actions: usize,
-        max_active: usize,
-        rule: TraceRule,
-        simd: Simd,
-    ) -> Self {
-        let n = n_features * n_actions;
+    fn for_table(n: usize, max_active: usize, rule: TraceRule, simd: Simd) -> Self {
         if rule.decay == 0.0 {
             Self::None
         } else if max_active <= 1 {
@@ -118,17 +110,17 @@ impl Learner {
     pub fn new(n_features: usize, n_actions: usize, max_active: usize, cfg: &LearnerConfig) -> Self {
         let rule = TraceRule::of(cfg);
         let simd = crate::simd::level();
-        let traces = Traces::for_table(n_features, n_actions, max_active, rule, simd);
-        let q = vec![cfg.q_init; n_features * n_actions];
-        Self { n_features, n_actions, max_active, q, traces, rule, alpha: cfg.alpha, last_step: 0.0, simd }
+        let n = n_features * n_actions;
+        let traces = Traces::for_table(n, max_active, rule, simd);
+        let q = vec![cfg.q_init; n];
+        Self { n_actions, max_active, q, traces, rule, alpha: cfg.alpha, last_step: 0.0, simd }
     }
 
     /// The same learner with its kernels at `simd` (capped by what the CPU has), and the trace
     /// layout that suits them. Only before the first update: the traces start empty again.
     pub fn with_simd(mut self, simd: Simd) -> Self {
         self.simd = simd.capped();
-        self.traces =
-            Traces::for_table(self.n_features, self.n_actions, self.max_active, self.rule, self.simd);
+        self.traces = Traces::for_table(self.q.len(), self.max_active, self.rule, self.simd);
         self
     }
 

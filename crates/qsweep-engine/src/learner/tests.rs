@@ -210,7 +210,7 @@ fn keeps_is_the_literal_decay_is_non_zero() {
 #[test]
 fn many_action_tables_sweep_only_their_live_traces() {
     let rule = TraceRule::of(&config(0.5, false, 1e-10));
-    let layout = |nf, na, active, simd| match Traces::for_table(nf, na, active, rule, simd) {
+    let layout = |nf: usize, na: usize, active, simd| match Traces::for_table(nf * na, active, rule, simd) {
         Traces::Dense(_) => "dense",
         Traces::Sparse(_) => "sparse",
         Traces::Chunked(_) => "chunked",

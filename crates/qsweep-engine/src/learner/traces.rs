@@ -158,7 +158,7 @@ fn sweep(q: &mut [f64], trace: &mut [f64], rule: TraceRule, step: f64) {
 }
 
 /// Parameters per chunk of [`ChunkTraces`]: one AVX-512 register of f64, two AVX2 ones.
-pub(super) const CHUNK: usize = 8;
+const CHUNK: usize = 8;
 
 /// One trace per parameter, as in [`DenseTraces`], but swept only where a chunk of [`CHUNK`]
 /// parameters holds a live trace: a fuzzy activation's traces lie in short runs of the table
@@ -198,9 +198,8 @@ impl ChunkTraces {
             let e = &mut self.dense.e;
             let n = e.len();
             for &c in &self.live {
-                let c = c as usize;
-                e[c * CHUNK..((c + 1) * CHUNK).min(n)].fill(0.0);
-                self.listed[c] = false;
+                e[chunk(c, n)].fill(0.0);
+                self.listed[c as usize] = false;
             }
         }
         self.live.clear();
@@ -278,13 +277,17 @@ fn extend(
     }
 }
 
+/// The parameters of chunk `c` in a table of `n` (the last chunk may be short).
+fn chunk(c: u32, n: usize) -> std::ops::Range<usize> {
+    let c = c as usize;
+    c * CHUNK..((c + 1) * CHUNK).min(n)
+}
+
 /// Drop from `live` the chunks whose traces are all 0.
 fn unlist_empty(e: &[f64], live: &mut Vec<u32>, listed: &mut [bool]) {
-    let n = e.len();
     live.retain(|&c| {
-        let c = c as usize;
-        let keep = e[c * CHUNK..((c + 1) * CHUNK).min(n)].iter().any(|&x| x != 0.0);
-        listed[c] = keep;
+        let keep = e[chunk(c, e.len())].iter().any(|&x| x != 0.0);
+        listed[c as usize] = keep;
         keep
     });
 }
