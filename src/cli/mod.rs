@@ -44,6 +44,9 @@ pub enum Command {
     /// Run one trial (one configuration, one seed) and print its outcome.
     Trial(trial_args::TrialArgs),
     /// Run a pipeline's missing trials in parallel, store them in the cache, then write the report.
+    ///
+    /// Each thread runs crisp trials four at a time, as lanes of one loop; `QSWEEP_LOCKSTEP=off`
+    /// runs every trial alone. Either way every trial's row is the same, only the speed differs.
     Run(run::RunArgs),
     /// Show how many of a pipeline's trials are cached and missing, without running anything.
     Status(status::StatusArgs),

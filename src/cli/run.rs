@@ -56,6 +56,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         batch_trials: a.batch_trials.max(1),
         batch_interval: std::time::Duration::from_secs_f64(a.batch_seconds.clamp(0.0, 1e9)),
         leases: Some(leases(&store)?),
+        ..ExecOptions::default()
     };
     let sel = qsweep_pipeline::run::Selection { shard: a.shard, force: a.force };
     let mut bar = super::progress::ProgressReporter::default();

@@ -14,6 +14,7 @@ pub mod actions;
 pub mod config;
 pub mod env;
 pub mod feasible;
+pub mod lanes;
 pub mod learner;
 pub mod math;
 pub mod repr;

@@ -168,6 +168,67 @@ pub fn cos(x: f64) -> f64 {
     }
 }
 
+/// [`cos`] of each of `N` values, the same bits lane by lane. The common cases, the kernel
+/// range and a one-stage reduction by π/2, are computed for every lane together without branches
+/// (both kernels, then a choice by the quadrant), so that they run as vector instructions when
+/// several trials step at once (`crate::lanes`); a lane outside them is recomputed by [`cos`].
+#[inline(always)]
+pub fn cos_lanes<const N: usize>(x: [f64; N]) -> [f64; N] {
+    let exponent = |v: f64| ((v.to_bits() >> 52) & 0x7ff) as i32;
+    let (mut y0, mut y1, mut n, mut slow) = ([0.0; N], [0.0; N], [0i32; N], [false; N]);
+    for k in 0..N {
+        let x = x[k];
+        let a = x.abs();
+        // rem_pio2_medium's first stage, as there.
+        let f_n = (x * INV_PIO2 + TO_INT) - TO_INT;
+        let r = x - f_n * PIO2_1;
+        let w = f_n * PIO2_1T;
+        let m0 = r - w;
+        let small = a < KERNEL_MAX;
+        slow[k] = !(small || (a < MEDIUM_MAX && exponent(x) - exponent(m0) <= 16));
+        // In the kernel range cos takes k_cos(x, 0), which is quadrant 0 with (y0, y1) = (x, 0).
+        y0[k] = if small { x } else { m0 };
+        y1[k] = if small { 0.0 } else { (r - m0) - w };
+        n[k] = if small { 0 } else { f_n as i32 };
+    }
+    let mut out = [0.0; N];
+    for k in 0..N {
+        let c = k_cos(y0[k], y1[k]);
+        let s = k_sin(y0[k], y1[k], true);
+        // Quadrants 0, 1, 2, 3: c, −s, −c, s (a sign flip is exact).
+        let quadrant = n[k] & 3;
+        let v = if quadrant & 1 == 0 { c } else { s };
+        out[k] = if quadrant == 1 || quadrant == 2 { -v } else { v };
+    }
+    for k in 0..N {
+        if slow[k] {
+            out[k] = cos(x[k]);
+        }
+    }
+    out
+}
+
+/// [`sin_cos`] of each of `N` values, the same bits lane by lane: the kernel range (Cart-Pole's
+/// pole angle, Ball-Beam's tilt) for every lane together without branches, a lane outside it
+/// recomputed by [`sin_cos`].
+#[inline(always)]
+pub fn sin_cos_lanes<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
+    let (mut sin, mut cos) = ([0.0; N], [0.0; N]);
+    for k in 0..N {
+        let s = k_sin(x[k], 0.0, false);
+        sin[k] = if x[k].abs() < TINY { x[k] } else { s };
+        cos[k] = k_cos(x[k], 0.0);
+    }
+    for k in 0..N {
+        // NaN is not in the kernel range either.
+        let kernel = x[k].abs() < KERNEL_MAX;
+        if !kernel {
+            (sin[k], cos[k]) = sin_cos(x[k]);
+        }
+    }
+    (sin, cos)
+}
+
 /// (sin x, cos x), each exactly what [`sin`] and [`cos`] return.
 #[inline]
 pub fn sin_cos(x: f64) -> (f64, f64) {
@@ -450,6 +511,103 @@ mod tests {
             assert!(e >= prev, "exp({x}) = {e} < {prev}");
             prev = e;
             x += 1.0 / 1024.0 / 3.0;
+        }
+    }
+
+    crate::simd::dispatch! {
+        /// sin_cos_lanes over four lanes compiled at `simd`'s width.
+        fn sin_cos_lanes_at => sin_cos_lanes_4(x: &mut [f64; 4], c: &mut [f64; 4])
+    }
+
+    #[inline(always)]
+    fn sin_cos_lanes_4(x: &mut [f64; 4], c: &mut [f64; 4]) {
+        (*x, *c) = sin_cos_lanes(*x);
+    }
+
+    /// sin_cos_lanes is sin_cos (so sin and cos), bit for bit, lane by lane, at every level: over
+    /// the pole's and the beam's angles, at the kernel range's and the tiny range's edges, and
+    /// beyond them.
+    #[test]
+    fn sin_cos_lanes_gives_the_bits_of_sin_cos_at_every_level() {
+        let mut inputs: Vec<f64> = (0..20_000).map(|i| -1.0 + f64::from(i) * 0.000_100_007).collect();
+        for e in [KERNEL_MAX, TINY, MEDIUM_MAX] {
+            for u in 0..4u64 {
+                let v = f64::from_bits(e.to_bits() - 2 + u);
+                inputs.extend([v, -v]);
+            }
+        }
+        inputs.extend([0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e10, 5e-324, 3.0, -7.0]);
+        while !inputs.len().is_multiple_of(4) {
+            inputs.push(0.5);
+        }
+        for simd in crate::simd::Simd::available() {
+            for chunk in inputs.chunks_exact(4) {
+                let (mut s, mut c): ([f64; 4], [f64; 4]) = (chunk.try_into().unwrap(), [0.0; 4]);
+                let input = s;
+                sin_cos_lanes_at(simd, &mut s, &mut c);
+                for k in 0..4 {
+                    let (ws, wc) = sin_cos(input[k]);
+                    assert_eq!(
+                        (s[k].to_bits(), c[k].to_bits()),
+                        (ws.to_bits(), wc.to_bits()),
+                        "{simd:?}: {}",
+                        input[k]
+                    );
+                    assert_eq!(
+                        (ws.to_bits(), wc.to_bits()),
+                        (sin(input[k]).to_bits(), cos(input[k]).to_bits())
+                    );
+                }
+            }
+        }
+    }
+
+    crate::simd::dispatch! {
+        /// cos_lanes over four lanes compiled at `simd`'s width.
+        fn cos_lanes_at => cos_lanes_4(x: &mut [f64; 4])
+    }
+
+    #[inline(always)]
+    fn cos_lanes_4(x: &mut [f64; 4]) {
+        *x = cos_lanes(*x);
+    }
+
+    /// cos_lanes is cos, bit for bit, lane by lane, at every vector level: across Mountain Car's
+    /// range of 3x and beyond, at the kernel range's edge, near multiples of π/2 (where cos takes
+    /// a second reduction stage), and for values that only cos's slow paths take.
+    #[test]
+    fn cos_lanes_gives_the_bits_of_cos_at_every_level() {
+        let mut inputs: Vec<f64> = (0..40_000).map(|i| -8.0 + f64::from(i) * 0.000_400_013).collect();
+        for m in -6..=6 {
+            let c = f64::from(m) * std::f64::consts::FRAC_PI_2;
+            for d in [0.0, 1e-300, 1e-17, 1e-12, 2e-6, 1.5e-5, 3e-5, 1e-3] {
+                inputs.extend([
+                    c + d,
+                    c - d,
+                    f64::from_bits(c.to_bits() + 1),
+                    f64::from_bits(c.to_bits().wrapping_sub(1)),
+                ]);
+            }
+        }
+        for e in [KERNEL_MAX, std::f64::consts::FRAC_PI_4, TINY, MEDIUM_MAX] {
+            for u in 0..4u64 {
+                let v = f64::from_bits(e.to_bits() - 2 + u);
+                inputs.extend([v, -v]);
+            }
+        }
+        inputs.extend([0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e10, -3e7, 5e-324]);
+        while !inputs.len().is_multiple_of(4) {
+            inputs.push(1.0);
+        }
+        for simd in crate::simd::Simd::available() {
+            for chunk in inputs.chunks_exact(4) {
+                let mut lanes: [f64; 4] = chunk.try_into().unwrap();
+                let (input, want) = (lanes, lanes.map(cos));
+                cos_lanes_at(simd, &mut lanes);
+                for (got, want) in lanes.iter().zip(&want) {
+                    assert_eq!(got.to_bits(), want.to_bits(), "{simd:?}: {input:?} → {got:e} vs {want:e}");
+                }
+            }
         }
     }
 

@@ -5,7 +5,9 @@
 
 use super::actions::action_set;
 use super::config::{Success, TieBreak, TrialConfig, Truncation};
-use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, TaskKind};
+use super::env::{
+    BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, State, TaskKind, Transition,
+};
 use super::learner::Learner;
 use super::repr::{Crisp, Encode, Fuzzy, ReprKind};
 use super::rng::TrialRng;
@@ -101,20 +103,19 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
     }
 }
 
-/// ε-greedy action choice; returns the action and whether it is greedy.
+/// ε-greedy action choice; returns the action and whether it is greedy. Among equal greatest
+/// values (NaN never is one) the first, or a uniform pick by `tie`.
 #[inline(always)]
 fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize, bool) {
-    let mut best = f64::NEG_INFINITY;
+    // Without a branch per action (which way it goes changes from step to step, and a wrong guess
+    // costs more than the few actions): the greatest value, then how many equal it and the first.
+    let best = greatest(q);
     let mut n_best = 0usize;
-    let mut first = 0usize;
-    for (a, &v) in q.iter().enumerate() {
-        if v > best {
-            best = v;
-            n_best = 1;
-            first = a;
-        } else if v == best {
-            n_best += 1;
-        }
+    let mut first = 0;
+    for (a, &v) in q.iter().enumerate().rev() {
+        let eq = v == best;
+        n_best += usize::from(eq);
+        first = if eq { a } else { first };
     }
     if rng.unit() < epsilon {
         let a = rng.below(q.len());
@@ -128,10 +129,18 @@ fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize,
     (a, true)
 }
 
+/// The greatest of `q` (−∞ for none; NaN is skipped), as `fold(−∞, f64::max)` gives it but for
+/// the sign of a zero, which no TD target can tell (r + γ·(±0) is r for the rewards of eqs.
+/// 23–25): one comparison per value, without `max`'s NaN handling.
+#[inline(always)]
+fn greatest(q: &[f64]) -> f64 {
+    q.iter().fold(f64::NEG_INFINITY, |m, &v| if v > m { v } else { m })
+}
+
 fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R, simd: Simd) -> Outcome {
-    let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
+    let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
         .with_simd(simd);
-    episodes(cfg, seed, env, repr, &mut learner)
+    episodes(cfg, seed, env, repr, learner).0
 }
 
 /// A trial's outcome and its final Q parameters (for tests of single updates).
@@ -142,8 +151,8 @@ pub fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
         let r = &cfg.repr;
         assert_eq!(r.kind, ReprKind::Crisp);
         let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
-        let mut learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
-        let o = episodes(cfg, seed, env, repr, &mut learner);
+        let learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
+        let (o, learner) = episodes(cfg, seed, env, repr, learner);
         (o, learner.params().to_vec())
     }
     match &cfg.env {
@@ -153,103 +162,207 @@ pub fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
     }
 }
 
+/// One trial run alone: [`TrialRun`]'s steps in one loop with its system.
 fn episodes<E: Environment, R: Encode>(
     cfg: &TrialConfig,
     seed: u64,
     mut env: E,
     repr: R,
-    learner: &mut Learner,
-) -> Outcome {
-    let l = &cfg.learner;
-    let actions = action_set(cfg.env.action_max(), cfg.actions);
-    let na = actions.len();
-    let gym_start = cfg.start == StartKind::Gym;
-    let cut_is_terminal = cfg.limits.truncation == Truncation::Terminal;
-    let mut rng = TrialRng::new(seed);
-    let (mut phi, mut phi_next) = (R::Active::default(), R::Active::default());
-    let (mut qs, mut qs_next) = (vec![0.0; na], vec![0.0; na]);
-    let cap = cfg.limits.episode_cap();
-    let mut lengths = Vec::new();
-    let mut total_steps = 0u64;
-    let mut streak = 0u32;
-    let mut window = match cfg.limits.success {
-        Success::Solved { window, mean_length, .. } => Some(SolvedWindow::new(window, mean_length, E::TASK)),
-        _ => None,
+    learner: Learner,
+) -> (Outcome, Learner) {
+    let mut run = TrialRun::new::<E>(cfg, seed, repr, learner);
+    let outcome = match run.begin(&mut env) {
+        Some(o) => o,
+        None => loop {
+            let action = run.choose();
+            let t = env.step(action);
+            if let Some(o) = run.learn(&mut env, t) {
+                break o;
+            }
+        },
     };
+    (outcome, run.learner)
+}
 
-    let finish = |stop, lengths: Vec<u32>, total_steps, failure| Outcome {
-        converged: stop == StopReason::Goal,
-        episodes_to_goal: (stop == StopReason::Goal).then_some(lengths.len() as u32),
-        episodes: lengths.len() as u32,
-        total_steps,
-        stop,
-        failure,
-        episode_lengths: lengths,
-    };
+/// One trial as a machine that the caller steps: [`choose`](Self::choose) an action, step the
+/// system with it, and [`learn`](Self::learn) from the transition, until `learn` returns the
+/// outcome. Run alone ([`run_trial`]) or as one lane of several sharing a loop
+/// ([`crate::lanes`]), a trial performs the same operations in the same order, so its outcome is
+/// the same.
+pub(crate) struct TrialRun<'c, R: Encode> {
+    cfg: &'c TrialConfig,
+    repr: R,
+    learner: Learner,
+    /// The action values, A_n.
+    actions: Vec<f64>,
+    gym_start: bool,
+    cut_is_terminal: bool,
+    rng: TrialRng,
+    /// φ(s_t), and scratch for φ(s_{t+1}).
+    phi: R::Active,
+    phi_next: R::Active,
+    /// Q(s_t, ·), and scratch for Q(s_{t+1}, ·).
+    qs: Vec<f64>,
+    qs_next: Vec<f64>,
+    cap: u64,
+    lengths: Vec<u32>,
+    total_steps: u64,
+    streak: u32,
+    window: Option<SolvedWindow>,
+    /// The episode running (1-based; 0 before the first).
+    episode: u32,
+    /// Steps of this episode so far.
+    len: u64,
+    /// The action chosen at s_t.
+    action: usize,
+}
 
-    for episode in 1..=cfg.limits.max_episodes {
-        if gym_start {
-            env.reset_gym(&mut rng);
+impl<'c, R: Encode> TrialRun<'c, R> {
+    /// The trial `cfg` with `seed` on system `E`, before its first episode.
+    pub(crate) fn new<E: Environment>(cfg: &'c TrialConfig, seed: u64, repr: R, learner: Learner) -> Self {
+        let actions = action_set(cfg.env.action_max(), cfg.actions);
+        let na = actions.len();
+        let window = match cfg.limits.success {
+            Success::Solved { window, mean_length, .. } => {
+                Some(SolvedWindow::new(window, mean_length, E::TASK))
+            }
+            _ => None,
+        };
+        Self {
+            cfg,
+            repr,
+            learner,
+            actions,
+            gym_start: cfg.start == StartKind::Gym,
+            cut_is_terminal: cfg.limits.truncation == Truncation::Terminal,
+            rng: TrialRng::new(seed),
+            phi: R::Active::default(),
+            phi_next: R::Active::default(),
+            qs: vec![0.0; na],
+            qs_next: vec![0.0; na],
+            cap: cfg.limits.episode_cap(),
+            lengths: Vec::new(),
+            total_steps: 0,
+            streak: 0,
+            window,
+            episode: 0,
+            len: 0,
+            action: 0,
+        }
+    }
+
+    /// Start the next episode with `env` at its start state, or the outcome once `max_episodes`
+    /// have run.
+    pub(crate) fn begin<E: Environment>(&mut self, env: &mut E) -> Option<Outcome> {
+        if self.episode >= self.cfg.limits.max_episodes {
+            return Some(self.finish(StopReason::MaxEpisodes, None));
+        }
+        self.episode += 1;
+        if self.gym_start {
+            env.reset_gym(&mut self.rng);
         } else {
             env.reset();
         }
-        learner.clear_traces();
-        repr.encode(env.state(), &mut phi);
-        learner.q_values(&phi, &mut qs);
-        let mut len = 0u64;
-        let terminal = loop {
-            let (a, greedy) = select(&qs, l.epsilon, l.tie_break, &mut rng);
-            if l.watkins_cut && !greedy {
-                learner.clear_traces();
-            }
-            let t = env.step(actions[a]);
-            len += 1;
-            let s = env.state();
-            // At the episode step limit, `terminal` truncation learns as if the task ended there.
-            let target = if t.terminal || (cut_is_terminal && len >= cap) {
-                t.reward
-            } else {
-                repr.encode(s, &mut phi_next);
-                learner.q_values(&phi_next, &mut qs_next);
-                t.reward + l.gamma * qs_next.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-            };
-            let delta = target - qs[a];
-            if !delta.is_finite() || !s[..E::DIM].iter().all(|v| v.is_finite()) {
-                lengths.push(len as u32);
-                let what = if delta.is_finite() { "state" } else { "TD error" };
-                let msg =
-                    format!("non-finite {what} at episode {episode}, step {len} (state {:?})", &s[..E::DIM]);
-                return finish(StopReason::Diverged, lengths, total_steps + len, Some(msg));
-            }
-            learner.update(&phi, a, delta);
-            if t.terminal || len >= cap {
-                break t.terminal;
-            }
-            std::mem::swap(&mut phi, &mut phi_next);
-            // qs_next is Q(s_{t+1}, ·) from before the update; phi_next is now φ(s_t).
-            std::mem::swap(&mut qs, &mut qs_next);
-            learner.refresh_after_update(&phi, &phi_next, a, &mut qs);
+        self.learner.clear_traces();
+        self.repr.encode(env.state(), &mut self.phi);
+        self.learner.q_values(&self.phi, &mut self.qs);
+        self.len = 0;
+        None
+    }
+
+    /// The ε-greedy action at s_t (eq. 12), as the value to step the system with.
+    #[inline(always)]
+    pub(crate) fn choose(&mut self) -> f64 {
+        let l = &self.cfg.learner;
+        let (a, greedy) = select(&self.qs, l.epsilon, l.tie_break, &mut self.rng);
+        if l.watkins_cut && !greedy {
+            self.learner.clear_traces();
+        }
+        self.action = a;
+        self.actions[a]
+    }
+
+    /// Learn from the step `env` just took under the chosen action, which returned `t`; at an
+    /// episode's end, judge it and begin the next. Returns the outcome once the trial stops.
+    #[inline(always)]
+    pub(crate) fn learn<E: Environment>(&mut self, env: &mut E, t: Transition) -> Option<Outcome> {
+        let l = &self.cfg.learner;
+        let a = self.action;
+        self.len += 1;
+        let s = env.state();
+        // At the episode step limit, `terminal` truncation learns as if the task ended there.
+        let target = if t.terminal || (self.cut_is_terminal && self.len >= self.cap) {
+            t.reward
+        } else {
+            self.repr.encode(s, &mut self.phi_next);
+            self.learner.q_values(&self.phi_next, &mut self.qs_next);
+            t.reward + l.gamma * greatest(&self.qs_next)
         };
-        lengths.push(len as u32);
-        total_steps += len;
-        let success = match (&cfg.limits.success, E::TASK) {
+        let delta = target - self.qs[a];
+        if !delta.is_finite() || !s[..E::DIM].iter().all(|v| v.is_finite()) {
+            return Some(self.diverged::<E>(delta, *s));
+        }
+        self.learner.update(&self.phi, a, delta);
+        if t.terminal || self.len >= self.cap {
+            return self.end_episode(env, t.terminal);
+        }
+        std::mem::swap(&mut self.phi, &mut self.phi_next);
+        // qs_next is Q(s_{t+1}, ·) from before the update; phi_next is now φ(s_t).
+        std::mem::swap(&mut self.qs, &mut self.qs_next);
+        self.learner.refresh_after_update(&self.phi, &self.phi_next, a, &mut self.qs);
+        None
+    }
+
+    /// The outcome of a trial whose TD error `delta` or state `s` stopped being finite.
+    #[cold]
+    fn diverged<E: Environment>(&mut self, delta: f64, s: State) -> Outcome {
+        self.lengths.push(self.len as u32);
+        self.total_steps += self.len;
+        let what = if delta.is_finite() { "state" } else { "TD error" };
+        let (episode, len) = (self.episode, self.len);
+        let msg = format!("non-finite {what} at episode {episode}, step {len} (state {:?})", &s[..E::DIM]);
+        self.finish(StopReason::Diverged, Some(msg))
+    }
+
+    /// Judge the episode that just ended (`terminal`: by a terminal state, else at the cap);
+    /// stop the trial, or begin the next episode.
+    fn end_episode<E: Environment>(&mut self, env: &mut E, terminal: bool) -> Option<Outcome> {
+        let len = self.len;
+        self.lengths.push(len as u32);
+        self.total_steps += len;
+        let success = match (&self.cfg.limits.success, E::TASK) {
             (Success::Balance { .. }, TaskKind::Survival) => !terminal,
             (Success::Reach { within, streak: need, .. }, TaskKind::GoalReaching) => {
-                streak = if terminal && len <= *within { streak + 1 } else { 0 };
-                streak >= *need
+                self.streak = if terminal && len <= *within { self.streak + 1 } else { 0 };
+                self.streak >= *need
             }
             // A cut episode is an ordinary one here: only the window's mean length counts.
-            (Success::Solved { .. }, _) => window.as_mut().expect("built for Solved").push(&lengths),
+            (Success::Solved { .. }, _) => {
+                self.window.as_mut().expect("built for Solved").push(&self.lengths)
+            }
             _ => unreachable!("validated: success criterion matches the task kind"),
         };
         if success {
-            return finish(StopReason::Goal, lengths, total_steps, None);
+            return Some(self.finish(StopReason::Goal, None));
         }
-        if total_steps >= cfg.limits.max_total_steps {
-            return finish(StopReason::MaxTotalSteps, lengths, total_steps, None);
+        if self.total_steps >= self.cfg.limits.max_total_steps {
+            return Some(self.finish(StopReason::MaxTotalSteps, None));
+        }
+        self.begin(env)
+    }
+
+    fn finish(&mut self, stop: StopReason, failure: Option<String>) -> Outcome {
+        let lengths = std::mem::take(&mut self.lengths);
+        Outcome {
+            converged: stop == StopReason::Goal,
+            episodes_to_goal: (stop == StopReason::Goal).then_some(lengths.len() as u32),
+            episodes: lengths.len() as u32,
+            total_steps: self.total_steps,
+            stop,
+            failure,
+            episode_lengths: lengths,
         }
     }
-    finish(StopReason::MaxEpisodes, lengths, total_steps, None)
 }
 
 /// Roll a system forward from `state` under the given action values, stopping after the first

@@ -8,7 +8,7 @@
 //! 0 at every episode start and is the system's hidden third state entry: the representation
 //! sees only (x, ẋ).
 
-use super::environment::{scalar_params, Environment, State, TaskKind, Transition};
+use super::environment::{scalar_params, Environment, State, TaskKind, Transition, LANES};
 use serde::{Deserialize, Serialize};
 
 /// What a Ball-Beam action sets.
@@ -140,7 +140,20 @@ impl Environment for BallBeam {
 
     #[inline]
     fn step(&mut self, action: f64) -> Transition {
-        let angle = match self.p.control {
+        let angle = self.angle(action);
+        self.advance(crate::math::sin(angle))
+    }
+
+    fn step_each(envs: &mut [Self], actions: &[f64], out: &mut [Transition]) {
+        super::environment::step_each_in_lanes(envs, actions, out, step_lanes_at);
+    }
+}
+
+impl BallBeam {
+    /// The beam angle of this step under `action` (under `rate` control, kept as state).
+    #[inline(always)]
+    fn angle(&mut self, action: f64) -> f64 {
+        match self.p.control {
             BeamControl::Angle => action,
             BeamControl::Rate => {
                 let theta =
@@ -148,15 +161,36 @@ impl Environment for BallBeam {
                 self.state[THETA] = theta;
                 theta
             }
-        };
+        }
+    }
+
+    /// The rest of the step, given the sine of its beam angle.
+    #[inline(always)]
+    fn advance(&mut self, sin_angle: f64) -> Transition {
         let [x, x_dot, ..] = self.state;
         // Eq. (1): position advances with the previous velocity (explicit Euler).
         let x = x + self.p.tau * x_dot;
-        let x_dot = x_dot + self.p.tau * self.p.gravity * crate::math::sin(angle);
+        let x_dot = x_dot + self.p.tau * self.p.gravity * sin_angle;
         self.state[0] = x;
         self.state[1] = x_dot;
         let failed = x.abs() > self.half_length;
         Transition { reward: if failed { -1.0 } else { 0.0 }, terminal: failed }
+    }
+}
+
+crate::simd::dispatch! {
+    /// [`step_lanes`] at `level`'s vector width.
+    fn step_lanes_at => step_lanes(envs: &mut [BallBeam; LANES], actions: &[f64; LANES], out: &mut [Transition; LANES])
+}
+
+/// [`LANES`] ball-beams' steps: their sines computed together ([`crate::math::sin_cos_lanes`]), the
+/// rest of each step exactly as [`Environment::step`] takes it.
+#[inline(always)]
+fn step_lanes(envs: &mut [BallBeam; LANES], actions: &[f64; LANES], out: &mut [Transition; LANES]) {
+    let angle: [f64; LANES] = std::array::from_fn(|k| envs[k].angle(actions[k]));
+    let (sin, _) = crate::math::sin_cos_lanes(angle);
+    for k in 0..LANES {
+        out[k] = envs[k].advance(sin[k]);
     }
 }
 

@@ -1,7 +1,7 @@
 //! Cart-Pole, eq. (2): Euler integration of the frictionless cart-pole (Barto et al.; Gymnasium's
 //! CartPole-v1 step, with the paper's g = 9.81). Reward eq. (24): 0, or −1 on failure.
 
-use super::environment::{scalar_params, Environment, State, TaskKind, Transition};
+use super::environment::{scalar_params, Environment, State, TaskKind, Transition, LANES};
 use crate::math;
 use crate::rng::TrialRng;
 use serde::{Deserialize, Serialize};
@@ -115,8 +115,20 @@ impl Environment for CartPole {
 
     #[inline]
     fn step(&mut self, force: f64) -> Transition {
+        let (sin, cos) = math::sin_cos(self.state[2]);
+        self.advance(force, sin, cos)
+    }
+
+    fn step_each(envs: &mut [Self], actions: &[f64], out: &mut [Transition]) {
+        super::environment::step_each_in_lanes(envs, actions, out, step_lanes_at);
+    }
+}
+
+impl CartPole {
+    /// The step under `force` from the current state, given sin θ and cos θ.
+    #[inline(always)]
+    fn advance(&mut self, force: f64, sin: f64, cos: f64) -> Transition {
         let [x, x_dot, theta, theta_dot] = self.state;
-        let (sin, cos) = math::sin_cos(theta);
         // Same operation order as Gymnasium's CartPole-v1, so trajectories agree to the last bit.
         let temp = (force + self.pole_mass_length * theta_dot * theta_dot * sin) / self.total_mass;
         let theta_acc = (self.p.gravity * sin - cos * temp)
@@ -131,5 +143,20 @@ impl Environment for CartPole {
             || theta < -self.theta_limit
             || theta > self.theta_limit;
         Transition { reward: if failed { -1.0 } else { 0.0 }, terminal: failed }
+    }
+}
+
+crate::simd::dispatch! {
+    /// [`step_lanes`] at `level`'s vector width.
+    fn step_lanes_at => step_lanes(envs: &mut [CartPole; LANES], actions: &[f64; LANES], out: &mut [Transition; LANES])
+}
+
+/// [`LANES`] cart-poles' steps: their sin θ and cos θ computed together
+/// ([`math::sin_cos_lanes`]), the rest of each step exactly as [`Environment::step`] takes it.
+#[inline(always)]
+fn step_lanes(envs: &mut [CartPole; LANES], actions: &[f64; LANES], out: &mut [Transition; LANES]) {
+    let (sin, cos) = math::sin_cos_lanes::<LANES>(std::array::from_fn(|k| envs[k].state[2]));
+    for k in 0..LANES {
+        out[k] = envs[k].advance(actions[k], sin[k], cos[k]);
     }
 }

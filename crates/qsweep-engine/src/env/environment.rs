@@ -2,6 +2,7 @@
 //! step, and the macro that gives every parameter struct its `--param NAME=VALUE` names.
 
 use crate::rng::TrialRng;
+use crate::simd::Simd;
 
 /// Largest number of state variables of any system (Cart-Pole's four).
 pub const MAX_DIM: usize = 4;
@@ -48,6 +49,17 @@ pub trait Environment {
     fn state(&self) -> &State;
     /// Advance one time step under the action value (force, tilt angle or rate, or throttle).
     fn step(&mut self, action: f64) -> Transition;
+    /// Step every system in `envs` under its own action, `out[k] = envs[k].step(actions[k])`:
+    /// several trials' steps at once (`crate::lanes`). A system may override it to run its
+    /// dynamics as vector lanes; each lane's result must be the bits `step` gives.
+    fn step_each(envs: &mut [Self], actions: &[f64], out: &mut [Transition])
+    where
+        Self: Sized,
+    {
+        for ((e, &a), t) in envs.iter_mut().zip(actions).zip(out) {
+            *t = e.step(a);
+        }
+    }
 }
 
 /// Generates `NAMES` and `slot(name) -> &mut f64` for a parameter struct's scalar fields.
@@ -68,3 +80,28 @@ macro_rules! scalar_params {
     };
 }
 pub(crate) use scalar_params;
+
+/// Systems a vector kernel steps together ([`Environment::step_each`]).
+pub const LANES: usize = 4;
+
+/// [`Environment::step_each`] by `kernel`, which steps [`LANES`] systems at a time at a vector
+/// level; the systems left over step one by one.
+#[inline(always)]
+pub(crate) fn step_each_in_lanes<E: Environment>(
+    envs: &mut [E],
+    actions: &[f64],
+    out: &mut [Transition],
+    kernel: fn(Simd, &mut [E; LANES], &[f64; LANES], &mut [Transition; LANES]),
+) {
+    let level = crate::simd::level();
+    let mut e = envs.chunks_exact_mut(LANES);
+    let mut a = actions.chunks_exact(LANES);
+    let mut o = out.chunks_exact_mut(LANES);
+    for ((e, a), o) in (&mut e).zip(&mut a).zip(&mut o) {
+        let e: &mut [E; LANES] = e.try_into().expect("LANES systems");
+        kernel(level, e, a.try_into().expect("LANES actions"), o.try_into().expect("LANES transitions"));
+    }
+    for ((e, &a), o) in e.into_remainder().iter_mut().zip(a.remainder()).zip(o.into_remainder()) {
+        *o = e.step(a);
+    }
+}

@@ -12,7 +12,7 @@ mod mountain_car;
 
 pub use ball_beam::{BallBeam, BallBeamParams, BeamControl, DEFAULT_RATE_MAX as BALL_BEAM_DEFAULT_RATE_MAX};
 pub use cart_pole::{CartPole, CartPoleParams, GYM_START as CART_POLE_GYM_START};
-pub use environment::{Environment, State, TaskKind, Transition, MAX_DIM};
+pub use environment::{Environment, State, TaskKind, Transition, LANES, MAX_DIM};
 pub use mountain_car::{MountainCar, MountainCarParams, GYM_START_X as MOUNTAIN_CAR_GYM_START_X};
 
 use serde::{Deserialize, Serialize};

@@ -2,7 +2,7 @@
 //! velocity clipped to ±v_max, position clipped to [x_min, x_max], and a negative velocity zeroed at
 //! the left wall. Reward eq. (25): 1 (terminal) at the goal x ≥ goal, −1 otherwise.
 
-use super::environment::{scalar_params, Environment, State, TaskKind, Transition};
+use super::environment::{scalar_params, Environment, State, TaskKind, Transition, LANES};
 use crate::math;
 use crate::rng::TrialRng;
 use serde::{Deserialize, Serialize};
@@ -88,9 +88,21 @@ impl Environment for MountainCar {
 
     #[inline]
     fn step(&mut self, action: f64) -> Transition {
+        self.advance(action, math::cos(3.0 * self.state[0]))
+    }
+
+    fn step_each(envs: &mut [Self], actions: &[f64], out: &mut [Transition]) {
+        super::environment::step_each_in_lanes(envs, actions, out, step_lanes_at);
+    }
+}
+
+impl MountainCar {
+    /// The step under `action` from the current state, given cos(3x).
+    #[inline(always)]
+    fn advance(&mut self, action: f64, cos_3x: f64) -> Transition {
         let [x, v, ..] = self.state;
         // Operation order as in MountainCar-v0 (velocity first, then position from the new velocity).
-        let mut v = v + action * self.p.force + math::cos(3.0 * x) * (-self.p.gravity);
+        let mut v = v + action * self.p.force + cos_3x * (-self.p.gravity);
         v = v.clamp(-self.p.v_max, self.p.v_max);
         let mut x = x + v;
         x = x.clamp(self.p.x_min, self.p.x_max);
@@ -101,5 +113,20 @@ impl Environment for MountainCar {
         self.state[1] = v;
         let goal = x >= self.p.goal;
         Transition { reward: if goal { 1.0 } else { -1.0 }, terminal: goal }
+    }
+}
+
+crate::simd::dispatch! {
+    /// [`step_lanes`] at `level`'s vector width.
+    fn step_lanes_at => step_lanes(cars: &mut [MountainCar; LANES], actions: &[f64; LANES], out: &mut [Transition; LANES])
+}
+
+/// [`LANES`] cars' steps: their cos(3x) computed together ([`math::cos_lanes`]), the rest of each
+/// step exactly as [`Environment::step`] takes it.
+#[inline(always)]
+fn step_lanes(cars: &mut [MountainCar; LANES], actions: &[f64; LANES], out: &mut [Transition; LANES]) {
+    let cos_3x = math::cos_lanes::<LANES>(std::array::from_fn(|k| 3.0 * cars[k].state[0]));
+    for k in 0..LANES {
+        out[k] = cars[k].advance(actions[k], cos_3x[k]);
     }
 }

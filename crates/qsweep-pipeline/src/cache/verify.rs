@@ -17,7 +17,7 @@ use super::key::{Key, ENGINE_VERSION};
 use super::record::TrialRecord;
 use super::rows::read_segment;
 use super::store::{Damaged, Store};
-use qsweep_engine::{run_trial, Outcome};
+use qsweep_engine::{run_trial, Outcome, TrialConfig};
 use rayon::prelude::*;
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -120,13 +120,24 @@ impl Store {
         // One recomputation per trial, compared with each of its stored rows.
         let trials: Vec<&[TrialRecord]> = rows.chunk_by(|a, b| a.key == b.key).collect();
         report.checked = trials.len();
+        // As `qsweep run` computes them: crisp trials in lockstep (in other company than the run
+        // that stored them), unless QSWEEP_LOCKSTEP=off.
+        let jobs: Vec<(&TrialConfig, u64)> =
+            trials.iter().map(|same| (&same[0].config, same[0].seed)).collect();
+        let again: Vec<Outcome> = if qsweep_engine::lanes::enabled() {
+            jobs.par_chunks(4 * qsweep_engine::lanes::LANES)
+                .flat_map_iter(qsweep_engine::lanes::run_batch)
+                .collect()
+        } else {
+            jobs.par_iter().map(|&(c, seed)| run_trial(c, seed)).collect()
+        };
         report.differing = trials
             .par_iter()
-            .filter_map(|same| {
-                let again = run_trial(&same[0].config, same[0].seed);
+            .zip(&again)
+            .filter_map(|(same, again)| {
                 let mut fields: Vec<&'static str> = Vec::new();
                 for r in *same {
-                    for f in differing_fields(&r.outcome, &again) {
+                    for f in differing_fields(&r.outcome, again) {
                         if !fields.contains(&f) {
                             fields.push(f);
                         }
@@ -183,7 +194,7 @@ mod tests {
     use super::*;
     use qsweep_engine::env::SystemKind;
     use qsweep_engine::repr::ReprKind;
-    use qsweep_engine::{run_trial, Algorithm, TrialConfig};
+    use qsweep_engine::{Algorithm, TrialConfig};
 
     fn records(n: u64) -> Vec<TrialRecord> {
         let mut c = TrialConfig::paper(SystemKind::BallBeam, ReprKind::Crisp, Algorithm::Q0, vec![2, 2], 3);

@@ -22,7 +22,7 @@ use crate::cache::TrialRecord;
 pub use job::{jobs, Job};
 use leased::{Pick, Scheduler, POLL};
 use qsweep_engine::repr::ReprKind;
-use qsweep_engine::{run_trial, TrialConfig};
+use qsweep_engine::{lanes, run_trial, TrialConfig};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
@@ -43,6 +43,9 @@ pub struct ExecOptions {
     /// that concurrent runs on the cache never compute one twice (`None`: run every job, as a
     /// library user without a shared cache).
     pub leases: Option<Arc<Leases>>,
+    /// Run crisp trials in lockstep, several as lanes of one loop ([`lanes::run_lockstep`]):
+    /// faster, the same rows. Default: on unless `QSWEEP_LOCKSTEP=off`.
+    pub lockstep: bool,
 }
 
 impl Default for ExecOptions {
@@ -52,6 +55,7 @@ impl Default for ExecOptions {
             batch_trials: 500,
             batch_interval: Duration::from_secs(10),
             leases: None,
+            lockstep: lanes::enabled(),
         }
     }
 }
@@ -85,6 +89,104 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     }
 }
 
+/// One worker: runs the jobs `sched` hands it until none is left, the run stops, or the
+/// collector hangs up. With `lockstep`, crisp trials run several as lanes of one loop
+/// ([`lanes::run_lockstep`]); the rows are the same either way.
+fn work(
+    jobs: &[Job<'_>],
+    sched: &Scheduler<'_>,
+    stop: &AtomicBool,
+    lockstep: bool,
+    tx: &mpsc::Sender<TrialRecord>,
+) {
+    let halted = || stop.load(Ordering::Relaxed) || INTERRUPTED.load(Ordering::Relaxed);
+    // A job picked while filling lanes that does not fit them: it runs next.
+    let mut stash = None;
+    loop {
+        if halted() {
+            break;
+        }
+        let j = match stash.take() {
+            Some(j) => j,
+            None => match sched.pick() {
+                Pick::Run(j) => j,
+                Pick::Wait => {
+                    std::thread::sleep(POLL);
+                    continue;
+                }
+                Pick::Done => break,
+            },
+        };
+        let sent = if lockstep && lanes::benefits(jobs[j].config) {
+            in_lockstep(jobs, sched, j, &mut stash, &halted, tx)
+        } else {
+            alone(jobs[j], tx)
+        };
+        if !sent {
+            break;
+        }
+    }
+}
+
+/// Run `job` alone and send its record; false once the collector has hung up.
+fn alone(job: Job<'_>, tx: &mpsc::Sender<TrialRecord>) -> bool {
+    let start = Instant::now();
+    let cpu = thread_cpu_seconds();
+    let outcome = run_trial(job.config, job.seed);
+    let cpu = thread_cpu_seconds().zip(cpu).map(|(b, a)| b - a);
+    let rec = TrialRecord::new(job.config.clone(), job.seed, outcome, start.elapsed().as_secs_f64())
+        .with_cpu_seconds(cpu);
+    debug_assert_eq!(rec.key, job.key);
+    tx.send(rec).is_ok()
+}
+
+/// Run job `first` and the jobs `sched` hands out after it in one lockstep loop, as long as they
+/// fit it (crisp, the same system); the first that does not is left in `stash`. A trial's
+/// seconds and CPU seconds are the loop's so far in proportion to its steps. False once the
+/// collector has hung up.
+fn in_lockstep(
+    jobs: &[Job<'_>],
+    sched: &Scheduler<'_>,
+    first: usize,
+    stash: &mut Option<usize>,
+    halted: &dyn Fn() -> bool,
+    tx: &mpsc::Sender<TrialRecord>,
+) -> bool {
+    let system = jobs[first].config.system();
+    let fits = |j: usize| lanes::benefits(jobs[j].config) && jobs[j].config.system() == system;
+    let mut first = Some(first);
+    let open = std::cell::Cell::new(true);
+    let (start, cpu) = (Instant::now(), thread_cpu_seconds());
+    let next = || {
+        let j = match first.take() {
+            Some(j) => j,
+            None if !open.get() || halted() || stash.is_some() => return None,
+            None => match sched.pick() {
+                Pick::Run(j) if fits(j) => j,
+                Pick::Run(j) => {
+                    *stash = Some(j);
+                    return None;
+                }
+                Pick::Wait | Pick::Done => return None,
+            },
+        };
+        Some((j, jobs[j].config, jobs[j].seed))
+    };
+    let done = |j: usize, outcome: qsweep_engine::Outcome, loop_steps: u64| {
+        let job = jobs[j];
+        let share = if loop_steps == 0 { 0.0 } else { outcome.total_steps as f64 / loop_steps as f64 };
+        let cpu = thread_cpu_seconds().zip(cpu).map(|(b, a)| (b - a) * share);
+        let seconds = start.elapsed().as_secs_f64() * share;
+        let rec = TrialRecord::new(job.config.clone(), job.seed, outcome, seconds).with_cpu_seconds(cpu);
+        debug_assert_eq!(rec.key, job.key);
+        if tx.send(rec).is_err() {
+            open.set(false);
+        }
+    };
+    lanes::run_lockstep(system, next, done);
+    open.get()
+}
+
 /// A rough relative cost of a trial, used only to start long trials first.
 pub fn estimated_cost(c: &TrialConfig) -> f64 {
     let per_step = match c.repr.kind {
@@ -115,6 +217,7 @@ pub fn execute(
     let leases = opts.leases.as_deref();
     let sched = Scheduler::new(jobs, order, threads, leases);
     let stop = AtomicBool::new(false);
+    let lockstep = opts.lockstep;
     let (tx, rx) = mpsc::channel::<TrialRecord>();
     let mut report = ExecReport::default();
     reporter.event(&Event::Started { trials: jobs.len() });
@@ -125,34 +228,7 @@ pub fn execute(
             pool.scope(|s| {
                 for _ in 0..threads {
                     let tx = tx.clone();
-                    s.spawn(move |_| loop {
-                        if stop.load(Ordering::Relaxed) || INTERRUPTED.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        let job = match sched.pick() {
-                            Pick::Run(j) => jobs[j],
-                            Pick::Wait => {
-                                std::thread::sleep(POLL);
-                                continue;
-                            }
-                            Pick::Done => break,
-                        };
-                        let start = Instant::now();
-                        let cpu = thread_cpu_seconds();
-                        let outcome = run_trial(job.config, job.seed);
-                        let cpu = thread_cpu_seconds().zip(cpu).map(|(b, a)| b - a);
-                        let rec = TrialRecord::new(
-                            job.config.clone(),
-                            job.seed,
-                            outcome,
-                            start.elapsed().as_secs_f64(),
-                        )
-                        .with_cpu_seconds(cpu);
-                        debug_assert_eq!(rec.key, job.key);
-                        if tx.send(rec).is_err() {
-                            break;
-                        }
-                    });
+                    s.spawn(move |_| work(jobs, sched, stop, lockstep, &tx));
                 }
             });
         });
@@ -254,7 +330,7 @@ mod tests {
     }
 
     #[test]
-    fn results_are_identical_on_one_or_two_threads_and_batches_cover_every_job() {
+    fn results_are_identical_on_one_or_two_threads_in_lockstep_or_alone_and_batches_cover_every_job() {
         let mut configs = Vec::new();
         for (sys, res) in [(SystemKind::BallBeam, vec![3, 3]), (SystemKind::MountainCar, vec![4, 4])] {
             for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
@@ -264,8 +340,8 @@ mod tests {
             }
         }
         let jobs = jobs_for(&configs);
-        let run = |threads| {
-            let opts = ExecOptions { jobs: threads, batch_trials: 4, ..Default::default() };
+        let run = |threads, lockstep| {
+            let opts = ExecOptions { jobs: threads, batch_trials: 4, lockstep, ..Default::default() };
             let mut got = Vec::new();
             let mut batches = 0;
             let mut events: Vec<Event> = Vec::new();
@@ -293,7 +369,11 @@ mod tests {
             got.sort_by_key(|r| r.key);
             got.into_iter().map(|r| (r.key, r.outcome)).collect::<Vec<_>>()
         };
-        assert_eq!(run(1), run(2));
+        // Crisp trials in lockstep (interleaved with fuzzy ones that run alone) or all alone.
+        let alone = run(1, false);
+        assert_eq!(run(1, true), alone);
+        assert_eq!(run(2, true), alone);
+        assert_eq!(run(2, false), alone);
     }
 
     #[test]
