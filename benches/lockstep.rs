@@ -1,6 +1,6 @@
 //! `cargo bench --bench lockstep`: crisp trials run alone against the same trials run in lockstep,
 //! [`lanes::LANES`] as lanes of one loop (`qsweep_engine::lanes`, what `qsweep run` does unless
-//! `QSWEEP_LOCKSTEP=off`). Per system and algorithm: one cell of the paper's grid, 8 seeds, run
+//! `QSWEEP_LOCKSTEP=off`). Per system and algorithm: one cell of the paper's grid, 32 seeds, run
 //! to their real stop; both ways alternate, 3 rounds, by thread CPU time, best kept; the outcomes
 //! must be identical. Prints CPU seconds and the ratio lockstep / alone (docs/speed.md).
 
@@ -18,7 +18,7 @@ fn cpu_seconds() -> f64 {
 
 fn main() {
     let filter = std::env::args().skip(1).find(|a| !a.starts_with('-')).unwrap_or_default();
-    println!("| cell, 8 seeds | steps | alone (CPU s) | lockstep (CPU s) | lockstep / alone |");
+    println!("| cell, 32 seeds | steps | alone (CPU s) | lockstep (CPU s) | lockstep / alone |");
     println!("|---|---:|---:|---:|---:|");
     for (system, res) in
         [(SystemKind::MountainCar, 10), (SystemKind::CartPole, 6), (SystemKind::BallBeam, 10)]
@@ -31,7 +31,7 @@ fn main() {
             }
             let cfg =
                 TrialConfig::paper(system, ReprKind::Crisp, algorithm, vec![res; system.dim()], actions);
-            let seeds: Vec<u64> = (1..=8).collect();
+            let seeds: Vec<u64> = (1..=32).collect();
             let (mut alone, mut together) = (f64::INFINITY, f64::INFINITY);
             let mut steps = 0;
             for _ in 0..3 {

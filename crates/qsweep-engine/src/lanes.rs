@@ -4,14 +4,16 @@
 //! A crisp step is one trial's chain of dependent operations (dynamics → bin → greedy choice →
 //! update), and the core idles behind it; Mountain Car's cos(3x) alone is about half of it. With
 //! [`LANES`] trials in one loop, their dynamics run as vector lanes ([`Environment::step_each`],
-//! [`crate::math::cos_lanes`]) and the rest of their steps overlap in the core.
+//! [`crate::math::cos_lanes`]) and the rest of their steps overlap in the core. A second hardware
+//! thread on the same core fills the same idle slots, so the gain is largest where a trial's
+//! thread has its core to itself (docs/speed.md, "Trials in lockstep").
 //!
 //! Each lane performs exactly the operations its trial performs when run alone, in the same
 //! order ([`TrialRun`] is both), and shares nothing with the other lanes but the loop: a trial's
 //! outcome never depends on which trials share its loop or on how many lanes there are
 //! (`tests::a_trial_in_lockstep_is_the_trial_alone`).
 
-use super::config::TrialConfig;
+use super::config::{Algorithm, TrialConfig};
 use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, SystemKind, Transition};
 use super::learner::Learner;
 use super::repr::{Crisp, ReprKind, Representation};
@@ -24,6 +26,13 @@ pub const LANES: usize = crate::env::LANES;
 /// docs/speed.md). Fuzzy steps are long and mostly independent operations already.
 pub fn benefits(cfg: &TrialConfig) -> bool {
     cfg.repr.kind == ReprKind::Crisp
+}
+
+/// The trials that run best together in one loop, for a trial that [`benefits`]: those of the same
+/// system and algorithm (lanes that take the same branches, and whose steps cost about the
+/// same); `None` for the others.
+pub fn group(cfg: &TrialConfig) -> Option<(SystemKind, Algorithm)> {
+    benefits(cfg).then(|| (cfg.system(), cfg.learner.algorithm))
 }
 
 /// Whether callers should run trials in lockstep: `QSWEEP_LOCKSTEP` is not `off` (it never

@@ -16,6 +16,10 @@
 //! against the reference). Larger arguments, which no system reaches in practice, call the
 //! `libm` crate's (musl's) Payne–Hanek reduction, itself plain arithmetic.
 //!
+//! [`cos_lanes`] and [`sin_cos_lanes`] compute them for several values at once (the systems of
+//! trials in lockstep, `crate::lanes`): the common cases for every lane without branches, with
+//! the operations of the scalar functions lane by lane, so the same bits.
+//!
 //! `exp` reduces x = (32m + j)·ln2/32 + r with |r| ≤ ln2/64, evaluates e^r − 1 by its degree-6
 //! Taylor polynomial (truncation error < 4·10⁻¹⁸, evaluated in Estrin's order) and multiplies by
 //! a table of 2^(j/32) held to double-double precision, so a normal result is within about half

@@ -89,6 +89,17 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     }
 }
 
+/// The order in which [`execute`] hands out `jobs`: those that run alone first, then those of each
+/// lockstep group ([`lanes::group`]) together, so that its loops stay full (crisp trials, short
+/// next to fuzzy ones, came last anyway); each longest first ([`estimated_cost`]), ties in plan
+/// order, so scheduling is reproducible.
+fn schedule(jobs: &[Job<'_>]) -> Vec<usize> {
+    let keys: Vec<_> = jobs.iter().map(|j| (lanes::group(j.config), estimated_cost(j.config))).collect();
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by(|&a, &b| keys[a].0.cmp(&keys[b].0).then_with(|| keys[b].1.total_cmp(&keys[a].1)));
+    order
+}
+
 /// One worker: runs the jobs `sched` hands it until none is left, the run stops, or the
 /// collector hangs up. With `lockstep`, crisp trials run several as lanes of one loop
 /// ([`lanes::run_lockstep`]); the rows are the same either way.
@@ -141,7 +152,7 @@ fn alone(job: Job<'_>, tx: &mpsc::Sender<TrialRecord>) -> bool {
 }
 
 /// Run job `first` and the jobs `sched` hands out after it in one lockstep loop, as long as they
-/// fit it (crisp, the same system); the first that does not is left in `stash`. A trial's
+/// fit it (the same [`lanes::group`]); the first that does not is left in `stash`. A trial's
 /// seconds and CPU seconds are the loop's so far in proportion to its steps. False once the
 /// collector has hung up.
 fn in_lockstep(
@@ -152,8 +163,8 @@ fn in_lockstep(
     halted: &dyn Fn() -> bool,
     tx: &mpsc::Sender<TrialRecord>,
 ) -> bool {
-    let system = jobs[first].config.system();
-    let fits = |j: usize| lanes::benefits(jobs[j].config) && jobs[j].config.system() == system;
+    let (system, group) = (jobs[first].config.system(), lanes::group(jobs[first].config));
+    let fits = |j: usize| lanes::group(jobs[j].config) == group;
     let mut first = Some(first);
     let open = std::cell::Cell::new(true);
     let (start, cpu) = (Instant::now(), thread_cpu_seconds());
@@ -209,9 +220,7 @@ pub fn execute(
     mut sink: impl FnMut(&[TrialRecord]) -> anyhow::Result<()>,
     reporter: &mut dyn Reporter,
 ) -> anyhow::Result<ExecReport> {
-    let mut order: Vec<usize> = (0..jobs.len()).collect();
-    // Longest first; ties keep plan order, so scheduling is reproducible.
-    order.sort_by(|&a, &b| estimated_cost(jobs[b].config).total_cmp(&estimated_cost(jobs[a].config)));
+    let order = schedule(jobs);
     let threads = opts.jobs.max(1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let leases = opts.leases.as_deref();
@@ -374,6 +383,35 @@ mod tests {
         assert_eq!(run(1, true), alone);
         assert_eq!(run(2, true), alone);
         assert_eq!(run(2, false), alone);
+    }
+
+    #[test]
+    fn trials_that_run_alone_go_first_then_each_lockstep_group_together_longest_first() {
+        let mut configs = Vec::new();
+        for sys in [SystemKind::MountainCar, SystemKind::BallBeam] {
+            for alg in [Algorithm::Q0, Algorithm::QLambda] {
+                for (repr, actions) in [(ReprKind::Crisp, 3), (ReprKind::Fuzzy, 3), (ReprKind::Crisp, 9)] {
+                    configs.push(TrialConfig::paper(sys, repr, alg, vec![3, 3], actions));
+                }
+            }
+        }
+        let jobs = jobs_for(&configs);
+        let order: Vec<&Job<'_>> = schedule(&jobs).into_iter().map(|j| &jobs[j]).collect();
+        let groups: Vec<_> = order.iter().map(|j| lanes::group(j.config)).collect();
+        let alone = groups.iter().take_while(|g| g.is_none()).count();
+        assert_eq!(alone, jobs.iter().filter(|j| j.config.repr.kind == ReprKind::Fuzzy).count());
+        // Each group is one run of the order, its trials longest first.
+        let mut runs = groups.clone();
+        runs.dedup();
+        assert_eq!(runs.len(), 1 + 4, "{runs:?}");
+        for w in order.windows(2) {
+            if lanes::group(w[0].config) == lanes::group(w[1].config) {
+                assert!(estimated_cost(w[0].config) >= estimated_cost(w[1].config));
+            }
+        }
+        let mut sorted = schedule(&jobs);
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..jobs.len()).collect::<Vec<_>>(), "every job once");
     }
 
     #[test]
