@@ -15,8 +15,7 @@
 
 use super::config::{Algorithm, TrialConfig};
 use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, SystemKind, Transition};
-use super::learner::Learner;
-use super::repr::{Crisp, ReprKind, Representation};
+use super::repr::{Crisp, ReprKind};
 use super::trial::{run_trial, Outcome, TrialRun};
 
 /// Trials one lockstep loop steps at once.
@@ -149,10 +148,7 @@ fn start<'c, E: Environment>(
             done(id, run_trial(cfg, seed), 0);
             continue;
         };
-        let r = &cfg.repr;
-        let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
-        let learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
-        let mut run = TrialRun::new::<E>(cfg, seed, repr, learner);
+        let mut run = TrialRun::crisp::<E>(cfg, seed);
         match run.begin(&mut env) {
             Some(o) => done(id, o, loop_steps),
             None => return Some((Lane { id, run }, env)),

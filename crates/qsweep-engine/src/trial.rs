@@ -140,19 +140,15 @@ fn greatest(q: &[f64]) -> f64 {
 fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R, simd: Simd) -> Outcome {
     let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
         .with_simd(simd);
-    episodes(cfg, seed, env, repr, learner).0
+    episodes(env, TrialRun::new::<E>(cfg, seed, repr, learner)).0
 }
 
 /// A trial's outcome and its final Q parameters (for tests of single updates).
 #[doc(hidden)]
 pub fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
     fn go<E: Environment>(cfg: &TrialConfig, seed: u64, env: E) -> (Outcome, Vec<f64>) {
-        use super::repr::Representation;
-        let r = &cfg.repr;
-        assert_eq!(r.kind, ReprKind::Crisp);
-        let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
-        let learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
-        let (o, learner) = episodes(cfg, seed, env, repr, learner);
+        assert_eq!(cfg.repr.kind, ReprKind::Crisp);
+        let (o, learner) = episodes(env, TrialRun::crisp::<E>(cfg, seed));
         (o, learner.params().to_vec())
     }
     match &cfg.env {
@@ -162,15 +158,8 @@ pub fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
     }
 }
 
-/// One trial run alone: [`TrialRun`]'s steps in one loop with its system.
-fn episodes<E: Environment, R: Encode>(
-    cfg: &TrialConfig,
-    seed: u64,
-    mut env: E,
-    repr: R,
-    learner: Learner,
-) -> (Outcome, Learner) {
-    let mut run = TrialRun::new::<E>(cfg, seed, repr, learner);
+/// One trial run alone: `run`'s steps in one loop with its system.
+fn episodes<E: Environment, R: Encode>(mut env: E, mut run: TrialRun<'_, R>) -> (Outcome, Learner) {
     let outcome = match run.begin(&mut env) {
         Some(o) => o,
         None => loop {
@@ -215,6 +204,18 @@ pub(crate) struct TrialRun<'c, R: Encode> {
     len: u64,
     /// The action chosen at s_t.
     action: usize,
+}
+
+impl<'c> TrialRun<'c, Crisp> {
+    /// The crisp trial `cfg` with `seed` on system `E`: its bins, and a learner for one active
+    /// feature a state.
+    pub(crate) fn crisp<E: Environment>(cfg: &'c TrialConfig, seed: u64) -> Self {
+        use super::repr::Representation;
+        let r = &cfg.repr;
+        let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
+        let learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
+        Self::new::<E>(cfg, seed, repr, learner)
+    }
 }
 
 impl<'c, R: Encode> TrialRun<'c, R> {
