@@ -44,7 +44,7 @@ fn main() {
                 lanes::run_lockstep(
                     system,
                     || next.next().map(|(i, &s)| (i, &cfg, s)),
-                    |i, o, _| got[i] = Some(o),
+                    |i, o| got[i] = Some(o),
                 );
                 together = together.min(cpu_seconds() - t);
                 assert!(got.iter().zip(&want).all(|(g, w)| g.as_ref() == Some(w)), "{name}: outcomes differ");

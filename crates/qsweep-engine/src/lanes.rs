@@ -45,14 +45,13 @@ pub fn enabled() -> bool {
 }
 
 /// Run the trials `next` hands out, [`LANES`] at a time in one loop, and give each to `done` as
-/// it stops (in stopping order): its id, its outcome, and the steps every lane of the loop had
-/// taken by then, its own included (its share of the loop's time is about its steps over those).
-/// Every trial must be crisp and of `system`; one that is not runs alone when it comes (the same
-/// outcome, reported with 0 loop steps).
+/// it stops (in stopping order): its id and its outcome. Every live lane takes one step per
+/// iteration of the loop, so the trials in it share its time equally. Every trial must be crisp
+/// and of `system`; one that is not runs alone when it comes (the same outcome).
 pub fn run_lockstep<'c>(
     system: SystemKind,
     next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
-    done: impl FnMut(usize, Outcome, u64),
+    done: impl FnMut(usize, Outcome),
 ) {
     match system {
         SystemKind::BallBeam => lockstep::<BallBeam>(next, done, |p| match p {
@@ -79,7 +78,7 @@ pub fn run_batch(trials: &[(&TrialConfig, u64)]) -> Vec<Outcome> {
         let mut next = (0..trials.len())
             .filter(|&i| benefits(trials[i].0) && trials[i].0.system() == system)
             .map(|i| (i, trials[i].0, trials[i].1));
-        run_lockstep(system, || next.next(), |i, o, _| out[i] = Some(o));
+        run_lockstep(system, || next.next(), |i, o| out[i] = Some(o));
     }
     out.iter_mut()
         .zip(trials)
@@ -95,13 +94,12 @@ struct Lane<'c> {
 
 fn lockstep<'c, E: Environment>(
     mut next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
-    mut done: impl FnMut(usize, Outcome, u64),
+    mut done: impl FnMut(usize, Outcome),
     system: impl Fn(&EnvParams) -> Option<E>,
 ) {
     let (mut lanes, mut envs): (Vec<Option<Lane<'c>>>, Vec<E>) = (Vec::new(), Vec::new());
-    let mut loop_steps = 0u64;
     while lanes.len() < LANES {
-        let Some((lane, env)) = start(&mut next, &mut done, &system, loop_steps) else { break };
+        let Some((lane, env)) = start(&mut next, &mut done, &system) else { break };
         lanes.push(Some(lane));
         envs.push(env);
     }
@@ -119,12 +117,11 @@ fn lockstep<'c, E: Environment>(
         E::step_each(&mut envs, &actions, &mut steps);
         for ((slot, env), &t) in lanes.iter_mut().zip(&mut envs).zip(&steps) {
             let Some(lane) = slot else { continue };
-            loop_steps += 1;
             let Some(o) = lane.run.learn(env, t) else { continue };
-            done(lane.id, o, loop_steps);
+            done(lane.id, o);
             *slot = None;
             if more {
-                match start(&mut next, &mut done, &system, loop_steps) {
+                match start(&mut next, &mut done, &system) {
                     Some((lane, e)) => (*slot, *env) = (Some(lane), e),
                     None => more = false,
                 }
@@ -137,20 +134,19 @@ fn lockstep<'c, E: Environment>(
 /// that stops before its first step, or is not a crisp trial of `E`, is settled here.
 fn start<'c, E: Environment>(
     next: &mut impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
-    done: &mut impl FnMut(usize, Outcome, u64),
+    done: &mut impl FnMut(usize, Outcome),
     system: &impl Fn(&EnvParams) -> Option<E>,
-    loop_steps: u64,
 ) -> Option<(Lane<'c>, E)> {
     loop {
         let (id, cfg, seed) = next()?;
         let env = system(&cfg.env).filter(|_| cfg.repr.kind == ReprKind::Crisp);
         let Some(mut env) = env else {
-            done(id, run_trial(cfg, seed), 0);
+            done(id, run_trial(cfg, seed));
             continue;
         };
         let mut run = TrialRun::crisp::<E>(cfg, seed);
         match run.begin(&mut env) {
-            Some(o) => done(id, o, loop_steps),
+            Some(o) => done(id, o),
             None => return Some((Lane { id, run }, env)),
         }
     }

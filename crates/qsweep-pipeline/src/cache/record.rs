@@ -19,7 +19,8 @@ pub struct TrialRecord {
     /// Wall-clock seconds the trial took (informational; not part of the result).
     pub seconds: f64,
     /// CPU seconds of the thread that ran the trial, which load on the machine does not inflate
-    /// (`None` in rows written before qsweep recorded it, and where the OS cannot tell).
+    /// (a trial in lockstep: its equal share of its loop's while it was in it; `None` in rows
+    /// written before qsweep recorded it, and where the OS cannot tell).
     pub cpu_seconds: Option<f64>,
 }
 

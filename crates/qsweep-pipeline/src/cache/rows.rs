@@ -55,7 +55,7 @@ pub struct StoredOutcome {
 /// | `failure` | utf8, nullable | why a diverged trial failed |
 /// | `episode_lengths` | list<uint32> | every episode's length, in order |
 /// | `seconds` | float64 | wall-clock time of the trial (informational only) |
-/// | `cpu_seconds` | float64, nullable | CPU time of the thread that ran the trial (informational; load does not inflate it); absent in segments written before qsweep recorded it, which still read (as null) |
+/// | `cpu_seconds` | float64, nullable | CPU time of the thread that ran the trial (informational; load does not inflate it; a trial in lockstep: its equal share of its loop's while it was in it); absent in segments written before qsweep recorded it, which still read (as null) |
 pub fn schema() -> SchemaRef {
     static SCHEMA: OnceLock<SchemaRef> = OnceLock::new();
     SCHEMA.get_or_init(|| Arc::new(columns(&[]).schema())).clone()

@@ -13,6 +13,7 @@
 mod events;
 mod job;
 pub mod leased;
+mod ledger;
 pub mod shard;
 
 pub use events::{Event, Reporter};
@@ -21,6 +22,7 @@ use crate::cache::leases::{lease::HEARTBEAT, Leases};
 use crate::cache::TrialRecord;
 pub use job::{jobs, Job};
 use leased::{Pick, Scheduler, POLL};
+use ledger::Ledger;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{lanes, run_trial, TrialConfig};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -153,8 +155,8 @@ fn alone(job: Job<'_>, tx: &mpsc::Sender<TrialRecord>) -> bool {
 
 /// Run job `first` and the jobs `sched` hands out after it in one lockstep loop, as long as they
 /// fit it (the same [`lanes::group`]); the first that does not is left in `stash`. A trial's
-/// seconds and CPU seconds are the loop's so far in proportion to its steps. False once the
-/// collector has hung up.
+/// seconds and CPU seconds are its equal shares of the loop's while it was in it ([`Ledger`]).
+/// False once the collector has hung up.
 fn in_lockstep(
     jobs: &[Job<'_>],
     sched: &Scheduler<'_>,
@@ -167,7 +169,12 @@ fn in_lockstep(
     let fits = |j: usize| lanes::group(jobs[j].config) == group;
     let mut first = Some(first);
     let open = std::cell::Cell::new(true);
-    let (start, cpu) = (Instant::now(), thread_cpu_seconds());
+    let start = Instant::now();
+    let clock = || (thread_cpu_seconds(), start.elapsed().as_secs_f64());
+    let ledger = {
+        let (cpu, wall) = clock();
+        std::cell::RefCell::new(Ledger::new(cpu, wall))
+    };
     let next = || {
         let j = match first.take() {
             Some(j) => j,
@@ -181,13 +188,14 @@ fn in_lockstep(
                 Pick::Wait | Pick::Done => return None,
             },
         };
+        let (cpu, wall) = clock();
+        ledger.borrow_mut().join(j, cpu, wall);
         Some((j, jobs[j].config, jobs[j].seed))
     };
-    let done = |j: usize, outcome: qsweep_engine::Outcome, loop_steps: u64| {
+    let done = |j: usize, outcome: qsweep_engine::Outcome| {
         let job = jobs[j];
-        let share = if loop_steps == 0 { 0.0 } else { outcome.total_steps as f64 / loop_steps as f64 };
-        let cpu = thread_cpu_seconds().zip(cpu).map(|(b, a)| (b - a) * share);
-        let seconds = start.elapsed().as_secs_f64() * share;
+        let (cpu, wall) = clock();
+        let (cpu, seconds) = ledger.borrow_mut().leave(j, cpu, wall);
         let rec = TrialRecord::new(job.config.clone(), job.seed, outcome, seconds).with_cpu_seconds(cpu);
         debug_assert_eq!(rec.key, job.key);
         if tx.send(rec).is_err() {
@@ -383,6 +391,38 @@ mod tests {
         assert_eq!(run(1, true), alone);
         assert_eq!(run(2, true), alone);
         assert_eq!(run(2, false), alone);
+    }
+
+    /// Regression: lockstep rows were charged their loop's time so far in proportion to their
+    /// steps, which over-counts (the crisp cells of `paper.yaml` summed to 10 % more CPU than the
+    /// process used). On one thread, the rows' seconds add up to at most the run's.
+    #[test]
+    fn lockstep_rows_charge_no_more_time_than_the_run_took() {
+        let mut configs = Vec::new();
+        for (res, alg) in
+            [(vec![6, 6], Algorithm::Q0), (vec![10, 10], Algorithm::Q0), (vec![3, 8], Algorithm::Q0)]
+        {
+            let mut c = TrialConfig::paper(SystemKind::MountainCar, ReprKind::Crisp, alg, res, 3);
+            c.limits.max_episodes = 40;
+            configs.push(c);
+        }
+        let jobs = jobs_for(&configs);
+        let opts = ExecOptions { jobs: 1, lockstep: true, ..Default::default() };
+        let mut rows = Vec::new();
+        let start = Instant::now();
+        let sink = |b: &[TrialRecord]| {
+            rows.extend(b.iter().cloned());
+            Ok(())
+        };
+        execute(&jobs, &opts, sink, &mut Vec::<Event>::new()).unwrap();
+        let took = start.elapsed().as_secs_f64();
+        assert_eq!(rows.len(), jobs.len());
+        let charged: f64 = rows.iter().map(|r| r.seconds).sum();
+        assert!(charged <= took, "rows charged {charged} s of a {took} s run");
+        assert!(rows.iter().all(|r| r.seconds > 0.0), "every trial took some time");
+        if let Some(cpu) = rows.iter().map(|r| r.cpu_seconds).sum::<Option<f64>>() {
+            assert!(cpu <= took * 1.01 + 0.01, "rows charged {cpu} CPU s in a {took} s run on one thread");
+        }
     }
 
     #[test]
