@@ -4,11 +4,11 @@
 //!
 //! The choice never changes a result. Only kernels whose every output is a fixed sequence of
 //! IEEE-754 operations on its own inputs are dispatched (the dense trace pass, the Q(0) update,
-//! the activation and the systems' steps in lockstep, element by element), or whose sums keep the engine's order of additions whatever
-//! the register width (Q(s, ·): the same partial sums, each in activation order). A vector lane does
-//! exactly what the scalar code does to that element, and Rust never fuses a multiply and an add
-//! (no FMA) nor reassociates, so every level gives the same bits (`learner::tests` and
-//! `pinned_tests` run every level the CPU has and compare).
+//! the activation and the systems' steps in lockstep, element by element), or whose sums keep the
+//! engine's order of additions whatever the register width (Q(s, ·): the same partial sums, each
+//! in activation order). A vector lane does exactly what the scalar code does to that element, and
+//! Rust never fuses a multiply and an add (no FMA) nor reassociates, so every level gives the same
+//! bits (`learner::tests` and `pinned_tests` run every level the CPU has and compare).
 //!
 //! `QSWEEP_SIMD`: `off` (the baseline), `avx2`, `avx512` (each capped by what the CPU has) or
 //! `auto` (the default: AVX2 where the CPU has it). AVX-512 is opt-in: on the 2-core Sapphire

@@ -33,7 +33,7 @@ impl Ledger {
         self.settle(cpu, wall);
         let charged = self.open.iter().position(|t| t.0 == id).map(|i| self.open.swap_remove(i));
         let (c, w) = charged.map_or((0.0, 0.0), |t| (t.1, t.2));
-        (cpu.and(self.last.0).map(|_| c), w)
+        (cpu.map(|_| c), w)
     }
 
     /// Split the time since the last event equally among the trials in the loop.

@@ -399,10 +399,8 @@ mod tests {
     #[test]
     fn lockstep_rows_charge_no_more_time_than_the_run_took() {
         let mut configs = Vec::new();
-        for (res, alg) in
-            [(vec![6, 6], Algorithm::Q0), (vec![10, 10], Algorithm::Q0), (vec![3, 8], Algorithm::Q0)]
-        {
-            let mut c = TrialConfig::paper(SystemKind::MountainCar, ReprKind::Crisp, alg, res, 3);
+        for res in [vec![6, 6], vec![10, 10], vec![3, 8]] {
+            let mut c = TrialConfig::paper(SystemKind::MountainCar, ReprKind::Crisp, Algorithm::Q0, res, 3);
             c.limits.max_episodes = 40;
             configs.push(c);
         }
