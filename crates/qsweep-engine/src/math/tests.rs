@@ -1,6 +1,6 @@
-//! Tests of the engine's own sin, cos and exp: errors against a high-precision reference table,
-//! special values, musl's results, and the lane forms against the scalar functions, bit for bit,
-//! at every vector level.
+//! Tests of the engine's own sin, cos, exp and ln: errors against a high-precision reference
+//! table, special values, musl's results, exp's monotonicity, and the lane forms against the scalar
+//! functions, bit for bit, at every vector level.
 
 use super::*;
 
@@ -100,8 +100,8 @@ fn symmetries_and_agreement_with_musl() {
 }
 
 /// On the kernel range (Cart-Pole's angle, Ball-Beam's tilt) sin and cos are musl's values bit
-/// for bit; above it, where musl's small-argument reductions differ in narrow bands (module
-/// docs), within 1 ulp of musl's, including just above 3π/4 and 5π/4 where the two pick
+/// for bit; above it, where musl's small-argument reductions differ in narrow bands (math.rs's
+/// module docs), within 1 ulp of musl's, including just above 3π/4 and 5π/4 where the two pick
 /// different multiples of π/2.
 #[test]
 fn sin_and_cos_are_musls_on_the_kernel_range_and_within_an_ulp_above() {
