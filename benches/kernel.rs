@@ -11,14 +11,13 @@ use qsweep_engine::repr::ReprKind;
 use qsweep_engine::rng::TrialRng;
 use qsweep_engine::{math, run_trial, Algorithm};
 use qsweep_pipeline::bench;
+use qsweep_pipeline::exec::thread_cpu_seconds;
 
 const STEPS: u64 = 3_000_000;
 
+/// The thread's CPU seconds: these benches run only where the clock exists.
 fn cpu_seconds() -> f64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: clock_gettime writes into the timespec we own.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+    thread_cpu_seconds().expect("a thread CPU clock (CLOCK_THREAD_CPUTIME_ID)")
 }
 
 /// The hand-written kernel: returns the steps it ran (at least `steps`, ending with an episode).

@@ -8,12 +8,11 @@ use qsweep_engine::config::TrialConfig;
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{lanes, run_trial, Algorithm, Outcome};
+use qsweep_pipeline::exec::thread_cpu_seconds;
 
+/// The thread's CPU seconds: these benches run only where the clock exists.
 fn cpu_seconds() -> f64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: clock_gettime writes into the timespec we own.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+    thread_cpu_seconds().expect("a thread CPU clock (CLOCK_THREAD_CPUTIME_ID)")
 }
 
 fn main() {
