@@ -156,7 +156,7 @@ fn main() {
 
     // Plan the paper grid in-process.
     let start = Instant::now();
-    let loaded = qsweep_pipeline::spec::load(&paper, &[]).unwrap();
+    let loaded = qsweep_pipeline::declared::load(&paper, &[]).unwrap();
     let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
     let plan_secs = start.elapsed().as_secs_f64();
     let unique = qsweep_pipeline::exec::jobs(&plan);
@@ -275,7 +275,7 @@ fn lease_overhead(records: &[TrialRecord]) {
 /// per trial times `max_seeds`.
 fn race_cost(pipeline: &Path, cache: &Path) {
     let start = Instant::now();
-    let loaded = qsweep_pipeline::spec::load(pipeline, &[]).unwrap();
+    let loaded = qsweep_pipeline::declared::load(pipeline, &[]).unwrap();
     let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
     let store = Store::open(cache).unwrap();
     let scan = store.keys().unwrap();

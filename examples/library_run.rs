@@ -4,7 +4,7 @@
 
 use qsweep_pipeline::exec::{Event, ExecOptions};
 use qsweep_pipeline::run::{run_trials, scan, Selection};
-use qsweep_report::kinds::{Format, Formats};
+use qsweep_report::formats::{Format, Formats};
 use qsweep_report::ReportOptions;
 
 fn main() -> anyhow::Result<()> {
@@ -13,7 +13,7 @@ fn main() -> anyhow::Result<()> {
         Some(dir) => std::path::PathBuf::from(dir),
         None => std::env::temp_dir().join(format!("qsweep-example-{}", std::process::id())),
     };
-    let loaded = qsweep_pipeline::spec::load(&root.join("tests/fixtures/pipelines/tiny.yaml"), &[])?;
+    let loaded = qsweep_pipeline::declared::load(&root.join("tests/fixtures/pipelines/tiny.yaml"), &[])?;
     let plan = qsweep_pipeline::plan::plan(&loaded, None)?;
     let store = qsweep_pipeline::cache::Store::open(&work.join("cache"))?;
     let keys = scan(&store)?.stored;

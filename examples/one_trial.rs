@@ -5,8 +5,8 @@
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{run_trial, Algorithm};
+use qsweep_pipeline::declared::Override;
 use qsweep_pipeline::plan::{one_cell, CellRequest};
-use qsweep_pipeline::spec::Override;
 
 fn main() -> anyhow::Result<()> {
     let request = CellRequest {

@@ -1,5 +1,5 @@
 //! Value parsers shared by subcommands: finite numbers, comma lists, NAME=VALUE pairs. Range
-//! rules come from `sim::rules`, the same ones pipeline files and `TrialConfig::validate` use.
+//! rules come from `qsweep_engine::rules`, the same ones pipeline files and `TrialConfig::validate` use.
 
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::rules::{self, Real};

@@ -1,5 +1,5 @@
 //! `qsweep feasible`: the longest survival any deterministic policy of a small crisp table reaches
-//! from the start state (an exhaustive search; see `sim::feasible`), with a policy that reaches it.
+//! from the start state (an exhaustive search; see `qsweep_engine::feasible`), with a policy that reaches it.
 
 use super::args;
 use super::simulate::env_params;
@@ -66,7 +66,7 @@ pub struct FeasibleArgs {
 fn parse_range(system: SystemKind, s: &str) -> anyhow::Result<(usize, [f64; 2])> {
     let bad = || user_error(format!("--range: '{s}' is not VAR=LO,HI (e.g. x_dot=-3,3)"));
     let (name, value) = s.split_once('=').ok_or_else(bad)?;
-    let j = qsweep_pipeline::spec::variable_index(system, name.trim())
+    let j = qsweep_pipeline::declared::variable_index(system, name.trim())
         .map_err(|e| user_error(format!("--range: {e}")))?;
     let v = args::finite_list(value).map_err(|e| user_error(format!("--range {s}: {e}")))?.0;
     match v[..] {

@@ -3,9 +3,9 @@
 
 use super::pipeline_args::CacheArgs;
 use clap::Args;
+use qsweep_pipeline::declared::load;
 use qsweep_pipeline::error::exit;
 use qsweep_pipeline::plan::plan;
-use qsweep_pipeline::spec::load;
 use std::path::PathBuf;
 
 /// Arguments of `qsweep gc`.

@@ -4,11 +4,11 @@
 
 use clap::Args;
 use qsweep_pipeline::cache::store::Store;
+use qsweep_pipeline::declared::{load, Override};
 use qsweep_pipeline::error::user_error;
 use qsweep_pipeline::plan::{plan_variants, Plan, DEFAULT_MAX_TRIALS};
-use qsweep_pipeline::spec::{load, Override};
-use qsweep_report::kinds::{Format, Formats, DEFAULT_FORMATS};
-use qsweep_report::{ReportOptions, ReportOutcome};
+use qsweep_report::formats::{Format, Formats, DEFAULT_FORMATS};
+use qsweep_report::{ReportOptions, ReportWritten};
 use std::path::{Path, PathBuf};
 
 /// Pipeline file, overrides and cache location.
@@ -163,7 +163,7 @@ pub fn warn_quarantined(scan: &qsweep_pipeline::run::Scan) {
 }
 
 /// The report's closing lines.
-pub fn print_report(o: &ReportOutcome, opts: &ReportOptions) {
+pub fn print_report(o: &ReportWritten, opts: &ReportOptions) {
     let s = &o.summary;
     let page = if opts.formats.has(Format::Html) { "index.html" } else { "" };
     println!(

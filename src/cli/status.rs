@@ -80,7 +80,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
     if let (Some(plan), Some(store)) = (planned, &store) {
         let dir = qsweep_report::default_dir(&plan);
         let keys = store.keys()?;
-        let formats = qsweep_report::kinds::Formats::default();
+        let formats = qsweep_report::formats::Formats::default();
         let explained = qsweep_report::staleness(plan, store, &keys, &dir, formats)?;
         let folders = &explained.folders;
         let stale = folders.iter().filter(|(_, why)| why.is_some()).count();
@@ -127,7 +127,11 @@ fn print_explanation(plan: &qsweep_pipeline::plan::Plan, cells: &[MissingCell]) 
             e.system.name(),
             e.id,
             c.algorithm.name(),
-            c.coords.iter().map(|&v| qsweep_pipeline::spec::format_value(v)).collect::<Vec<_>>().join("×")
+            c.coords
+                .iter()
+                .map(|&v| qsweep_pipeline::declared::format_value(v))
+                .collect::<Vec<_>>()
+                .join("×")
         );
         println!("missing {label} ({} of {} seeds): {}", m.missing, m.trials, m.reason);
     }

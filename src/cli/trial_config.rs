@@ -4,9 +4,9 @@
 use super::trial_args::TrialArgs;
 use qsweep_engine::config::TrialConfig;
 use qsweep_engine::env::{SystemKind, TaskKind};
+use qsweep_pipeline::declared::Override;
 use qsweep_pipeline::error::user_error;
 use qsweep_pipeline::plan::{one_cell, CellRequest};
-use qsweep_pipeline::spec::Override;
 
 /// Resolve the arguments into a validated trial configuration: the flags become the settings of
 /// a one-cell plan ([`one_cell`]), resolved exactly as a pipeline cell with the same settings, so

@@ -18,7 +18,7 @@ const CRATES: &[&str] =
 /// lower layer.
 const PIPELINE_LAYERS: &[&[&str]] = &[
     &["atomic", "parquet_io", "error"],
-    &["analysis", "cache", "spec"],
+    &["analysis", "cache", "declared"],
     &["plan"],
     &["fresh"],
     &["race"],

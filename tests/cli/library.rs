@@ -9,7 +9,7 @@ use qsweep_pipeline::run::{run_trials, scan, Selection};
 fn a_library_user_runs_a_pipeline_and_reads_its_events() {
     let dir = tempfile::tempdir().unwrap();
     let loaded =
-        qsweep_pipeline::spec::load(&repo().join("tests/fixtures/pipelines/tiny.yaml"), &[]).unwrap();
+        qsweep_pipeline::declared::load(&repo().join("tests/fixtures/pipelines/tiny.yaml"), &[]).unwrap();
     let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
     let store = qsweep_pipeline::cache::Store::open(&dir.path().join("cache")).unwrap();
     let sel = Selection { shard: None, force: false };
@@ -62,7 +62,8 @@ fn the_plan_a_no_op_run_hands_its_report_is_the_one_the_report_would_replay() {
     for fixture in ["fresh.yaml", "race.yaml"] {
         let dir = tempfile::tempdir().unwrap();
         let loaded =
-            qsweep_pipeline::spec::load(&repo().join("tests/fixtures/pipelines").join(fixture), &[]).unwrap();
+            qsweep_pipeline::declared::load(&repo().join("tests/fixtures/pipelines").join(fixture), &[])
+                .unwrap();
         let plan = qsweep_pipeline::plan::plan(&loaded, None).unwrap();
         let store = qsweep_pipeline::cache::Store::open(&dir.path().join("cache")).unwrap();
         let sel = Selection { shard: None, force: false };

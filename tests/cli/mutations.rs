@@ -69,9 +69,9 @@ proptest! {
         for e in &edits {
             text = apply(&text, e);
         }
-        match qsweep_pipeline::spec::load_str(&text, "mutant.yaml", &[]) {
+        match qsweep_pipeline::declared::load_str(&text, "mutant.yaml", &[]) {
             Ok(spec) => {
-                let loaded = qsweep_pipeline::spec::LoadedSpec { spec, path: "mutant.yaml".into(), variants: Vec::new() };
+                let loaded = qsweep_pipeline::declared::LoadedSpec { spec, path: "mutant.yaml".into(), variants: Vec::new() };
                 if let Err(err) = qsweep_pipeline::plan::plan(&loaded, Some(200_000)) {
                     prop_assert!(err.downcast_ref::<UserError>().is_some(), "{err:#}");
                     prop_assert!(err.to_string().contains("mutant.yaml"), "{err:#}");

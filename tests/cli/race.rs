@@ -163,9 +163,9 @@ fn slurm_chains_one_array_per_round_for_a_race() {
 #[test]
 fn paper_race_races_the_trials_of_paper_yaml_gym_v0_reset() {
     let root = crate::helpers::repo().join("pipelines");
-    let race = qsweep_pipeline::spec::load(&root.join("paper-race.yaml"), &[]).unwrap();
+    let race = qsweep_pipeline::declared::load(&root.join("paper-race.yaml"), &[]).unwrap();
     let race = qsweep_pipeline::plan::plan(&race, None).unwrap();
-    let paper = qsweep_pipeline::spec::load(&root.join("paper.yaml"), &[]).unwrap();
+    let paper = qsweep_pipeline::declared::load(&root.join("paper.yaml"), &[]).unwrap();
     let paper = qsweep_pipeline::plan::plan_variants(&paper, None, &["gym-v0-reset".to_string()]).unwrap();
     assert_eq!(race.experiments.len(), paper.experiments.len());
     let mut cells = 0;

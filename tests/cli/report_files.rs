@@ -9,9 +9,9 @@ use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{run_trial, Algorithm, Outcome, StopReason};
 use qsweep_pipeline::cache::store::Store;
 use qsweep_pipeline::cache::{Key, TrialRecord};
+use qsweep_pipeline::declared::Reference;
 use qsweep_pipeline::plan::Plan;
-use qsweep_pipeline::spec::Reference;
-use qsweep_report::kinds::{Format, Formats};
+use qsweep_report::formats::{Format, Formats};
 use qsweep_report::render::{curves, figures};
 use qsweep_report::{ReportOptions, ReportSummary};
 use std::collections::{BTreeMap, HashMap};
@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 fn quick_plan() -> Plan {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/quick.yaml");
-    let loaded = qsweep_pipeline::spec::load(&path, &[]).expect("quick.yaml loads");
+    let loaded = qsweep_pipeline::declared::load(&path, &[]).expect("quick.yaml loads");
     qsweep_pipeline::plan::plan(&loaded, None).expect("quick.yaml plans")
 }
 

@@ -1,4 +1,4 @@
-//! The range rule of every setting, defined once. The pipeline parser (`spec`), `TrialConfig::validate`
+//! The range rule of every setting, defined once. The pipeline parser (`qsweep_pipeline::declared`), `TrialConfig::validate`
 //! and the command-line parsers (`cli::args`) all call these, so a value is accepted or refused the
 //! same way, in the same words, wherever it is given. Messages say what was given and what is
 //! allowed; the caller adds the field's name (or the file position).

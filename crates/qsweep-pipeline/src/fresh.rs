@@ -14,7 +14,7 @@
 
 use crate::analysis::{best_cell, episodes_counted, mean, Candidate};
 use crate::cache::{Key, ENGINE_VERSION};
-use crate::plan::{Experiment, Plan, PlannedTrial, ReadOutcomes, StageOutcome};
+use crate::plan::{Experiment, Plan, PlannedTrial, ReadOutcomes, TrialBrief};
 use qsweep_engine::{Algorithm, Outcome};
 use std::collections::{HashMap, HashSet};
 
@@ -31,7 +31,7 @@ seeds, biased low by the choice).";
 pub fn plan_fresh(
     plan: &mut Plan,
     cached: &HashSet<Key>,
-    known: &mut HashMap<Key, StageOutcome>,
+    known: &mut HashMap<Key, TrialBrief>,
     read: &mut ReadOutcomes,
 ) -> anyhow::Result<()> {
     let mut ready: Vec<(usize, Algorithm)> = Vec::new();
@@ -82,13 +82,13 @@ fn candidates(e: &Experiment, algorithm: Algorithm) -> impl Iterator<Item = usiz
 
 /// The best cell of `algorithm` by Table III's rule, from the outcomes of its candidates' trials
 /// (the report's choice: the same counting, the same mean, the same order).
-fn best_of(e: &Experiment, algorithm: Algorithm, known: &HashMap<Key, StageOutcome>) -> Option<usize> {
+fn best_of(e: &Experiment, algorithm: Algorithm, known: &HashMap<Key, TrialBrief>) -> Option<usize> {
     let cands: Vec<Candidate> = candidates(e, algorithm)
         .map(|i| {
             let cell = &e.cells[i];
             let limits = &cell.config.limits;
             let outcomes: Vec<Outcome> =
-                cell.trials.iter().filter_map(|t| known.get(&t.key).map(StageOutcome::outcome)).collect();
+                cell.trials.iter().filter_map(|t| known.get(&t.key).map(TrialBrief::outcome)).collect();
             let values: Vec<f64> =
                 outcomes.iter().map(|o| f64::from(episodes_counted(o, limits, e.counting))).collect();
             Candidate {
@@ -117,8 +117,8 @@ mod tests {
         // All but one trial stored: still undecided.
         let keys: Vec<Key> = p.trials().map(|(_, _, t)| t.key).collect();
         let almost: HashSet<Key> = keys[1..].iter().copied().collect();
-        let read = |w: &HashSet<Key>| -> anyhow::Result<Vec<(Key, StageOutcome)>> {
-            Ok(w.iter().map(|k| (*k, StageOutcome::from(&outcome(20)))).collect())
+        let read = |w: &HashSet<Key>| -> anyhow::Result<Vec<(Key, TrialBrief)>> {
+            Ok(w.iter().map(|k| (*k, TrialBrief::from(&outcome(20)))).collect())
         };
         let part = replay(&p, &almost, &mut |w| read(w)).unwrap();
         assert!(part.plan().experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
@@ -147,14 +147,14 @@ mod tests {
         // the fresh trials.
         let cached: HashSet<Key> = store.keys().copied().collect();
         let again =
-            replay(&p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect()))
+            replay(&p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, TrialBrief::from(&store[k]))).collect()))
                 .unwrap();
         assert!(again.plan().trials().all(|(_, _, t)| cached.contains(&t.key)));
         assert_eq!(again.plan().experiments[0].cells[best].fresh, cells[best].fresh);
         assert_eq!(done.trial_count(), 9 * 5 + 20);
         // Replayed in place and taken back, it is the plan as planned: no fresh trials.
-        let mut stored = |w: &HashSet<Key>| -> anyhow::Result<Vec<(Key, StageOutcome)>> {
-            Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+        let mut stored = |w: &HashSet<Key>| -> anyhow::Result<Vec<(Key, TrialBrief)>> {
+            Ok(w.iter().map(|k| (*k, TrialBrief::from(&store[k]))).collect())
         };
         let (in_place, undo) = crate::race::Unreplay::replay(p.clone(), false, &cached, &mut stored).unwrap();
         assert_eq!(in_place.plan().experiments[0].cells[best].fresh, cells[best].fresh);

@@ -1,4 +1,4 @@
-//! qsweep's pipeline: the YAML pipeline as written ([`spec`]), the resolved plan of every cell and
+//! qsweep's pipeline: the YAML pipeline as written ([`declared`]), the resolved plan of every cell and
 //! trial ([`plan`]), the content-addressed trial store ([`cache`]), which cells get more seeds
 //! ([`fresh`], [`race`]), running the missing trials in parallel ([`exec`], [`run`]), a
 //! pipeline's cache status ([`status`]), Slurm arrays ([`slurm`]), `qsweep bench` ([`bench`]),
@@ -15,6 +15,7 @@ pub mod analysis;
 pub mod atomic;
 pub mod bench;
 pub mod cache;
+pub mod declared;
 pub mod error;
 pub mod exec;
 pub mod fresh;
@@ -23,7 +24,6 @@ pub mod plan;
 pub mod race;
 pub mod run;
 pub mod slurm;
-pub mod spec;
 pub mod status;
 #[cfg(any(test, feature = "test-support"))]
 pub mod testing;

@@ -82,7 +82,7 @@ pub fn select<'p>(plan: &'p Plan, scan: &KeySet, sel: Selection) -> (Vec<Job<'p>
 
 /// What [`run_trials`] did.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct RunOutcome {
+pub struct RunSummary {
     /// The execution's counts.
     pub exec: ExecReport,
     /// Distinct trials of the selection already cached (not run).
@@ -101,7 +101,7 @@ pub fn run_trials(
     sel: Selection,
     opts: &ExecOptions,
     reporter: &mut dyn crate::exec::Reporter,
-) -> anyhow::Result<RunOutcome> {
+) -> anyhow::Result<RunSummary> {
     Ok(run_trials_replayed(plan.clone(), store, scan, sel, opts, reporter)?.0)
 }
 
@@ -128,7 +128,7 @@ pub fn run_trials_replayed(
     sel: Selection,
     opts: &ExecOptions,
     reporter: &mut dyn crate::exec::Reporter,
-) -> anyhow::Result<(RunOutcome, AfterRun)> {
+) -> anyhow::Result<(RunSummary, AfterRun)> {
     let flush = |batch: &[crate::cache::TrialRecord]| {
         store.write_segment(batch)?;
         Ok(())
@@ -139,7 +139,7 @@ pub fn run_trials_replayed(
             c.reset_view(scan, sel.force);
         }
         let exec = execute(&jobs, opts, flush, reporter)?;
-        let done = RunOutcome { exec, cached: unique.len() - jobs.len() };
+        let done = RunSummary { exec, cached: unique.len() - jobs.len() };
         drop((jobs, unique));
         return Ok((done, AfterRun::Planned(plan)));
     }
@@ -167,7 +167,7 @@ pub fn run_trials_replayed(
             unique.iter().filter(|t| !scan.keys.contains(&t.key)).copied().collect()
         };
         if jobs.is_empty() {
-            let done = RunOutcome { cached: unique.len() - total.executed.min(unique.len()), exec: total };
+            let done = RunSummary { cached: unique.len() - total.executed.min(unique.len()), exec: total };
             drop((jobs, unique));
             let after =
                 if first { AfterRun::Replayed(replayed) } else { AfterRun::Planned(back.undo(replayed)) };
@@ -185,7 +185,7 @@ pub fn run_trials_replayed(
         total.interrupted |= exec.interrupted;
         plan = back.undo(replayed);
         if exec.interrupted || sel.shard.is_some() {
-            return Ok((RunOutcome { cached, exec: total }, AfterRun::Planned(plan)));
+            return Ok((RunSummary { cached, exec: total }, AfterRun::Planned(plan)));
         }
         rescanned = store.keys()?;
         scan = &rescanned;

@@ -54,7 +54,7 @@ fn keys_of_the_paper_pipeline_are_those_of_the_committed_report() {
     ];
     // The workspace root, two folders above this crate.
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let loaded = crate::spec::load(&root.join("pipelines/paper.yaml"), &[]).unwrap();
+    let loaded = crate::declared::load(&root.join("pipelines/paper.yaml"), &[]).unwrap();
     let plan = crate::plan::plan(&loaded, None).unwrap();
     let keys: std::collections::HashSet<String> = plan
         .experiments
@@ -241,10 +241,10 @@ fn digitize_binning_changes_the_trajectory() {
 fn settings_resolve_from_every_level_and_from_set_paths() {
     let text = "name: t\nseeds: 1\ndefaults: { start: gym }\nsystems:\n  mountain-car:\n    settings: { truncation: terminal }\n    crisp: { binning: digitize }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q0], vary: { x == x_dot: 4 } }\n      - { id: b, repr: fuzzy, algorithms: [q0], vary: { x == x_dot: 4 }, settings: { start: fixed } }\n";
     let plan_of = |sets: &[&str]| {
-        let overrides: Vec<_> = sets.iter().map(|s| crate::spec::Override::parse(s).unwrap()).collect();
-        let spec = crate::spec::load_str(text, "t.yaml", &overrides).unwrap();
+        let overrides: Vec<_> = sets.iter().map(|s| crate::declared::Override::parse(s).unwrap()).collect();
+        let spec = crate::declared::load_str(text, "t.yaml", &overrides).unwrap();
         crate::plan::plan(
-            &crate::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() },
+            &crate::declared::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() },
             None,
         )
         .unwrap()

@@ -3,9 +3,9 @@
 //! store of planted outcomes to race it to the end against.
 
 use crate::cache::Key;
-use crate::plan::{plan, Plan, StageOutcome};
+use crate::declared::{load_str, LoadedSpec};
+use crate::plan::{plan, Plan, TrialBrief};
 use crate::race::replay;
-use crate::spec::{load_str, LoadedSpec};
 use qsweep_engine::trial::StopReason;
 use qsweep_engine::Outcome;
 use std::collections::{HashMap, HashSet};
@@ -46,7 +46,7 @@ pub fn run_to_the_end(p: &Plan) -> (Plan, HashMap<Key, Outcome>, usize) {
     loop {
         let cached: HashSet<Key> = store.keys().copied().collect();
         let out =
-            replay(p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect()))
+            replay(p, &cached, &mut |w| Ok(w.iter().map(|k| (*k, TrialBrief::from(&store[k]))).collect()))
                 .unwrap()
                 .into_plan();
         let missing: Vec<(usize, u64, Key)> = out.experiments[0]

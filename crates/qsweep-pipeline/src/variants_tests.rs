@@ -171,9 +171,9 @@ fn bad_values_are_refused_with_the_field_name() {
 #[test]
 fn pipelines_resolve_the_variants_settings() {
     let text = "name: t\nseeds: 1\nsystems:\n  cart-pole:\n    success: { steps: 200, window: 100, mean_length: 195 }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q0], vary: { x == x_dot == theta == theta_dot: 2 } }\n  mountain-car:\n    success: { within: 200, max_episode_steps: 200, window: 100, mean_length: 110 }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q0], vary: { x == x_dot: 2 } }\n      - { id: b, repr: crisp, algorithms: [q0], vary: { x == x_dot: 2 }, success: { within: 150 } }\n  ball-beam:\n    params: { control: rate, tau: 0.1, beam_length: 1, angle_max: 0.2, start: [0, 0] }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q0], vary: { x == x_dot: 2 }, fixed: { actions: 2 } }\n";
-    let spec = crate::spec::load_str(text, "t.yaml", &[]).unwrap();
+    let spec = crate::declared::load_str(text, "t.yaml", &[]).unwrap();
     let plan = crate::plan::plan(
-        &crate::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() },
+        &crate::declared::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() },
         None,
     )
     .unwrap();

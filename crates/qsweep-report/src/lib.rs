@@ -12,7 +12,7 @@
 //!   rerun skips a folder whose inputs have not changed.
 //!
 //! [`stage::write`] is the whole stage for a pipeline, one variant at a time ([`render::compare`]
-//! for the comparison of variants). Which files are written is chosen by [`kinds`]. Trials missing from the records are left
+//! for the comparison of variants). Which files are written is chosen by [`formats`]. Trials missing from the records are left
 //! out and counted. Every file is written atomically (a temporary file in the same directory,
 //! then a rename), and the output is a pure function of the inputs: no timestamps, no hash-map
 //! order, a seeded bootstrap.
@@ -20,7 +20,7 @@
 //!
 //! The crate's parts, each built only on those before it:
 //!
-//! - [`kinds`]: which files a report writes (`--formats`);
+//! - [`formats`]: which files a report writes (`--formats`);
 //! - [`memo`]: the one owner of derived results kept between reports (the statistics' memo in the
 //!   cache, the per-variant trial parts, each folder's `memo.json`), with [`memo::ANALYSIS_VERSION`];
 //! - [`derive`]: the numbers (per-cell statistics, Table III as a format-neutral table, the fit of
@@ -38,7 +38,7 @@
 #![allow(clippy::disallowed_methods)]
 
 pub mod derive;
-pub mod kinds;
+pub mod formats;
 pub mod memo;
 pub mod render;
 pub mod stage;
@@ -46,4 +46,4 @@ pub mod stage;
 pub use derive::model::{Outcomes, ReportData};
 pub use render::folder::{existing_trials, write_folder, ReportSummary};
 pub use stage::stale::{staleness, Staleness};
-pub use stage::{default_dir, write, write_replayed, ReportOptions, ReportOutcome};
+pub use stage::{default_dir, write, write_replayed, ReportOptions, ReportWritten};

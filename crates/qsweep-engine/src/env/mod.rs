@@ -199,7 +199,7 @@ impl EnvParams {
         self.invalid_field().map_or(Ok(()), |(name, e)| Err(format!("{name}: {e}")))
     }
 
-    /// The first parameter that breaks its rule (see `sim::rules`), with the message, if any.
+    /// The first parameter that breaks its rule (see `crate::rules`), with the message, if any.
     pub fn invalid_field(&self) -> Option<(&'static str, String)> {
         use super::rules::{FINITE, POSITIVE};
         type Fields = Vec<(&'static str, f64)>;

@@ -45,7 +45,7 @@ impl Summary {
     }
 
     /// [`Summary::with_interval`], its interval given by `ci` (the same function as
-    /// [`bootstrap_ci`], e.g. memoized: [`super::derived::Derived::bootstrap_ci`]).
+    /// [`bootstrap_ci`], e.g. memoized: [`super::derived::StatsMemo::bootstrap_ci`]).
     pub fn with_interval_by(
         values: &[f64],
         seed: Option<u64>,

@@ -26,16 +26,17 @@ pub fn welch_p_greater(worse: &[f64], best: &[f64]) -> f64 {
     student_t_sf(t, df)
 }
 
-/// Holm's step-down procedure at level `alpha`: which of the hypotheses with these p-values are
-/// rejected. The family-wise error rate stays ≤ `alpha` under any dependence between the tests.
+/// Holm's step-down procedure at family-wise level `level`: which of the hypotheses with these
+/// p-values are rejected. The family-wise error rate stays ≤ `level` under any dependence between
+/// the tests.
 /// Ties in p keep their input order, so the answer is a pure function of the input.
-pub fn holm_reject(p: &[f64], alpha: f64) -> Vec<bool> {
+pub fn holm_reject(p: &[f64], level: f64) -> Vec<bool> {
     let m = p.len();
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| p[a].total_cmp(&p[b]).then(a.cmp(&b)));
     let mut out = vec![false; m];
     for (k, &i) in order.iter().enumerate() {
-        if p[i] <= alpha / (m - k) as f64 {
+        if p[i] <= level / (m - k) as f64 {
             out[i] = true;
         } else {
             break;

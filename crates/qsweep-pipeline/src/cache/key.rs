@@ -12,9 +12,9 @@ use std::fmt;
 /// representations, the learner or the random stream can change any outcome; every key changes
 /// with it, so stale results are never served. Pinned by the semantics fingerprint test.
 ///
-/// Engine 2 computes its own `sin`/`cos`/`exp` (`sim::math`), so that a key names one result on
+/// Engine 2 computes its own `sin`/`cos`/`exp` (`qsweep_engine::math`), so that a key names one result on
 /// every IEEE-754 machine (engine 1 called the platform's libm, whose last bits depend on the CPU's
-/// features), and sums Q(s, ·) in interleaved partial sums (`sim::learner`).
+/// features), and sums Q(s, ·) in interleaved partial sums (`qsweep_engine::learner`).
 pub const ENGINE_VERSION: u32 = 2;
 
 /// blake3 (first 16 hex chars) of the outcomes of the fixed fingerprint trials under

@@ -23,7 +23,7 @@ use std::sync::{Arc, OnceLock};
 /// A stored trial's outcome without its configuration (which the plan already knows): what a
 /// report reads.
 #[derive(Debug, Clone, PartialEq)]
-pub struct StoredOutcome {
+pub struct StoredTrial {
     /// The outcome; `episode_lengths` is empty when the read left that column out.
     pub outcome: Outcome,
     /// Wall-clock seconds (informational).
@@ -240,7 +240,7 @@ pub(super) fn read_outcome_rows(
     path: &Path,
     rows: &[usize],
     lengths: bool,
-) -> anyhow::Result<Vec<(Key, StoredOutcome)>> {
+) -> anyhow::Result<Vec<(Key, StoredTrial)>> {
     use parquet::arrow::arrow_reader::{RowSelection, RowSelector};
     let builder = open_reader(path)?;
     let mut names =
@@ -270,7 +270,7 @@ pub(super) fn read_outcome_rows(
         let cols = OutcomeColumns::of(&b)?;
         for i in 0..b.num_rows() {
             let (seconds, cpu_seconds) = cols.seconds(i);
-            out.push((cols.key(i)?, StoredOutcome { outcome: cols.outcome(i)?, seconds, cpu_seconds }));
+            out.push((cols.key(i)?, StoredTrial { outcome: cols.outcome(i)?, seconds, cpu_seconds }));
         }
     }
     anyhow::ensure!(out.len() == rows.len(), "expected {} rows, read {}", rows.len(), out.len());

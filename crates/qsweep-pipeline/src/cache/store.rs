@@ -12,7 +12,7 @@
 
 use super::key::Key;
 use super::record::TrialRecord;
-use super::rows::{read_keys, read_outcome_rows, read_segment, to_batch, StoredOutcome};
+use super::rows::{read_keys, read_outcome_rows, read_segment, to_batch, StoredTrial};
 use crate::atomic::write_atomic;
 use crate::parquet_io::to_parquet;
 use std::collections::HashSet;
@@ -121,7 +121,7 @@ impl Store {
         scan: &KeySet,
         wanted: &HashSet<Key>,
         lengths: bool,
-    ) -> anyhow::Result<std::collections::HashMap<Key, StoredOutcome>> {
+    ) -> anyhow::Result<std::collections::HashMap<Key, StoredTrial>> {
         Ok(self.read_outcomes_as(scan, wanted, lengths, |k, s| (k, s))?.into_iter().collect())
     }
 
@@ -132,7 +132,7 @@ impl Store {
         scan: &KeySet,
         wanted: &HashSet<Key>,
         lengths: bool,
-        f: impl Fn(Key, StoredOutcome) -> T + Sync,
+        f: impl Fn(Key, StoredTrial) -> T + Sync,
     ) -> anyhow::Result<Vec<T>> {
         use rayon::prelude::*;
         let mut taken = HashSet::new();

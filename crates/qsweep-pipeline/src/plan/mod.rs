@@ -10,4 +10,4 @@ mod resolved;
 
 pub use one_cell::{one_cell, CellRequest};
 pub use resolve::{plan, plan_variants, DEFAULT_MAX_TRIALS};
-pub use resolved::{Cell, Experiment, Plan, PlannedTrial, ReadOutcomes, StageOutcome, Variant};
+pub use resolved::{Cell, Experiment, Plan, PlannedTrial, ReadOutcomes, TrialBrief, Variant};

@@ -3,7 +3,7 @@
 //! the same settings have the same configuration and the same cache key.
 
 use super::resolve::plan;
-use crate::spec::{load_value, LoadedSpec, Override};
+use crate::declared::{load_value, LoadedSpec, Override};
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{Algorithm, TrialConfig};

@@ -4,12 +4,12 @@
 use super::keys::KeyMemo;
 use super::resolved::{Cell, Experiment, Plan, Variant};
 use crate::cache::Key;
-use crate::error::user_error;
-use crate::spec::{each_system, BallBeamM, CartPoleM, MountainCarM};
-use crate::spec::{
+use crate::declared::{each_system, BallBeamM, CartPoleM, MountainCarM};
+use crate::declared::{
     format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings,
     SystemMarker, SystemSpec, Target,
 };
+use crate::error::user_error;
 use qsweep_engine::config::{default_ranges, default_success, Success, TrialConfig};
 use qsweep_engine::env::{EnvParams, SystemKind};
 use qsweep_engine::Algorithm;
@@ -157,7 +157,7 @@ pub fn plan_variants(
     for id in select {
         if !loaded.variants.iter().any(|v| &v.id == id) {
             let ids: Vec<&str> = loaded.variants.iter().map(|v| v.id.as_str()).collect();
-            let hint = crate::spec::suggest(id, ids.iter().copied())
+            let hint = crate::declared::suggest(id, ids.iter().copied())
                 .map(|s| format!("; did you mean `{s}`?"))
                 .unwrap_or_default();
             return Err(user_error(format!(
@@ -167,17 +167,17 @@ pub fn plan_variants(
         }
     }
     let generated = loaded.variants.iter().filter(|v| v.generated).count();
-    if max_trials.is_some() && generated > crate::spec::grid::DEFAULT_MAX_VARIANTS {
+    if max_trials.is_some() && generated > crate::declared::grid::DEFAULT_MAX_VARIANTS {
         // The position is read again from the file: the typed pipeline does not keep it.
         let pos = std::fs::read_to_string(&loaded.path)
             .ok()
-            .and_then(|t| crate::spec::locate(&t, &["variant_grid".to_string()]))
+            .and_then(|t| crate::declared::locate(&t, &["variant_grid".to_string()]))
             .map(|(l, c)| format!("{l}:{c}:"))
             .unwrap_or_default();
         return Err(user_error(format!(
             "{origin}:{pos} variant_grid: {generated} variants, more than the confirmation limit of {}; \
              rerun with --yes if this is intended, or add `sample: N` to try a random N of them",
-            crate::spec::grid::DEFAULT_MAX_VARIANTS
+            crate::declared::grid::DEFAULT_MAX_VARIANTS
         )));
     }
     let chosen: Vec<&LoadedVariant> =
@@ -188,7 +188,8 @@ pub fn plan_variants(
         // A variant that differs from an earlier one only in report settings plans the same
         // trials: counted once.
         fn trial_set(v: &LoadedVariant) -> Vec<&String> {
-            let mut s: Vec<&String> = v.set.iter().filter(|e| !crate::spec::is_report_setting(e)).collect();
+            let mut s: Vec<&String> =
+                v.set.iter().filter(|e| !crate::declared::is_report_setting(e)).collect();
             s.sort();
             s
         }
@@ -260,7 +261,7 @@ pub fn plan_variants(
                 .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter()))
                 .any(|t| !written.contains(&t.key));
             // A report setting changes what the trials count, not the trials: no warning for it.
-            if !changed && v.set.iter().any(|e| !crate::spec::is_report_setting(e)) {
+            if !changed && v.set.iter().any(|e| !crate::declared::is_report_setting(e)) {
                 warnings.push(format!(
                     "variant `{}` changes no trial (its set gives the same configurations as the pipeline as written)",
                     v.id
@@ -334,7 +335,7 @@ fn spec_races(spec: &PipelineSpec) -> bool {
 /// its race can run), without building anything.
 fn planned_trials(spec: &PipelineSpec) -> u128 {
     let seeds = spec.seeds.0.len() as u128;
-    let system = |experiments: Vec<(u128, Option<crate::spec::RaceSpec>)>| -> u128 {
+    let system = |experiments: Vec<(u128, Option<crate::declared::RaceSpec>)>| -> u128 {
         experiments
             .into_iter()
             .map(|(cells, race)| {
@@ -342,7 +343,7 @@ fn planned_trials(spec: &PipelineSpec) -> u128 {
             })
             .sum()
     };
-    fn cells<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<(u128, Option<crate::spec::RaceSpec>)> {
+    fn cells<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<(u128, Option<crate::declared::RaceSpec>)> {
         s.experiments
             .iter()
             .map(|e| {
@@ -442,7 +443,7 @@ fn expand_experiment<M: Resolve>(
                     Target::Var(j) => resolution[j] = v as u32,
                     Target::Actions => actions = v as u32,
                     Target::Setting(name) => {
-                        let one = crate::spec::setting_level(name, v)
+                        let one = crate::declared::setting_level(name, v)
                             .map_err(|m| fail(format!("vary.{name}: {m}")))?;
                         axis_level.merge(&one);
                     }
@@ -500,7 +501,7 @@ fn grid_points(lens: &[usize]) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::load_str;
+    use crate::declared::load_str;
 
     fn plan_of(text: &str) -> Plan {
         let spec = load_str(text, "test.yaml", &[]).unwrap();

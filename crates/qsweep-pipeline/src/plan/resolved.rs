@@ -1,7 +1,7 @@
 //! What a plan is: experiments, cells, trials with their keys, and the variants they belong to.
 
 use crate::cache::Key;
-use crate::spec::{Axis, RaceSpec, Reference, Target};
+use crate::declared::{Axis, RaceSpec, Reference, Target};
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{Algorithm, TrialConfig};
@@ -11,13 +11,13 @@ use std::path::PathBuf;
 /// Fetches the stored outcomes of some trial keys (all of them present in the cache), one per
 /// key: how a plan's stages (a race's rounds, the fresh seeds) read what earlier stages produced.
 pub type ReadOutcomes<'a> =
-    dyn FnMut(&std::collections::HashSet<Key>) -> anyhow::Result<Vec<(Key, StageOutcome)>> + 'a;
+    dyn FnMut(&std::collections::HashSet<Key>) -> anyhow::Result<Vec<(Key, TrialBrief)>> + 'a;
 
 /// What a plan's stages read of a stored outcome: all of it but the episode lengths and a
 /// diverged trial's message, which no decision reads. 24 bytes, so a replay of the paper's 100,000
 /// trials holds them in a few MB.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StageOutcome {
+pub struct TrialBrief {
     /// Whether the learning goal was reached.
     pub converged: bool,
     /// Episodes up to and including the one that reached the goal.
@@ -30,7 +30,7 @@ pub struct StageOutcome {
     pub stop: qsweep_engine::StopReason,
 }
 
-impl From<&qsweep_engine::Outcome> for StageOutcome {
+impl From<&qsweep_engine::Outcome> for TrialBrief {
     fn from(o: &qsweep_engine::Outcome) -> Self {
         Self {
             converged: o.converged,
@@ -42,7 +42,7 @@ impl From<&qsweep_engine::Outcome> for StageOutcome {
     }
 }
 
-impl StageOutcome {
+impl TrialBrief {
     /// As an outcome for the shared statistics ([`crate::analysis::episodes_counted`]), without
     /// the episode lengths and failure message it does not keep (nothing allocated).
     pub fn outcome(&self) -> qsweep_engine::Outcome {
@@ -85,7 +85,7 @@ pub struct Plan {
     /// the race columns, in every variant's files alike, so they concatenate.
     pub raced: bool,
     /// The pipeline's exploratory block: which Table III rows choose the variant.
-    pub exploratory: Option<crate::spec::explore::Exploratory>,
+    pub exploratory: Option<crate::declared::explore::Exploratory>,
     /// How many variants the pipeline declares (listed and generated), all of them even when
     /// `--variant` selects some: what an exploratory search tried.
     pub variant_count: usize,

@@ -29,7 +29,7 @@
 use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
 use crate::cache::store::{KeySet, Store};
 use crate::cache::{Key, ENGINE_VERSION};
-use crate::plan::{Plan, PlannedTrial, StageOutcome};
+use crate::plan::{Plan, PlannedTrial, TrialBrief};
 use qsweep_engine::{Algorithm, Outcome};
 use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
@@ -217,8 +217,8 @@ impl Unreplay {
 pub fn read_cached<'a>(
     store: &'a Store,
     scan: &'a KeySet,
-) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, StageOutcome)>> + 'a {
-    move |wanted| store.read_outcomes_as(scan, wanted, false, |k, s| (k, StageOutcome::from(&s.outcome)))
+) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, TrialBrief)>> + 'a {
+    move |wanted| store.read_outcomes_as(scan, wanted, false, |k, s| (k, TrialBrief::from(&s.outcome)))
 }
 
 /// Replay every stage of `plan`, given up (replayed in place) or borrowed (a copy is replayed):
@@ -265,7 +265,7 @@ pub fn replay<'p>(
         }
     }
     // Every heatmap advances as far as the cache allows; they share one read per pass.
-    let mut known: HashMap<Key, StageOutcome> = HashMap::new();
+    let mut known: HashMap<Key, TrialBrief> = HashMap::new();
     loop {
         let mut wanted = HashSet::new();
         for h in heats.iter().filter(|h| !h.finished) {
@@ -296,7 +296,7 @@ pub fn replay<'p>(
                 let cell = &e.cells[i];
                 let (limits, counting) = (&cell.config.limits, e.counting);
                 let outcomes: Option<Vec<Outcome>> =
-                    cell.trials.iter().map(|t| known.get(&t.key).map(StageOutcome::outcome)).collect();
+                    cell.trials.iter().map(|t| known.get(&t.key).map(TrialBrief::outcome)).collect();
                 match outcomes {
                     Some(os) => samples.push(Some(Sample {
                         values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
@@ -378,8 +378,8 @@ pub struct Sample {
 
 /// One round's decision over a heatmap's cells (`None`: already out of the race): which stay. The
 /// best contender by Table III's rule stays; every other contender is tested against it
-/// ([`welch::welch_p_greater`]) and the ones Holm's procedure rejects at `alpha` leave.
-pub fn decide(samples: &[Option<Sample>], alpha: f64) -> Vec<bool> {
+/// ([`welch::welch_p_greater`]) and the ones Holm's procedure rejects at family-wise level `level` leave.
+pub fn decide(samples: &[Option<Sample>], level: f64) -> Vec<bool> {
     let candidates = samples.iter().enumerate().filter_map(|(i, s)| {
         s.as_ref().map(|s| Candidate {
             index: i,
@@ -396,7 +396,7 @@ pub fn decide(samples: &[Option<Sample>], alpha: f64) -> Vec<bool> {
         .iter()
         .map(|&i| welch::welch_p_greater(&samples[i].as_ref().expect("a contender").values, best_values))
         .collect();
-    for (&i, drop) in tested.iter().zip(welch::holm_reject(&p, alpha)) {
+    for (&i, drop) in tested.iter().zip(welch::holm_reject(&p, level)) {
         keep[i] = !drop;
     }
     keep
@@ -405,7 +405,7 @@ pub fn decide(samples: &[Option<Sample>], alpha: f64) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::load_str;
+    use crate::declared::load_str;
     use qsweep_engine::trial::StopReason;
 
     fn sample(values: &[f64], cap: f64) -> Option<Sample> {
@@ -444,7 +444,7 @@ mod tests {
             "name: t\nseeds: 3\nrace: {race}\nsystems:\n  cart-pole:\n    settings: {{ max_episodes: 50 }}\n    experiments:\n      - {{ id: a, repr: crisp, algorithms: [q0], vary: {{ actions: [2, 3, 4] }}, fixed: {{ x == x_dot == theta == theta_dot: 2 }} }}\n"
         );
         let spec = load_str(&text, "t.yaml", &[]).unwrap();
-        let loaded = crate::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() };
+        let loaded = crate::declared::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() };
         crate::plan::plan(&loaded, None).unwrap()
     }
 
@@ -466,8 +466,8 @@ mod tests {
     type Stored = HashMap<Key, Outcome>;
 
     /// Read from `store`, as a replay reads a cache.
-    fn reader(store: &Stored) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, StageOutcome)>> + '_ {
-        |w| Ok(w.iter().map(|k| (*k, StageOutcome::from(&store[k]))).collect())
+    fn reader(store: &Stored) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, TrialBrief)>> + '_ {
+        |w| Ok(w.iter().map(|k| (*k, TrialBrief::from(&store[k]))).collect())
     }
 
     fn race_to_the_end(plan: &Plan, value: impl Fn(usize, u64) -> u32) -> (Replayed, Vec<usize>, Stored) {

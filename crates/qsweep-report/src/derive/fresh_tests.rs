@@ -10,10 +10,10 @@ use std::collections::HashMap;
 #[test]
 fn the_report_judges_the_row_on_the_fresh_estimate() {
     let (done, store, _) = run_to_the_end(&plan());
-    let records: HashMap<Key, qsweep_pipeline::cache::rows::StoredOutcome> = store
+    let records: HashMap<Key, qsweep_pipeline::cache::rows::StoredTrial> = store
         .into_iter()
         .map(|(k, o)| {
-            (k, qsweep_pipeline::cache::rows::StoredOutcome { outcome: o, seconds: 0.0, cpu_seconds: None })
+            (k, qsweep_pipeline::cache::rows::StoredTrial { outcome: o, seconds: 0.0, cpu_seconds: None })
         })
         .collect();
     let data = crate::derive::model::ReportData::build(&done, &records);

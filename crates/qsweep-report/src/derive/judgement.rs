@@ -6,7 +6,7 @@ use crate::derive::model::{CellData, Contradictions};
 use qsweep_engine::Algorithm;
 use qsweep_pipeline::analysis::equivalence::Moments;
 use qsweep_pipeline::analysis::verdict::{cause, judge, Cause, Judged};
-use qsweep_pipeline::spec::Reference;
+use qsweep_pipeline::declared::Reference;
 
 /// One Table III row judged at one assumed number of paper runs.
 #[derive(Debug, Clone, Copy, PartialEq)]

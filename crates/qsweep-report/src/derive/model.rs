@@ -5,27 +5,27 @@
 //! The rules it applies (episodes counted, the best cell) and the statistics are
 //! [`qsweep_pipeline::analysis`]'s, shared with the race.
 
-use crate::memo::stats::Derived;
+use crate::memo::stats::StatsMemo;
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{Algorithm, Outcome};
 use qsweep_pipeline::analysis::claims::ClaimCell;
 use qsweep_pipeline::analysis::consistency::Published;
 use qsweep_pipeline::analysis::{best_cell, episodes_counted, Best, Candidate, Summary};
-use qsweep_pipeline::cache::rows::StoredOutcome;
+use qsweep_pipeline::cache::rows::StoredTrial;
 use qsweep_pipeline::cache::{Key, TrialRecord};
 use qsweep_pipeline::plan::{Cell, Experiment, Plan, PlannedTrial};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Where a report finds a trial's outcome by key: the cache's outcome columns
-/// ([`StoredOutcome`]), or whole records (in tests and tools that ran the trials themselves).
+/// ([`StoredTrial`]), or whole records (in tests and tools that ran the trials themselves).
 pub trait Outcomes: Sync {
     /// The outcome of `key`, its wall-clock and its CPU seconds, if present.
     fn outcome(&self, key: &Key) -> Option<(&Outcome, f64, Option<f64>)>;
 }
 
-impl Outcomes for HashMap<Key, StoredOutcome> {
+impl Outcomes for HashMap<Key, StoredTrial> {
     fn outcome(&self, key: &Key) -> Option<(&Outcome, f64, Option<f64>)> {
         self.get(key).map(|s| (&s.outcome, s.seconds, s.cpu_seconds))
     }
@@ -239,13 +239,13 @@ impl<'a> ReportData<'a> {
     /// seeded by its own trials, so the result does not depend on the threads).
     pub fn build(plan: &'a Plan, records: &'a dyn Outcomes) -> Self {
         // A memo kept by nobody: every interval computed (its version names no file).
-        Self::build_as(plan, records, Some(&Derived::fresh(0)))
+        Self::build_as(plan, records, Some(&StatsMemo::fresh(0)))
     }
 
     /// [`ReportData::build`], with the cells' bootstrap intervals only when `intervals` gives the
     /// statistics' memo they are taken from or recorded in: a variant that writes no folder (an
     /// exploratory or not-chosen one) only needs its means for the comparison.
-    pub fn build_as(plan: &'a Plan, records: &'a dyn Outcomes, intervals: Option<&Derived>) -> Self {
+    pub fn build_as(plan: &'a Plan, records: &'a dyn Outcomes, intervals: Option<&StatsMemo>) -> Self {
         let planned = plan.trial_count();
         let mut present = 0;
         let experiments = plan
@@ -408,7 +408,7 @@ fn cell_data<'a>(
     cell: &'a Cell,
     trials: Vec<TrialData<'a>>,
     fresh: Vec<TrialData<'a>>,
-    intervals: Option<&Derived>,
+    intervals: Option<&StatsMemo>,
 ) -> CellData<'a> {
     let summarize = |trials: &[TrialData]| {
         let (values, seed) = interval_inputs(trials);

@@ -24,7 +24,7 @@
 //! means the folder is recomputed: never an error, never a stale number. `--rebuild` ignores it.
 
 use super::ANALYSIS_VERSION;
-use crate::kinds::Formats;
+use crate::formats::Formats;
 use crate::render::folder::ReportSummary;
 use qsweep_pipeline::cache::store::KeySet;
 use qsweep_pipeline::cache::Key;
@@ -391,8 +391,9 @@ mod tests {
     /// A plan of one heatmap of 9 Cart-Pole cells, 2 seeds each.
     fn plan() -> Plan {
         let text = "name: t\nseeds: 2\nsystems:\n  cart-pole:\n    settings: { max_episodes: 50 }\n    experiments:\n      - { id: a, repr: crisp, algorithms: [q0], vary: { actions: 2..10 }, fixed: { x == x_dot == theta == theta_dot: 2 } }\n";
-        let spec = qsweep_pipeline::spec::load_str(text, "t.yaml", &[]).unwrap();
-        let loaded = qsweep_pipeline::spec::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() };
+        let spec = qsweep_pipeline::declared::load_str(text, "t.yaml", &[]).unwrap();
+        let loaded =
+            qsweep_pipeline::declared::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() };
         qsweep_pipeline::plan::plan(&loaded, None).unwrap()
     }
 

@@ -44,7 +44,7 @@ type Id = [u8; 16];
 
 /// The statistics' memo of one report (see the module documentation).
 #[derive(Debug)]
-pub struct Derived {
+pub struct StatsMemo {
     /// The definitions' version mixed into every id.
     version: u32,
     /// Entries read from the file.
@@ -59,14 +59,14 @@ pub struct Derived {
 
 /// What one report did with the memo.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct DerivedCounts {
+pub struct MemoCounts {
     /// Statistics computed (not in the memo, or `--rebuild`).
     pub computed: usize,
     /// Statistics taken from the memo.
     pub reused: usize,
 }
 
-impl Derived {
+impl StatsMemo {
     /// A memo that reuses nothing (every statistic is computed) but records what it computes, to
     /// be saved: `--rebuild`, and callers without a cache.
     pub fn fresh(version: u32) -> Self {
@@ -99,8 +99,8 @@ impl Derived {
     }
 
     /// How many statistics were computed and reused so far.
-    pub fn counts(&self) -> DerivedCounts {
-        DerivedCounts {
+    pub fn counts(&self) -> MemoCounts {
+        MemoCounts {
             computed: self.computed.load(Ordering::Relaxed),
             reused: self.reused.load(Ordering::Relaxed),
         }
@@ -148,7 +148,7 @@ impl Derived {
         h
     }
 
-    /// The id of [`Derived::bootstrap_ci`]'s entry.
+    /// The id of [`StatsMemo::bootstrap_ci`]'s entry.
     fn ci_id(&self, values: &[f64], resamples: usize, seed: u64) -> Id {
         let mut h = self.hasher("bootstrap-ci");
         put_params(&mut h, resamples, seed);
@@ -156,7 +156,7 @@ impl Derived {
         id(&h)
     }
 
-    /// Whether [`Derived::bootstrap_ci`] of these inputs is in the memo (what a report would
+    /// Whether [`StatsMemo::bootstrap_ci`] of these inputs is in the memo (what a report would
     /// reuse rather than compute).
     pub fn has_ci(&self, values: &[f64], resamples: usize, seed: u64) -> bool {
         self.reuse && self.kept.contains_key(&self.ci_id(values, resamples, seed))
@@ -293,7 +293,7 @@ fn decode(bytes: &[u8], version: u32) -> Option<Vec<(Id, Box<[u64]>)>> {
 
 /// What `qsweep verify` found of a cache's memos.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
-pub struct DerivedCheck {
+pub struct StatsCheck {
     /// Memo files whole and of this build's format (any definitions' version).
     pub intact: usize,
     /// Entries in them.
@@ -303,8 +303,8 @@ pub struct DerivedCheck {
 }
 
 /// Check every memo file of the cache at `cache`.
-pub fn check(cache: &Path) -> DerivedCheck {
-    let mut out = DerivedCheck::default();
+pub fn check(cache: &Path) -> StatsCheck {
+    let mut out = StatsCheck::default();
     let Ok(dir) = std::fs::read_dir(cache.join(DERIVED_DIR)) else { return out };
     let mut files: Vec<PathBuf> = dir.flatten().map(|e| e.path()).filter(|p| is_memo(p)).collect();
     files.sort();
@@ -324,7 +324,7 @@ pub fn check(cache: &Path) -> DerivedCheck {
 
 /// What [`gc`] removed, or left because a report is reading it.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
-pub struct DerivedGc {
+pub struct StatsGc {
     /// Memo files and parts' folders removed (with `dry_run`: that would be).
     pub removed: usize,
     /// Parts' folders of pipelines not kept, left in place because a report of the pipeline is
@@ -340,8 +340,8 @@ pub fn gc(
     keep: Option<&std::collections::HashSet<String>>,
     version: u32,
     dry_run: bool,
-) -> anyhow::Result<DerivedGc> {
-    let mut out = DerivedGc::default();
+) -> anyhow::Result<StatsGc> {
+    let mut out = StatsGc::default();
     let Ok(dir) = std::fs::read_dir(cache.join(DERIVED_DIR)) else { return Ok(out) };
     let paths: Vec<PathBuf> = dir.flatten().map(|e| e.path()).collect();
     // A pipeline's trial parts (`<name>.trials/`, report::trials) go with it, once no report
@@ -398,48 +398,48 @@ mod tests {
     fn memoized_intervals_equal_computed_ones_and_are_reused() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.bin");
-        let m = Derived::fresh(7);
+        let m = StatsMemo::fresh(7);
         let ci = m.bootstrap_ci(&values(), 2000, 11);
         assert_eq!(ci, qsweep_pipeline::analysis::bootstrap_ci(&values(), 2000, 11));
         let d = m.bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5);
         assert_eq!(d, qsweep_pipeline::analysis::bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5));
-        assert_eq!(m.counts(), DerivedCounts { computed: 2, reused: 0 });
+        assert_eq!(m.counts(), MemoCounts { computed: 2, reused: 0 });
         assert!(m.save(&path, true).unwrap());
         assert!(!m.save(&path, true).unwrap(), "the same entries are the same bytes: not rewritten");
 
-        let again = Derived::load(&path, 7, true);
+        let again = StatsMemo::load(&path, 7, true);
         assert!(again.has_ci(&values(), 2000, 11) && !again.has_ci(&values(), 2000, 12));
-        assert!(!Derived::load(&path, 7, false).has_ci(&values(), 2000, 11), "--rebuild reuses nothing");
+        assert!(!StatsMemo::load(&path, 7, false).has_ci(&values(), 2000, 11), "--rebuild reuses nothing");
         assert_eq!(again.bootstrap_ci(&values(), 2000, 11), ci);
         assert_eq!(again.bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5), d);
-        assert_eq!(again.counts(), DerivedCounts { computed: 0, reused: 2 });
+        assert_eq!(again.counts(), MemoCounts { computed: 0, reused: 2 });
         // Another seed, another resample count or one value changed: another entry.
         again.bootstrap_ci(&values(), 2000, 12);
         again.bootstrap_ci(&values(), 1999, 11);
         let mut v = values();
         v[4] = f64::from_bits(40f64.to_bits() + 1);
         again.bootstrap_ci(&v, 2000, 11);
-        assert_eq!(again.counts(), DerivedCounts { computed: 3, reused: 2 });
+        assert_eq!(again.counts(), MemoCounts { computed: 3, reused: 2 });
     }
 
     #[test]
     fn another_version_a_damaged_or_a_truncated_file_is_read_as_empty() {
         let cache = tempfile::tempdir().unwrap();
-        let path = Derived::path(cache.path(), "p");
-        let m = Derived::fresh(7);
+        let path = StatsMemo::path(cache.path(), "p");
+        let m = StatsMemo::fresh(7);
         m.bootstrap_ci(&values(), 100, 1);
         m.save(&path, true).unwrap();
-        assert_eq!(Derived::load(&path, 7, true).kept.len(), 1);
+        assert_eq!(StatsMemo::load(&path, 7, true).kept.len(), 1);
         assert_eq!((check(cache.path()).intact, check(cache.path()).entries), (1, 1));
-        assert_eq!(Derived::load(&path, 8, true).kept.len(), 0, "other definitions");
+        assert_eq!(StatsMemo::load(&path, 8, true).kept.len(), 0, "other definitions");
         let mut bytes = std::fs::read(&path).unwrap();
         bytes[30] ^= 1;
         std::fs::write(&path, &bytes).unwrap();
-        assert_eq!(Derived::load(&path, 7, true).kept.len(), 0, "checksum");
+        assert_eq!(StatsMemo::load(&path, 7, true).kept.len(), 0, "checksum");
         assert_eq!((check(cache.path()).intact, check(cache.path()).damaged.len()), (0, 1));
         std::fs::write(&path, &bytes[..20]).unwrap();
-        assert_eq!(Derived::load(&path, 7, true).kept.len(), 0, "truncated");
-        assert_eq!(Derived::load(&cache.path().join("none.bin"), 7, true).kept.len(), 0, "missing");
+        assert_eq!(StatsMemo::load(&path, 7, true).kept.len(), 0, "truncated");
+        assert_eq!(StatsMemo::load(&cache.path().join("none.bin"), 7, true).kept.len(), 0, "missing");
         // gc drops the damaged file, and a pipeline's file no given pipeline names.
         assert_eq!(gc(cache.path(), None, 7, true).unwrap().removed, 1);
         assert!(path.is_file(), "a dry run removes nothing");
@@ -461,7 +461,7 @@ mod tests {
         let reading = readers::Reading::hold(&parts);
         for dry_run in [true, false] {
             let r = gc(cache.path(), Some(&keep), 7, dry_run).unwrap();
-            assert_eq!(r, DerivedGc { removed: 0, in_use: vec![parts.clone()] });
+            assert_eq!(r, StatsGc { removed: 0, in_use: vec![parts.clone()] });
             assert!(parts.join("a.parquet").is_file());
         }
         drop(reading);
@@ -469,10 +469,7 @@ mod tests {
         std::fs::remove_file(&lock).unwrap();
         assert_eq!(gc(cache.path(), Some(&keep), 7, true).unwrap().removed, 1);
         assert!(parts.join("a.parquet").is_file() && !lock.exists(), "a dry run makes and removes nothing");
-        assert_eq!(
-            gc(cache.path(), Some(&keep), 7, false).unwrap(),
-            DerivedGc { removed: 1, in_use: vec![] }
-        );
+        assert_eq!(gc(cache.path(), Some(&keep), 7, false).unwrap(), StatsGc { removed: 1, in_use: vec![] });
         assert!(!parts.exists());
     }
 
@@ -480,25 +477,25 @@ mod tests {
     fn a_full_report_prunes_what_it_did_not_use_a_partial_one_adds() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.bin");
-        let m = Derived::fresh(1);
+        let m = StatsMemo::fresh(1);
         m.bootstrap_ci(&values(), 100, 1);
         m.bootstrap_ci(&values(), 100, 2);
         m.save(&path, true).unwrap();
-        let partial = Derived::load(&path, 1, true);
+        let partial = StatsMemo::load(&path, 1, true);
         partial.bootstrap_ci(&values(), 100, 3);
         partial.save(&path, false).unwrap();
-        assert_eq!(Derived::load(&path, 1, true).kept.len(), 3);
-        let full = Derived::load(&path, 1, true);
+        assert_eq!(StatsMemo::load(&path, 1, true).kept.len(), 3);
+        let full = StatsMemo::load(&path, 1, true);
         full.bootstrap_ci(&values(), 100, 3);
         full.save(&path, true).unwrap();
-        assert_eq!(Derived::load(&path, 1, true).kept.len(), 1);
+        assert_eq!(StatsMemo::load(&path, 1, true).kept.len(), 1);
         // Without reuse (--rebuild) a kept entry is computed again, and still kept by a partial
         // report.
-        let rebuild = Derived::load(&path, 1, false);
+        let rebuild = StatsMemo::load(&path, 1, false);
         rebuild.bootstrap_ci(&values(), 100, 4);
         rebuild.bootstrap_ci(&values(), 100, 3);
-        assert_eq!(rebuild.counts(), DerivedCounts { computed: 2, reused: 0 });
+        assert_eq!(rebuild.counts(), MemoCounts { computed: 2, reused: 0 });
         rebuild.save(&path, false).unwrap();
-        assert_eq!(Derived::load(&path, 1, true).kept.len(), 2);
+        assert_eq!(StatsMemo::load(&path, 1, true).kept.len(), 2);
     }
 }

@@ -208,7 +208,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
     sub.extend(
         exp.fixed
             .iter()
-            .map(|(t, v)| format!("{} = {v}", qsweep_pipeline::spec::target_name(exp.system, *t))),
+            .map(|(t, v)| format!("{} = {v}", qsweep_pipeline::declared::target_name(exp.system, *t))),
     );
     if best.is_some_and(|b| !b.all_converged) {
         sub.push("no cell fully converged".into());
@@ -330,7 +330,7 @@ impl<'e> Grid<'e> {
         for (ci, v) in self.cols.iter().enumerate() {
             let x = self.left + ((ci as f64 + 0.5) * self.cw).round() as i32;
             cv.text(
-                &qsweep_pipeline::spec::format_value(*v),
+                &qsweep_pipeline::declared::format_value(*v),
                 (x, self.bottom + 5),
                 12.0,
                 INK,
@@ -345,7 +345,7 @@ impl<'e> Grid<'e> {
             for (ri, v) in self.rows.iter().enumerate() {
                 let y = self.top + ((ri as f64 + 0.5) * self.ch).round() as i32;
                 cv.text(
-                    &qsweep_pipeline::spec::format_value(*v),
+                    &qsweep_pipeline::declared::format_value(*v),
                     (self.left - 6, y),
                     12.0,
                     INK,

@@ -1,7 +1,7 @@
 //! Writing one report folder: its files (tables, figures, data, pages) in the formats asked for,
 //! each atomically, and what the folder holds.
 
-use crate::kinds::{Format, Formats};
+use crate::formats::{Format, Formats};
 
 use crate::derive::model::ReportData;
 use crate::derive::table::{table3, table3_parts};

@@ -5,7 +5,7 @@
 
 use crate::derive::model::{ExpData, ReportData};
 use crate::derive::table::{cell_table, table3_parts, TABLE3_PARTS};
-use crate::kinds::{Format, Formats};
+use crate::formats::{Format, Formats};
 use crate::render::curves::CURVE_RULE;
 use crate::render::escape::html as esc;
 use crate::render::table::{render, Html};

@@ -5,7 +5,7 @@
 //! never becomes HTML, a link or a heading.
 
 use crate::derive::model::ReportData;
-use crate::kinds::{Format, Formats};
+use crate::formats::{Format, Formats};
 use crate::render::escape;
 use crate::render::html::identity;
 use crate::render::table::{render, Markdown, Table};

@@ -5,10 +5,10 @@
 //! guard over every folder it replaces ([`guard`]).
 
 use crate::derive::compare::VariantInfo;
-use crate::kinds::Formats;
+use crate::formats::Formats;
 use crate::memo::folders::{self as memo, Inputs, Memo, Role};
 use crate::stage::manifest::Counts;
-use crate::stage::outcome::{ReportOptions, ReportOutcome};
+use crate::stage::outcome::{ReportOptions, ReportWritten};
 use crate::stage::target::Target;
 use qsweep_pipeline::cache::store::{KeySet, Store};
 use qsweep_pipeline::plan::Plan;
@@ -92,13 +92,13 @@ pub(super) fn all_intact(
     inputs: &FolderInputs,
     scan: &KeySet,
     opts: &ReportOptions,
-) -> Option<ReportOutcome> {
+) -> Option<ReportWritten> {
     let dir = &opts.dir;
     let top = intact(opts, dir, &inputs.top)?;
-    let mut out = ReportOutcome {
+    let mut out = ReportWritten {
         summary: top.summary.summary(),
         cells_reused: top.summary.cells,
-        ..ReportOutcome::empty(Counts::of(plan, &scan.keys))
+        ..ReportWritten::empty(Counts::of(plan, &scan.keys))
     };
     for (f, h) in folders.iter().zip(&inputs.each) {
         let Some(v) = &f.info else { continue };

@@ -5,7 +5,7 @@
 //! [`Target`](target::Target)) reads the manifest of every folder the report would replace: it
 //! refuses (exit 1, nothing written) only when the new report's plan lacks trials and the kept
 //! report holds more. A complete report of a changed plan replaces the old one, and
-//! [`ReportOutcome::replaced`] says what changed.
+//! [`ReportWritten::replaced`] says what changed.
 //!
 //! Only what changed is recomputed. Each folder's memo ([`crate::memo::folders`]) says whether
 //! its inputs changed: an intact folder is neither recomputed nor rewritten; with a comparison,
@@ -13,7 +13,7 @@
 //! folders are intact keep their files and are only summarized for the comparison (in parallel,
 //! from one shared read without episode lengths), while the others are drawn one at a time
 //! (memory: one variant's episode lengths). Every bootstrap interval and claim set comes from the
-//! statistics' memo ([`Derived`](crate::memo::stats::Derived)) when its inputs are unchanged; the
+//! statistics' memo ([`StatsMemo`](crate::memo::stats::StatsMemo)) when its inputs are unchanged; the
 //! combined `trials.parquet` is spliced from one part per variant
 //! ([`TrialParts`](crate::memo::parts::TrialParts)), encoding only the changed ones; every file is
 //! written only when its bytes change. `--rebuild` ([`ReportOptions::rebuild`]) ignores every memo.
@@ -31,7 +31,7 @@ mod steps;
 mod target;
 
 use crate::stage::layout::{all_intact, folders_of, guard, in_full, inputs_of, with_comparison};
-pub use crate::stage::outcome::{ReportOptions, ReportOutcome};
+pub use crate::stage::outcome::{ReportOptions, ReportWritten};
 use crate::stage::steps::Report;
 use qsweep_pipeline::cache::store::{KeySet, Store};
 use qsweep_pipeline::error::user_error;
@@ -52,7 +52,7 @@ pub fn write(
     store: &Store,
     scan: &KeySet,
     opts: &ReportOptions,
-) -> anyhow::Result<ReportOutcome> {
+) -> anyhow::Result<ReportWritten> {
     if opts.dir.exists() && !opts.dir.is_dir() {
         return Err(not_a_dir(&opts.dir));
     }
@@ -75,7 +75,7 @@ pub fn write_replayed(
     store: &Store,
     scan: &KeySet,
     opts: &ReportOptions,
-) -> anyhow::Result<ReportOutcome> {
+) -> anyhow::Result<ReportWritten> {
     if opts.dir.exists() && !opts.dir.is_dir() {
         return Err(not_a_dir(&opts.dir));
     }

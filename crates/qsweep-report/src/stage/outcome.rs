@@ -1,7 +1,7 @@
-//! What a report is asked to do ([`ReportOptions`]) and what it did ([`ReportOutcome`]).
+//! What a report is asked to do ([`ReportOptions`]) and what it did ([`ReportWritten`]).
 
-use crate::kinds::Formats;
-use crate::memo::stats::DerivedCounts;
+use crate::formats::Formats;
+use crate::memo::stats::MemoCounts;
 use crate::render::folder::ReportSummary;
 use crate::stage::manifest::Counts;
 use std::path::PathBuf;
@@ -21,7 +21,7 @@ pub struct ReportOptions {
 
 /// What the stage wrote.
 #[derive(Debug, Clone)]
-pub struct ReportOutcome {
+pub struct ReportWritten {
     /// Counts over the whole plan and every file written (relative to the directory).
     pub summary: ReportSummary,
     /// The whole plan's distinct-trial counts.
@@ -40,13 +40,13 @@ pub struct ReportOutcome {
     /// Cells of the folders skipped as their memos say (nothing read, nothing computed).
     pub cells_reused: usize,
     /// Bootstrap intervals and claim sets computed, and taken from the statistics' memo
-    /// ([`crate::memo::stats::Derived`]), by the folders recomputed.
-    pub statistics: DerivedCounts,
+    /// ([`crate::memo::stats::StatsMemo`]), by the folders recomputed.
+    pub statistics: MemoCounts,
     /// What went wrong without failing the report (the statistics' memo could not be saved).
     pub warnings: Vec<String>,
 }
 
-impl ReportOutcome {
+impl ReportWritten {
     /// Nothing written yet, of a plan with these counts.
     pub(super) fn empty(counts: Counts) -> Self {
         Self {
@@ -58,7 +58,7 @@ impl ReportOutcome {
             files_unchanged: 0,
             cells_recomputed: 0,
             cells_reused: 0,
-            statistics: DerivedCounts::default(),
+            statistics: MemoCounts::default(),
             warnings: Vec::new(),
         }
     }

@@ -3,9 +3,9 @@
 //! takes from the statistics' memo ([`crate::memo::stats`]).
 
 use crate::derive::model::{interval_inputs, ReportData};
-use crate::kinds::Formats;
+use crate::formats::Formats;
 use crate::memo::folders::{self as memo, Inputs, Role};
-use crate::memo::stats::Derived;
+use crate::memo::stats::StatsMemo;
 use qsweep_pipeline::analysis::BOOTSTRAP_RESAMPLES;
 use qsweep_pipeline::cache::store::{KeySet, Store};
 use qsweep_pipeline::cache::Key;
@@ -38,8 +38,8 @@ pub fn staleness(
 ) -> anyhow::Result<Staleness> {
     let plan = replay(plan, &scan.keys, &mut read_cached(store, scan))?.into_plan();
     let folders = folders(&plan, scan, dir, formats);
-    let path = Derived::path(store.dir(), &plan.name);
-    let memo = Derived::load(&path, crate::memo::ANALYSIS_VERSION, true);
+    let path = StatsMemo::path(store.dir(), &plan.name);
+    let memo = StatsMemo::load(&path, crate::memo::ANALYSIS_VERSION, true);
     // The cells whose intervals a report shows: every declared variant's (an exploratory one
     // shows none in a full report).
     let declared: Vec<Plan> = if plan.variants.is_empty() {

@@ -15,20 +15,20 @@
 
 use crate::derive::compare::{VariantDigest, VariantInfo};
 use crate::derive::model::ReportData;
-use crate::kinds::{Format, Formats};
+use crate::formats::{Format, Formats};
 use crate::memo::folders::{self as memo, Counted, Memo};
 use crate::memo::parts::TrialParts;
-use crate::memo::stats::Derived;
+use crate::memo::stats::StatsMemo;
 use crate::render::compare;
 use crate::render::datasets;
 use crate::render::folder::{write_folder, ReportSummary};
 use crate::stage::layout::{deferred, intact, with_comparison, Folder};
 use crate::stage::manifest::Counts;
-use crate::stage::outcome::{ReportOptions, ReportOutcome};
+use crate::stage::outcome::{ReportOptions, ReportWritten};
 use crate::stage::target::Target;
 use arrow::record_batch::RecordBatch;
 use qsweep_pipeline::atomic::write_if_changed;
-use qsweep_pipeline::cache::rows::StoredOutcome;
+use qsweep_pipeline::cache::rows::StoredTrial;
 use qsweep_pipeline::cache::store::{KeySet, Store};
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::plan::Plan;
@@ -37,7 +37,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 /// Outcomes read from the cache, by trial key.
-pub(super) type Read = HashMap<Key, StoredOutcome>;
+pub(super) type Read = HashMap<Key, StoredTrial>;
 
 /// What one folder needs, decided before any trial is read.
 pub(super) struct FolderNeed {
@@ -69,7 +69,7 @@ impl<'p> Summarized<'p> {
         sub: &'p Plan,
         data: &ReportData,
         cells: bool,
-        derived: &Derived,
+        derived: &StatsMemo,
     ) -> anyhow::Result<Self> {
         Ok(Self {
             counted: ReportSummary::of(data, Vec::new()),
@@ -92,9 +92,9 @@ pub(super) struct Report<'a> {
     scan: &'a KeySet,
     opts: &'a ReportOptions,
     /// What it has done so far.
-    out: ReportOutcome,
+    out: ReportWritten,
     /// The statistics' memo: every interval and claim set whose inputs are unchanged is reused.
-    derived: Derived,
+    derived: StatsMemo,
     /// Where the statistics' memo is kept.
     memo_path: PathBuf,
     /// A folder was skipped by its memo: it used no statistics, so the memo keeps what it holds.
@@ -116,9 +116,9 @@ impl<'a> Report<'a> {
         scan: &'a KeySet,
         opts: &'a ReportOptions,
     ) -> anyhow::Result<Self> {
-        let out = ReportOutcome::empty(Counts::of(plan, &scan.keys));
-        let memo_path = Derived::path(store.dir(), &plan.name);
-        let derived = Derived::load(&memo_path, crate::memo::ANALYSIS_VERSION, !opts.rebuild);
+        let out = ReportWritten::empty(Counts::of(plan, &scan.keys));
+        let memo_path = StatsMemo::path(store.dir(), &plan.name);
+        let derived = StatsMemo::load(&memo_path, crate::memo::ANALYSIS_VERSION, !opts.rebuild);
         let dir = &opts.dir;
         let parts = (with_comparison(plan) && opts.formats.has(Format::Trials))
             .then(|| {
@@ -380,7 +380,7 @@ impl<'a> Report<'a> {
     /// leaves it as it is. Then a full report keeps exactly the statistics it used; a partial one
     /// adds to the memo. A cache this run cannot write to costs only the next report's
     /// recomputation (a warning).
-    pub(super) fn save_memo(mut self) -> ReportOutcome {
+    pub(super) fn save_memo(mut self) -> ReportWritten {
         self.out.statistics = self.derived.counts();
         if self.out.statistics.computed > 0 {
             if let Err(e) = self.derived.save(&self.memo_path, !self.plan.variant_subset && !self.skipped) {
@@ -393,14 +393,14 @@ impl<'a> Report<'a> {
 }
 
 /// Count a folder kept as its memo says: its counts into the summary, its files as unchanged.
-fn reuse(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
+fn reuse(m: &Memo, prefix: &Path, out: &mut ReportWritten) {
     out.summary.add(&m.summary.summary());
     out.cells_reused += m.summary.cells;
     keep_files(m, prefix, out);
 }
 
 /// List a kept folder's files (under `prefix`) in the outcome, as unchanged.
-fn keep_files(m: &Memo, prefix: &Path, out: &mut ReportOutcome) {
+fn keep_files(m: &Memo, prefix: &Path, out: &mut ReportWritten) {
     out.summary.files.extend(m.files.keys().map(|f| prefix.join(f)));
     out.summary.files.push(prefix.join(memo::MEMO));
     out.files_unchanged += m.files.len() + 1;

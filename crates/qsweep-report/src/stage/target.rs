@@ -2,10 +2,10 @@
 //! against being replaced by one of fewer trials), and, once written, its manifest and memo, the
 //! kept files it no longer writes removed, and which of its files were rewritten.
 
-use crate::kinds::Formats;
+use crate::formats::Formats;
 use crate::memo::folders::{self as memo, Counted};
 use crate::stage::manifest::{self, Counts, Kept, Manifest, MANIFEST_VERSION};
-use crate::stage::outcome::ReportOutcome;
+use crate::stage::outcome::ReportWritten;
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::plan::Plan;
 use std::collections::HashSet;
@@ -112,7 +112,7 @@ impl Target {
         formats: Formats,
         files: Vec<PathBuf>,
         memo: (&blake3::Hash, Counted, Option<&str>),
-        out: &mut ReportOutcome,
+        out: &mut ReportWritten,
     ) -> anyhow::Result<()> {
         let names: Vec<String> = files.iter().map(|f| f.to_string_lossy().into_owned()).collect();
         let m = Manifest {

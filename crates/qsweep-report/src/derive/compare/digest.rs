@@ -5,7 +5,7 @@ use crate::derive::compare::fit::{rows_of, Fit, RowFit};
 pub use crate::derive::compare::info::VariantInfo;
 use crate::derive::compare::ratios::ForestRow;
 use crate::derive::model::ReportData;
-use crate::memo::stats::Derived;
+use crate::memo::stats::StatsMemo;
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::Algorithm;
 use qsweep_pipeline::analysis::claims::ClaimResult;
@@ -73,7 +73,7 @@ pub struct VariantDigest<'p> {
 impl<'p> VariantDigest<'p> {
     /// The digest of `data`, the report data of `plan` (whose cells the digest borrows, so it
     /// outlives the trials `data` borrows).
-    pub fn of(info: VariantInfo, plan: &'p Plan, data: &ReportData, memo: &Derived) -> Self {
+    pub fn of(info: VariantInfo, plan: &'p Plan, data: &ReportData, memo: &StatsMemo) -> Self {
         let exps = plan
             .experiments
             .iter()

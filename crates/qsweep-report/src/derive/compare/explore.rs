@@ -6,8 +6,8 @@
 use crate::derive::compare::digest::{VariantDigest, VariantInfo};
 use crate::derive::compare::fit::{fit_order, Fit, FitVerdict, RowFit, FIT_ORDER, VERDICT_RULE};
 use crate::derive::table::{Align, Column, Row, Table, Value};
+use qsweep_pipeline::declared::explore::Exploratory;
 use qsweep_pipeline::plan::Plan;
-use qsweep_pipeline::spec::explore::Exploratory;
 
 /// The label every exploratory page, table and file carries.
 pub const LABEL: &str = "exploratory search";

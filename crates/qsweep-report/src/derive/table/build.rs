@@ -12,7 +12,7 @@ use qsweep_pipeline::analysis::verdict::{
     cause_2se, fit_verdict, FitVerdict, CAUSE_RULE, HEADLINE_N, SCALE_RULE, SPREAD_RULE,
 };
 use qsweep_pipeline::analysis::{BEST_RULE, CENSORING, RACE_RULE};
-use qsweep_pipeline::spec::Reference;
+use qsweep_pipeline::declared::Reference;
 
 fn var_columns(prefix: &str) -> Vec<Column> {
     let vars = [

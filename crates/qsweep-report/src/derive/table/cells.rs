@@ -35,51 +35,51 @@ pub fn cell_table(e: &ExpData) -> Table {
     let ranks = e.rank_tests();
     let num =
         |v: Option<f64>| v.map_or(Value::Missing, |value| Value::Num { value, decimals: 2, signed: false });
-    let rows =
-        e.cells
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let s = &c.summary;
-                // The caption names the representation; the rows only need the algorithm.
-                let mut values = vec![Value::Text(c.cell.algorithm.symbol().into())];
-                values.extend(c.cell.coords.iter().map(|&v| {
-                    whole(v).unwrap_or_else(|| Value::Text(qsweep_pipeline::spec::format_value(v)))
+    let rows = e
+        .cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let s = &c.summary;
+            // The caption names the representation; the rows only need the algorithm.
+            let mut values = vec![Value::Text(c.cell.algorithm.symbol().into())];
+            values.extend(c.cell.coords.iter().map(|&v| {
+                whole(v).unwrap_or_else(|| Value::Text(qsweep_pipeline::declared::format_value(v)))
+            }));
+            values.push(Value::Int(c.trials.len() as u64));
+            values.push(Value::Int(c.successes as u64));
+            values.push(s.mean.map_or(Value::Missing, |mean| Value::MeanStd {
+                mean,
+                std: s.std,
+                decimals: 2,
+                marked: false,
+            }));
+            values.push(num(s.median));
+            values.push(num(s.iqm));
+            values.push(match (s.ci_lo, s.ci_hi) {
+                (Some(lo), Some(hi)) => Value::Range { lo, hi, decimals: 2 },
+                _ => Value::Missing,
+            });
+            // Counts are whole numbers: min and max print without decimals.
+            values.push(s.min.and_then(whole).unwrap_or_else(|| num(s.min)));
+            values.push(s.max.and_then(whole).unwrap_or_else(|| num(s.max)));
+            if exp.race.is_some() {
+                let yes_no = |b: bool| Value::Text(if b { "yes" } else { "no" }.into());
+                values.push(c.cell.contender.map_or(Value::Missing, yes_no));
+                values.push(ranks[i].map_or(Value::Missing, |r| Value::Num {
+                    value: r.0,
+                    decimals: 4,
+                    signed: false,
                 }));
-                values.push(Value::Int(c.trials.len() as u64));
-                values.push(Value::Int(c.successes as u64));
-                values.push(s.mean.map_or(Value::Missing, |mean| Value::MeanStd {
-                    mean,
-                    std: s.std,
-                    decimals: 2,
-                    marked: false,
-                }));
-                values.push(num(s.median));
-                values.push(num(s.iqm));
-                values.push(match (s.ci_lo, s.ci_hi) {
-                    (Some(lo), Some(hi)) => Value::Range { lo, hi, decimals: 2 },
-                    _ => Value::Missing,
-                });
-                // Counts are whole numbers: min and max print without decimals.
-                values.push(s.min.and_then(whole).unwrap_or_else(|| num(s.min)));
-                values.push(s.max.and_then(whole).unwrap_or_else(|| num(s.max)));
-                if exp.race.is_some() {
-                    let yes_no = |b: bool| Value::Text(if b { "yes" } else { "no" }.into());
-                    values.push(c.cell.contender.map_or(Value::Missing, yes_no));
-                    values.push(ranks[i].map_or(Value::Missing, |r| Value::Num {
-                        value: r.0,
-                        decimals: 4,
-                        signed: false,
-                    }));
-                    values.push(ranks[i].map_or(Value::Missing, |r| yes_no(r.1)));
-                }
-                Row { values, highlight: e.is_best(i) }
-            })
-            .collect();
+                values.push(ranks[i].map_or(Value::Missing, |r| yes_no(r.1)));
+            }
+            Row { values, highlight: e.is_best(i) }
+        })
+        .collect();
     let fixed: Vec<String> = exp
         .fixed
         .iter()
-        .map(|(t, v)| format!("{} = {v}", qsweep_pipeline::spec::target_name(exp.system, *t)))
+        .map(|(t, v)| format!("{} = {v}", qsweep_pipeline::declared::target_name(exp.system, *t)))
         .collect();
     let mut caption = format!(
         "{}, Exp. {}{} ({} representation)",

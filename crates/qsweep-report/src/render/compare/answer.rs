@@ -6,7 +6,7 @@
 
 use crate::derive::compare::selection::Selection;
 use crate::derive::compare::VariantDigest;
-use crate::kinds::Formats;
+use crate::formats::Formats;
 use crate::render::compare::forest::{Series, STEM, TWO_X};
 use crate::render::escape::html as escape_html;
 use qsweep_pipeline::analysis::equivalence::{MARGIN, MARGIN_2X};

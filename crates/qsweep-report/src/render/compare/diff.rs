@@ -3,7 +3,7 @@
 //! cells whose bootstrap 95% interval of the difference excludes 0 marked ([`CellDiff`]).
 
 use crate::derive::compare::{CellDigest, ExpDigest, VariantDigest};
-use crate::memo::stats::Derived;
+use crate::memo::stats::StatsMemo;
 use crate::render::figures::{
     self, cell_label_value, columns, ink_on, Canvas, Drawn, Grid, Picture, Res, INK, MISSING, SUBTLE,
 };
@@ -48,7 +48,7 @@ pub fn diff_seed(base: &CellDigest, other: &CellDigest) -> u64 {
 
 impl CellDiff {
     /// Compare two cells; `None` when either has no trials.
-    pub fn of(base: &CellDigest, other: &CellDigest, memo: &Derived) -> Option<Self> {
+    pub fn of(base: &CellDigest, other: &CellDigest, memo: &StatsMemo) -> Option<Self> {
         let (a, b) = (&base.values, &other.values);
         if a.is_empty() || b.is_empty() {
             return None;
@@ -69,7 +69,11 @@ pub fn matching<'d, 'a>(base: &'d VariantDigest<'a>, e: &ExpDigest, i: usize) ->
 
 /// Every cell's difference of `other` against `base`, in `other`'s experiment and cell order.
 /// Each is its own seeded bootstrap, so they are computed in parallel.
-pub fn all_diffs(base: &VariantDigest, other: &VariantDigest, memo: &Derived) -> Vec<Vec<Option<CellDiff>>> {
+pub fn all_diffs(
+    base: &VariantDigest,
+    other: &VariantDigest,
+    memo: &StatsMemo,
+) -> Vec<Vec<Option<CellDiff>>> {
     use rayon::prelude::*;
     other
         .exps

@@ -275,8 +275,8 @@ mod tests {
     use qsweep_engine::run_trial;
     use qsweep_engine::Algorithm;
     use qsweep_pipeline::cache::{Key, TrialRecord};
+    use qsweep_pipeline::declared::{load_str, LoadedSpec, Override};
     use qsweep_pipeline::plan::{plan, Plan};
-    use qsweep_pipeline::spec::{load_str, LoadedSpec, Override};
     use std::collections::HashMap;
 
     /// Mountain Car with reference values on both algorithms of a crisp and a fuzzy experiment.

@@ -29,7 +29,7 @@ use crate::derive::compare::{
     comparison_table, conclusions, consistency, explore, selection, verdicts, ExpDigest, Fit, VariantDigest,
     VariantInfo,
 };
-use crate::kinds::{Format, Formats};
+use crate::formats::{Format, Formats};
 use crate::render::escape::{self, html as esc};
 use crate::render::table::{render, Csv, Html, Markdown, Table};
 use qsweep_engine::env::SystemKind;
@@ -43,7 +43,7 @@ pub fn write_comparison(
     plan: &Plan,
     variants: &[VariantDigest],
     formats: Formats,
-    memo: &crate::memo::stats::Derived,
+    memo: &crate::memo::stats::StatsMemo,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = crate::render::folder::Folder::create(dir)?;
     let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
@@ -364,7 +364,7 @@ fn readme(
     for v in variants {
         let title = v.info.title.as_deref().map(|t| format!(": {}", escape::markdown(t))).unwrap_or_default();
         // The link's target is the variant's folder: its id is a safe folder name
-        // (`spec::safe_folder_name`), so it needs no escaping there.
+        // (`declared::safe_folder_name`), so it needs no escaping there.
         let id = escape::markdown_code(&v.info.id);
         if has_folder(plan, chosen, &v.info.id) {
             m.push_str(&format!(

@@ -8,13 +8,13 @@ use plotters::style::RGBColor;
 use qsweep_engine::run_trial;
 use qsweep_pipeline::analysis::bootstrap_diff_ci;
 use qsweep_pipeline::cache::{Key, TrialRecord};
+use qsweep_pipeline::declared::{load_str, LoadedSpec, Override};
 use qsweep_pipeline::plan::plan;
-use qsweep_pipeline::spec::{load_str, LoadedSpec, Override};
 use std::collections::{BTreeMap, HashMap};
 
 /// A statistics' memo that reuses nothing.
-fn memo() -> crate::memo::stats::Derived {
-    crate::memo::stats::Derived::fresh(0)
+fn memo() -> crate::memo::stats::StatsMemo {
+    crate::memo::stats::StatsMemo::fresh(0)
 }
 
 /// Two Ball-Beam experiments (a 2 × 2 grid and a 3-cell row), 4 seeds, short trials.

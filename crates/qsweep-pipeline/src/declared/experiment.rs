@@ -235,7 +235,7 @@ fn unknown_target(system: SystemKind, name: &str, axis: bool) -> String {
     }
 }
 
-/// A grid value for a target: a whole count for bins and actions (their rules in `sim::rules`;
+/// A grid value for a target: a whole count for bins and actions (their rules in `qsweep_engine::rules`;
 /// the representation's own limit is checked when trials are resolved), a setting's own rule.
 fn check_value(t: Target, v: f64) -> Result<(), String> {
     if t.is_count() && !(v.fract() == 0.0 && v >= 0.0 && v <= f64::from(u32::MAX)) {

@@ -1,4 +1,4 @@
-//! Range-checked scalar types for pipeline files, each applying its rule from `sim::rules`.
+//! Range-checked scalar types for pipeline files, each applying its rule from `qsweep_engine::rules`.
 //! Validating inside `Deserialize` puts every "value out of range" error at the value's own path,
 //! which `load` turns into the file position of the field.
 

@@ -86,7 +86,7 @@ impl SystemMarker for MountainCarM {
 }
 
 /// Survival success criterion: `steps` alone (one episode that long without failure), or with
-/// `window` and `mean_length` Gym's solved rule, episodes cut at `steps` (`sim::solved`). Each
+/// `window` and `mean_length` Gym's solved rule, episodes cut at `steps` (`qsweep_engine::solved`). Each
 /// value is range-checked at its own key; the rule across them is [`BalanceSpec::check`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

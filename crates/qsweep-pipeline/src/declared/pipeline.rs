@@ -89,7 +89,7 @@ pub struct Systems {
 /// silently left out anywhere else.
 macro_rules! each_system {
     ($systems:expr, |$s:ident| $body:expr) => {{
-        let $crate::spec::pipeline::Systems { ball_beam, cart_pole, mountain_car } = $systems;
+        let $crate::declared::pipeline::Systems { ball_beam, cart_pole, mountain_car } = $systems;
         if let Some($s) = ball_beam.as_ref() {
             $body;
         }
@@ -108,7 +108,7 @@ pub(crate) use each_system;
 /// `SystemKind` (see [`each_system`]).
 macro_rules! with_system {
     ($systems:expr, $kind:expr, |$s:ident| $body:expr) => {{
-        let $crate::spec::pipeline::Systems { ball_beam, cart_pole, mountain_car } = $systems;
+        let $crate::declared::pipeline::Systems { ball_beam, cart_pole, mountain_car } = $systems;
         match $kind {
             qsweep_engine::env::SystemKind::BallBeam => ball_beam.as_ref().map(|$s| $body),
             qsweep_engine::env::SystemKind::CartPole => cart_pole.as_ref().map(|$s| $body),
