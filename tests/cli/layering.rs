@@ -1,10 +1,11 @@
 //! The architecture's import rules inside each crate (ARCHITECTURE.md), checked on the source.
 //! Between crates the compiler holds the layers (a crate cannot name one that does not depend on
-//! it); inside a crate only this test does: every top-level module of `qsweep-pipeline` imports
-//! only modules of lower layers, the report's `derive` never imports its `render`, the engine's
-//! representations never import the learner, and in no crate does a file import a
-//! file that imports it back (directly or through others). Test code (`*tests.rs`,
-//! `mod tests { … }`) is left out.
+//! it); inside a crate only this test does: every top-level module of `qsweep-pipeline` and of
+//! `qsweep-report` imports only modules of lower layers (the report's memo at the bottom, its
+//! replication above the generic parts, which never import it), the replication's own parts are
+//! layered too, the engine's representations never import the learner, in no crate do two
+//! top-level parts import each other (directly or through others), and in no crate does a file
+//! import a file that imports it back. Test code (`*tests.rs`, `mod tests { … }`) is left out.
 
 use crate::helpers::repo;
 use std::collections::{BTreeMap, BTreeSet};
@@ -29,8 +30,19 @@ const PIPELINE_LAYERS: &[&[&str]] = &[
     &["testing"],
 ];
 
-fn layer(module: &str) -> Option<usize> {
-    PIPELINE_LAYERS.iter().position(|l| l.contains(&module))
+/// The layers of `qsweep-report`, lowest first: which files a report writes, the memo of what
+/// reports derived (which knows no report part above it), the generic numbers, the generic files,
+/// the replication of the paper (built on the generic parts, never imported by them), the stage.
+const REPORT_LAYERS: &[&[&str]] =
+    &[&["formats"], &["memo"], &["derive"], &["render"], &["replication"], &["stage"]];
+
+/// The layers inside the report's `replication`: its statistics, what the generic data holds of
+/// the paper, a row judged, Table III and the comparison's numbers, the comparison's pages.
+const REPLICATION_LAYERS: &[&[&str]] =
+    &[&["stats"], &["published"], &["judgement"], &["table3", "compare"], &["pages"]];
+
+fn layer_in(layers: &[&[&str]], module: &str) -> Option<usize> {
+    layers.iter().position(|l| l.contains(&module))
 }
 
 /// Every library source file of the crate at `src` by module path (`compare::fit`), with its
@@ -177,23 +189,59 @@ fn graph(src: &str) -> BTreeMap<String, BTreeSet<String>> {
     edges
 }
 
-#[test]
-fn no_pipeline_module_imports_a_higher_layer() {
+/// The imports of the modules under `root` (`""`: the whole crate) against `layers` of the parts
+/// directly under it: a part may import only parts of a strictly lower layer.
+fn against_layers(src: &str, root: &str, layers: &[&[&str]]) -> Vec<String> {
+    let part_of = |m: &str| -> Option<String> {
+        let rest = if root.is_empty() { m } else { m.strip_prefix(root)?.strip_prefix("::")? };
+        rest.split("::").next().map(str::to_string)
+    };
     let mut wrong = Vec::new();
-    for (module, targets) in graph("crates/qsweep-pipeline/src") {
-        let top = module.split("::").next().unwrap().to_string();
-        let Some(own) = layer(&top) else {
-            wrong.push(format!("{module}: top-level module `{top}` is in no layer of tests/cli/layering.rs"));
+    for (module, targets) in graph(src) {
+        let Some(top) = part_of(&module) else { continue };
+        let Some(own) = layer_in(layers, &top) else {
+            wrong.push(format!("{module}: `{top}` is in no layer of tests/cli/layering.rs"));
             continue;
         };
         for t in targets {
-            let other = t.split("::").next().unwrap();
-            if other != top && layer(other).is_none_or(|l| l >= own) {
-                wrong.push(format!("{module} imports {t} (layer {:?} ≥ {own})", layer(other)));
+            let Some(other) = part_of(&t) else { continue };
+            if other != top && layer_in(layers, &other).is_none_or(|l| l >= own) {
+                wrong.push(format!("{module} imports {t} (layer {:?} ≥ {own})", layer_in(layers, &other)));
             }
         }
     }
+    wrong
+}
+
+#[test]
+fn no_pipeline_module_imports_a_higher_layer() {
+    let wrong = against_layers("crates/qsweep-pipeline/src", "", PIPELINE_LAYERS);
     assert!(wrong.is_empty(), "imports against the layers:\n{}", wrong.join("\n"));
+}
+
+#[test]
+fn no_report_part_imports_a_higher_layer() {
+    let wrong = [
+        against_layers("crates/qsweep-report/src", "", REPORT_LAYERS),
+        against_layers("crates/qsweep-report/src", "replication", REPLICATION_LAYERS),
+    ]
+    .concat();
+    assert!(wrong.is_empty(), "imports against the report's layers:\n{}", wrong.join("\n"));
+}
+
+/// The rules above would pass vacuously if a part were missing from the lists or named wrongly:
+/// every top-level part of the report and of its replication is in a layer.
+#[test]
+fn every_report_part_is_in_a_layer() {
+    let g = graph("crates/qsweep-report/src");
+    for m in g.keys() {
+        let top = m.split("::").next().unwrap();
+        assert!(layer_in(REPORT_LAYERS, top).is_some(), "{m}: `{top}` is in no report layer");
+        if let Some(part) = m.strip_prefix("replication::") {
+            let part = part.split("::").next().unwrap();
+            assert!(layer_in(REPLICATION_LAYERS, part).is_some(), "{m}: `{part}` is in no replication layer");
+        }
+    }
 }
 
 /// Imports from a module (and its children) into another that must never happen in one crate.
@@ -207,15 +255,13 @@ fn forbidden(src: &str, from: &str, to: &str) -> Vec<String> {
 }
 
 #[test]
-fn the_report_derives_before_it_renders() {
+fn the_generic_report_never_imports_the_replication() {
     let src = "crates/qsweep-report/src";
-    let wrong = [
-        forbidden(src, "derive", "render"),
-        forbidden(src, "derive", "stage"),
-        forbidden(src, "render", "stage"),
-    ]
-    .concat();
-    assert!(wrong.is_empty(), "derive < render < stage: {wrong:?}");
+    let wrong: Vec<String> = ["formats", "memo", "derive", "render"]
+        .into_iter()
+        .flat_map(|generic| forbidden(src, generic, "replication"))
+        .collect();
+    assert!(wrong.is_empty(), "the generic report works for any pipeline: {wrong:?}");
 }
 
 #[test]
@@ -230,12 +276,29 @@ fn representations_never_import_the_learner() {
 #[test]
 fn no_file_imports_a_file_that_imports_it_back() {
     for src in CRATES {
-        no_cycles(src);
+        no_cycles(src, &graph(src));
     }
 }
 
-fn no_cycles(src: &str) {
-    let edges = graph(src);
+/// Files may form no cycle, and neither may the parts they belong to: in every crate, the graph of
+/// its top-level modules (a file's imports counted for the part that holds it) has no cycle, so
+/// its parts stack in layers with no import running back up.
+#[test]
+fn no_top_level_part_imports_one_that_imports_it_back() {
+    for src in CRATES {
+        let mut parts: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for (m, targets) in graph(src) {
+            let top = m.split("::").next().unwrap().to_string();
+            let entry = parts.entry(top.clone()).or_default();
+            entry.extend(
+                targets.iter().map(|t| t.split("::").next().unwrap().to_string()).filter(|t| *t != top),
+            );
+        }
+        no_cycles(src, &parts);
+    }
+}
+
+fn no_cycles(src: &str, edges: &BTreeMap<String, BTreeSet<String>>) {
     // Tarjan's strongly connected components: any component of two or more files is a cycle.
     struct S<'a> {
         edges: &'a BTreeMap<String, BTreeSet<String>>,
@@ -281,7 +344,7 @@ fn no_cycles(src: &str) {
         }
     }
     let mut s = S {
-        edges: &edges,
+        edges,
         index: BTreeMap::new(),
         low: BTreeMap::new(),
         stack: Vec::new(),
@@ -304,6 +367,7 @@ fn the_import_scan_sees_known_imports() {
     assert!(g["race"].contains("analysis"), "{:?}", g["race"]);
     let g = graph("crates/qsweep-report/src");
     assert!(g["stage::steps"].contains("render::folder"), "{:?}", g["stage::steps"]);
+    assert!(g["replication::table3"].contains("render::addition"), "{:?}", g["replication::table3"]);
     let g = graph("crates/qsweep-engine/src");
     assert!(g["repr::fuzzy"].contains("repr::activation"), "{:?}", g["repr::fuzzy"]);
     assert!(g["repr"].contains("repr::crisp"), "re-exports count: {:?}", g["repr"]);

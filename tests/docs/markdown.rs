@@ -24,9 +24,11 @@ impl Doc {
     }
 }
 
-/// The documentation a reader is sent to: README.md, ARCHITECTURE.md and the guide (docs/**/*.md).
+/// The documentation a reader is sent to: README.md, ARCHITECTURE.md, the crates' READMEs and the
+/// guide (docs/**/*.md).
 pub fn guide_docs() -> Vec<Doc> {
     let mut paths = vec![PathBuf::from("README.md"), PathBuf::from("ARCHITECTURE.md")];
+    paths.extend(crate_readmes());
     paths.extend(markdown_under(Path::new("docs")));
     paths.iter().map(|p| Doc::read(p)).collect()
 }
@@ -41,6 +43,16 @@ pub fn report_docs() -> Vec<Doc> {
         paths.extend(markdown_under(&Path::new("reports").join(name)));
     }
     paths.iter().map(|p| Doc::read(p)).collect()
+}
+
+/// Every crate's README (`crates/*/README.md`, relative to the repository), sorted.
+pub fn crate_readmes() -> Vec<PathBuf> {
+    let mut out: Vec<PathBuf> = std::fs::read_dir(repo().join("crates"))
+        .unwrap()
+        .map(|e| Path::new("crates").join(e.unwrap().file_name()).join("README.md"))
+        .collect();
+    out.sort();
+    out
 }
 
 /// Every `.md` file under `dir` (relative to the repository), sorted.

@@ -41,9 +41,10 @@ pub mod derive;
 pub mod formats;
 pub mod memo;
 pub mod render;
+pub mod replication;
 pub mod stage;
 
-pub use derive::model::{Outcomes, ReportData};
+pub use derive::report_data::{Outcomes, ReportData};
 pub use render::folder::{existing_trials, write_folder, ReportSummary};
 pub use stage::stale::{staleness, Staleness};
 pub use stage::{default_dir, write, write_replayed, ReportOptions, ReportWritten};

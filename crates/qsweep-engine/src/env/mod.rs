@@ -100,6 +100,24 @@ impl SystemKind {
         self.variables().len()
     }
 
+    /// How reports write the state variable `name` of [`SystemKind::variables`]: its Unicode
+    /// symbol and its LaTeX in math mode (`x_dot`: `ẋ`, `\dot{x}`). A name without a symbol of
+    /// its own is written as itself (`\mathrm{…}` in LaTeX), so a new system's variables need
+    /// nothing here to be reported.
+    pub fn variable_symbol(name: &str) -> (String, String) {
+        let known = match name {
+            "x" => Some(("x", "x")),
+            "x_dot" => Some(("ẋ", "\\dot{x}")),
+            "theta" => Some(("θ", "\\theta")),
+            "theta_dot" => Some(("θ̇", "\\dot{\\theta}")),
+            _ => None,
+        };
+        match known {
+            Some((symbol, latex)) => (symbol.to_string(), latex.to_string()),
+            None => (name.to_string(), format!("\\mathrm{{{}}}", name.replace('_', "\\_"))),
+        }
+    }
+
     /// The paper's fixed action count for the system (Section III-A).
     pub fn default_actions(self) -> u32 {
         match self {

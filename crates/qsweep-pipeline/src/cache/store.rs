@@ -48,6 +48,40 @@ pub struct KeySet {
     pub segments: Vec<(PathBuf, Vec<Key>)>,
 }
 
+impl KeySet {
+    /// Every stored key with `segment` of the segment its outcome is read from: of the segments
+    /// holding it, the first in `segments`' order. Every read of this scan follows this one rule
+    /// ([`Store::read_outcomes`]), so a report's memo can name a trial's row by its segment.
+    pub fn reading_segment<T: Copy>(
+        &self,
+        segment: impl Fn(&Path) -> T,
+    ) -> std::collections::HashMap<Key, T> {
+        let mut out = std::collections::HashMap::with_capacity(self.keys.len());
+        for (path, keys) in &self.segments {
+            let id = segment(path);
+            for k in keys {
+                out.entry(*k).or_insert(id);
+            }
+        }
+        out
+    }
+
+    /// The rows to read for the keys in `wanted`, per segment in `segments`' order: each key from
+    /// the first segment holding it ([`KeySet::reading_segment`]'s rule).
+    fn rows_to_read(&self, wanted: &HashSet<Key>) -> Vec<(&Path, Vec<usize>)> {
+        let mut taken = HashSet::new();
+        let mut work = Vec::new();
+        for (path, keys) in &self.segments {
+            let rows: Vec<usize> =
+                (0..keys.len()).filter(|&i| wanted.contains(&keys[i]) && taken.insert(keys[i])).collect();
+            if !rows.is_empty() {
+                work.push((path.as_path(), rows));
+            }
+        }
+        work
+    }
+}
+
 /// A cache directory.
 #[derive(Debug, Clone)]
 pub struct Store {
@@ -135,15 +169,7 @@ impl Store {
         f: impl Fn(Key, StoredTrial) -> T + Sync,
     ) -> anyhow::Result<Vec<T>> {
         use rayon::prelude::*;
-        let mut taken = HashSet::new();
-        let mut work: Vec<(&Path, Vec<usize>)> = Vec::new();
-        for (path, keys) in &scan.segments {
-            let rows: Vec<usize> =
-                (0..keys.len()).filter(|&i| wanted.contains(&keys[i]) && taken.insert(keys[i])).collect();
-            if !rows.is_empty() {
-                work.push((path, rows));
-            }
-        }
+        let work = scan.rows_to_read(wanted);
         let parts: Vec<Vec<T>> = work
             .par_iter()
             .map(|(path, rows)| {

@@ -1,6 +1,6 @@
 //! The report judges a row on its fresh estimate: a plan whose best cell gets fresh seeds, raced
 //! to the end against a store of planted outcomes (`qsweep_pipeline::testing`, as in
-//! `qsweep_pipeline::fresh`'s own tests), then read by [`crate::derive::model::ReportData`].
+//! `qsweep_pipeline::fresh`'s own tests), then read by [`crate::derive::report_data::ReportData`].
 
 use qsweep_engine::Algorithm;
 use qsweep_pipeline::cache::Key;
@@ -16,7 +16,7 @@ fn the_report_judges_the_row_on_the_fresh_estimate() {
             (k, qsweep_pipeline::cache::rows::StoredTrial { outcome: o, seconds: 0.0, cpu_seconds: None })
         })
         .collect();
-    let data = crate::derive::model::ReportData::build(&done, &records);
+    let data = crate::derive::report_data::ReportData::build(&done, &records);
     let e = &data.experiments[0];
     let best = e.best_of(Algorithm::Q0).unwrap().cell;
     let c = &e.cells[best];

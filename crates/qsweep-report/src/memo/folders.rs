@@ -25,7 +25,6 @@
 
 use super::ANALYSIS_VERSION;
 use crate::formats::Formats;
-use crate::render::folder::ReportSummary;
 use qsweep_pipeline::cache::store::KeySet;
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::plan::{Experiment, Plan, PlannedTrial};
@@ -70,7 +69,7 @@ impl Memo {
     }
 }
 
-/// The counts of a [`ReportSummary`] (without its file list).
+/// A report folder's counts (a report's summary without its file list).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[allow(missing_docs)]
 pub struct Counted {
@@ -79,32 +78,6 @@ pub struct Counted {
     pub cells_with_trials: usize,
     pub trials_planned: usize,
     pub trials_cached: usize,
-}
-
-impl Counted {
-    /// The counts of `s`.
-    pub fn of(s: &ReportSummary) -> Self {
-        Self {
-            experiments: s.experiments,
-            cells: s.cells,
-            cells_with_trials: s.cells_with_trials,
-            trials_planned: s.trials_planned,
-            trials_cached: s.trials_cached,
-        }
-    }
-
-    /// As a summary without files.
-    pub fn summary(&self) -> ReportSummary {
-        ReportSummary {
-            experiments: self.experiments,
-            cells: self.cells,
-            cells_with_trials: self.cells_with_trials,
-            trials_planned: self.trials_planned,
-            trials_cached: self.trials_cached,
-            trials_missing: self.trials_planned - self.trials_cached.min(self.trials_planned),
-            files: Vec::new(),
-        }
-    }
 }
 
 /// Which folder of a report an inputs digest is for.
@@ -168,19 +141,13 @@ impl Inputs {
     }
 }
 
-/// For every stored key, an 8-byte id of the segment its outcome is read from (the first
-/// segment holding it, as [`qsweep_pipeline::cache::store::Store::read_outcomes`] reads).
+/// For every stored key, an 8-byte id of the segment its outcome is read from (the store's rule,
+/// [`KeySet::reading_segment`]).
 pub(crate) fn where_stored(scan: &KeySet) -> HashMap<Key, u64> {
-    let mut out = HashMap::with_capacity(scan.keys.len());
-    for (path, keys) in &scan.segments {
+    scan.reading_segment(|path| {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let id =
-            u64::from_le_bytes(blake3::hash(name.as_bytes()).as_bytes()[..8].try_into().expect("8 bytes"));
-        for k in keys {
-            out.entry(*k).or_insert(id);
-        }
-    }
-    out
+        u64::from_le_bytes(blake3::hash(name.as_bytes()).as_bytes()[..8].try_into().expect("8 bytes"))
+    })
 }
 
 /// The digest of one experiment: every field but the cells as written by `Debug` (no hash maps in

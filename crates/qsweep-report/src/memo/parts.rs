@@ -18,9 +18,8 @@
 //! ([`readers::alone`]); otherwise they stay for the next report to prune. The parts are not
 //! committed: a fresh clone encodes them on its first recomputed report.
 
-use crate::derive::model::ReportData;
 use crate::memo::stats::readers;
-use crate::render::datasets;
+use arrow::record_batch::RecordBatch;
 use parquet::arrow::ArrowWriter;
 use parquet::column::writer::ColumnCloseResult;
 use parquet::file::metadata::{PageIndexPolicy, ParquetMetaData, ParquetMetaDataReader};
@@ -120,13 +119,18 @@ impl TrialParts {
         self.used.push(self.path(digest));
     }
 
-    /// Encode the rows of `data` into the part `digest` and use it.
-    pub fn write(&mut self, digest: &blake3::Hash, data: &ReportData) -> anyhow::Result<()> {
+    /// Encode `batches` (a variant's trial rows, one batch per experiment, as
+    /// [`crate::render::datasets::trials_batches`] makes them) into the part `digest` and use it.
+    pub fn write(
+        &mut self,
+        digest: &blake3::Hash,
+        batches: impl Iterator<Item = anyhow::Result<RecordBatch>>,
+    ) -> anyhow::Result<()> {
         std::fs::create_dir_all(&self.dir)
             .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", self.dir.display()))?;
         let path = self.path(digest);
         let mut sink = PartWriter::new(path.clone());
-        sink.push(data)?;
+        sink.push(batches)?;
         // A variant without experiments has no rows and no part.
         if sink.finish()? {
             let sum = crate::memo::folders::file_digest(&path)
@@ -335,11 +339,11 @@ impl PartWriter {
         Self { tmp: qsweep_pipeline::atomic::temp_beside(&path), path, writer: None }
     }
 
-    /// Append one variant's rows, built an experiment at a time and flushed every
-    /// [`TRIALS_ROW_GROUP`] trials.
-    fn push(&mut self, data: &ReportData) -> anyhow::Result<()> {
-        for k in 0..data.experiments.len() {
-            let batch = datasets::trials_batch_of(&data.experiments[k..k + 1])?;
+    /// Append one variant's rows, built a batch at a time and flushed every [`TRIALS_ROW_GROUP`]
+    /// trials.
+    fn push(&mut self, batches: impl Iterator<Item = anyhow::Result<RecordBatch>>) -> anyhow::Result<()> {
+        for batch in batches {
+            let batch = batch?;
             // An experiment without stored trials has no rows, and its empty batch is not the
             // schema of the others' (it lacks their `variant` column): skip it.
             if batch.num_rows() == 0 {

@@ -1,6 +1,7 @@
 //! The statistics' memo: the report's expensive numbers — each cell's bootstrap interval, each
-//! difference figure's per-cell interval, each variant's claims — addressed by content, as
-//! trials are. An entry's id is blake3 over the statistic's kind, the definitions' version
+//! difference figure's per-cell interval, and any other statistic a part above keeps here through
+//! [`StatsMemo::entry`] (the replication's claims) — addressed by content, as trials are. An
+//! entry's id is blake3 over the statistic's kind, the definitions' version
 //! (`ANALYSIS_VERSION`), its parameters (resamples, seed) and its inputs' bits (the values it
 //! resamples), so an entry is exactly what recomputation would give: a changed input is a
 //! different id, never a stale number. A report recomputes only the statistics whose inputs
@@ -25,7 +26,6 @@
 
 pub mod readers;
 
-use qsweep_pipeline::analysis::claims::{ClaimCell, ClaimResult, CLAIMS, CLAIM_RESAMPLES};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -138,6 +138,21 @@ impl StatsMemo {
         value
     }
 
+    /// The entry of a statistic of kind `kind` whose parameters and inputs `inputs` writes into
+    /// its id ([`put_params`], [`put_values`]): taken from the memo, or computed by `compute` (its
+    /// result as 64-bit words, e.g. `f64::to_bits`), and recorded as used. How a statistic outside
+    /// this module (the replication's claims) is memoized.
+    pub fn entry(
+        &self,
+        kind: &str,
+        inputs: impl FnOnce(&mut blake3::Hasher),
+        compute: impl FnOnce() -> Vec<u64>,
+    ) -> Box<[u64]> {
+        let mut h = self.hasher(kind);
+        inputs(&mut h);
+        self.get(id(&h), compute)
+    }
+
     /// An id hasher for a statistic of kind `kind` under this memo's definitions.
     fn hasher(&self, kind: &str) -> blake3::Hasher {
         let mut h = blake3::Hasher::new();
@@ -183,58 +198,16 @@ impl StatsMemo {
         });
         (f64::from_bits(v[0]), f64::from_bits(v[1]))
     }
-
-    /// [`qsweep_pipeline::analysis::claims::evaluate`], memoized: the estimate and interval of every claim.
-    pub fn claims(&self, cells: &[ClaimCell]) -> Vec<ClaimResult> {
-        let mut h = self.hasher("claims");
-        put_params(&mut h, CLAIM_RESAMPLES, CLAIMS.len() as u64);
-        for c in cells {
-            // Every field the claims read (ClaimCell's, in order).
-            h.update(c.system.name().as_bytes());
-            h.update(b"\0");
-            h.update(&(c.experiment as u64).to_le_bytes());
-            h.update(c.experiment_id.as_bytes());
-            h.update(b"\0");
-            h.update(&[u8::from(c.fuzzy), c.algorithm as u8]);
-            h.update(&(c.resolution.len() as u64).to_le_bytes());
-            for r in &c.resolution {
-                h.update(&r.to_le_bytes());
-            }
-            h.update(&c.actions.to_le_bytes());
-            put_values(&mut h, &c.counted);
-            h.update(&(c.converged.len() as u64).to_le_bytes());
-            h.update(&c.converged.iter().map(|&b| u8::from(b)).collect::<Vec<u8>>());
-            h.update(&c.seed.to_le_bytes());
-        }
-        let v = self.get(id(&h), || {
-            let mut out = Vec::with_capacity(CLAIMS.len() * 5);
-            for r in qsweep_pipeline::analysis::claims::evaluate(cells) {
-                out.push(u64::from(r.estimate.is_some()));
-                out.push(r.estimate.unwrap_or(0.0).to_bits());
-                out.push(u64::from(r.interval.is_some()));
-                let (lo, hi) = r.interval.unwrap_or((0.0, 0.0));
-                out.extend([lo.to_bits(), hi.to_bits()]);
-            }
-            out
-        });
-        CLAIMS
-            .iter()
-            .zip(v.chunks_exact(5))
-            .map(|(claim, e)| {
-                let estimate = (e[0] == 1).then(|| f64::from_bits(e[1]));
-                let interval = (e[2] == 1).then(|| (f64::from_bits(e[3]), f64::from_bits(e[4])));
-                qsweep_pipeline::analysis::claims::result(claim, estimate, interval)
-            })
-            .collect()
-    }
 }
 
-fn put_params(h: &mut blake3::Hasher, resamples: usize, seed: u64) {
+/// Write a statistic's parameters into its id: resamples and seed.
+pub fn put_params(h: &mut blake3::Hasher, resamples: usize, seed: u64) {
     h.update(&(resamples as u64).to_le_bytes());
     h.update(&seed.to_le_bytes());
 }
 
-fn put_values(h: &mut blake3::Hasher, values: &[f64]) {
+/// Write a sample into a statistic's id: its length, then every value's bits.
+pub fn put_values(h: &mut blake3::Hasher, values: &[f64]) {
     h.update(&(values.len() as u64).to_le_bytes());
     let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_bits().to_le_bytes()).collect();
     h.update(&bytes);
@@ -387,115 +360,4 @@ pub fn is_memo(path: &Path) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn values() -> Vec<f64> {
-        vec![3.0, 7.0, 7.0, 12.0, 40.0]
-    }
-
-    #[test]
-    fn memoized_intervals_equal_computed_ones_and_are_reused() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("p.bin");
-        let m = StatsMemo::fresh(7);
-        let ci = m.bootstrap_ci(&values(), 2000, 11);
-        assert_eq!(ci, qsweep_pipeline::analysis::bootstrap_ci(&values(), 2000, 11));
-        let d = m.bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5);
-        assert_eq!(d, qsweep_pipeline::analysis::bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5));
-        assert_eq!(m.counts(), MemoCounts { computed: 2, reused: 0 });
-        assert!(m.save(&path, true).unwrap());
-        assert!(!m.save(&path, true).unwrap(), "the same entries are the same bytes: not rewritten");
-
-        let again = StatsMemo::load(&path, 7, true);
-        assert!(again.has_ci(&values(), 2000, 11) && !again.has_ci(&values(), 2000, 12));
-        assert!(!StatsMemo::load(&path, 7, false).has_ci(&values(), 2000, 11), "--rebuild reuses nothing");
-        assert_eq!(again.bootstrap_ci(&values(), 2000, 11), ci);
-        assert_eq!(again.bootstrap_diff_ci(&values(), &[1.0, 2.0], 2000, 5), d);
-        assert_eq!(again.counts(), MemoCounts { computed: 0, reused: 2 });
-        // Another seed, another resample count or one value changed: another entry.
-        again.bootstrap_ci(&values(), 2000, 12);
-        again.bootstrap_ci(&values(), 1999, 11);
-        let mut v = values();
-        v[4] = f64::from_bits(40f64.to_bits() + 1);
-        again.bootstrap_ci(&v, 2000, 11);
-        assert_eq!(again.counts(), MemoCounts { computed: 3, reused: 2 });
-    }
-
-    #[test]
-    fn another_version_a_damaged_or_a_truncated_file_is_read_as_empty() {
-        let cache = tempfile::tempdir().unwrap();
-        let path = StatsMemo::path(cache.path(), "p");
-        let m = StatsMemo::fresh(7);
-        m.bootstrap_ci(&values(), 100, 1);
-        m.save(&path, true).unwrap();
-        assert_eq!(StatsMemo::load(&path, 7, true).kept.len(), 1);
-        assert_eq!((check(cache.path()).intact, check(cache.path()).entries), (1, 1));
-        assert_eq!(StatsMemo::load(&path, 8, true).kept.len(), 0, "other definitions");
-        let mut bytes = std::fs::read(&path).unwrap();
-        bytes[30] ^= 1;
-        std::fs::write(&path, &bytes).unwrap();
-        assert_eq!(StatsMemo::load(&path, 7, true).kept.len(), 0, "checksum");
-        assert_eq!((check(cache.path()).intact, check(cache.path()).damaged.len()), (0, 1));
-        std::fs::write(&path, &bytes[..20]).unwrap();
-        assert_eq!(StatsMemo::load(&path, 7, true).kept.len(), 0, "truncated");
-        assert_eq!(StatsMemo::load(&cache.path().join("none.bin"), 7, true).kept.len(), 0, "missing");
-        // gc drops the damaged file, and a pipeline's file no given pipeline names.
-        assert_eq!(gc(cache.path(), None, 7, true).unwrap().removed, 1);
-        assert!(path.is_file(), "a dry run removes nothing");
-        assert_eq!(gc(cache.path(), None, 7, false).unwrap().removed, 1);
-        assert!(!path.is_file());
-        m.save(&path, true).unwrap();
-        let keep: std::collections::HashSet<String> = ["p".to_string()].into();
-        assert_eq!(gc(cache.path(), Some(&keep), 7, false).unwrap().removed, 0);
-        assert_eq!(gc(cache.path(), Some(&["q".to_string()].into()), 7, false).unwrap().removed, 1);
-    }
-
-    #[test]
-    fn gc_leaves_the_parts_a_report_is_reading() {
-        let cache = tempfile::tempdir().unwrap();
-        let parts = cache.path().join(DERIVED_DIR).join("q.trials");
-        std::fs::create_dir_all(&parts).unwrap();
-        std::fs::write(parts.join("a.parquet"), "part").unwrap();
-        let keep: std::collections::HashSet<String> = ["p".to_string()].into();
-        let reading = readers::Reading::hold(&parts);
-        for dry_run in [true, false] {
-            let r = gc(cache.path(), Some(&keep), 7, dry_run).unwrap();
-            assert_eq!(r, StatsGc { removed: 0, in_use: vec![parts.clone()] });
-            assert!(parts.join("a.parquet").is_file());
-        }
-        drop(reading);
-        let lock = parts.join(readers::LOCK_FILE);
-        std::fs::remove_file(&lock).unwrap();
-        assert_eq!(gc(cache.path(), Some(&keep), 7, true).unwrap().removed, 1);
-        assert!(parts.join("a.parquet").is_file() && !lock.exists(), "a dry run makes and removes nothing");
-        assert_eq!(gc(cache.path(), Some(&keep), 7, false).unwrap(), StatsGc { removed: 1, in_use: vec![] });
-        assert!(!parts.exists());
-    }
-
-    #[test]
-    fn a_full_report_prunes_what_it_did_not_use_a_partial_one_adds() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("p.bin");
-        let m = StatsMemo::fresh(1);
-        m.bootstrap_ci(&values(), 100, 1);
-        m.bootstrap_ci(&values(), 100, 2);
-        m.save(&path, true).unwrap();
-        let partial = StatsMemo::load(&path, 1, true);
-        partial.bootstrap_ci(&values(), 100, 3);
-        partial.save(&path, false).unwrap();
-        assert_eq!(StatsMemo::load(&path, 1, true).kept.len(), 3);
-        let full = StatsMemo::load(&path, 1, true);
-        full.bootstrap_ci(&values(), 100, 3);
-        full.save(&path, true).unwrap();
-        assert_eq!(StatsMemo::load(&path, 1, true).kept.len(), 1);
-        // Without reuse (--rebuild) a kept entry is computed again, and still kept by a partial
-        // report.
-        let rebuild = StatsMemo::load(&path, 1, false);
-        rebuild.bootstrap_ci(&values(), 100, 4);
-        rebuild.bootstrap_ci(&values(), 100, 3);
-        assert_eq!(rebuild.counts(), MemoCounts { computed: 2, reused: 0 });
-        rebuild.save(&path, false).unwrap();
-        assert_eq!(StatsMemo::load(&path, 1, true).kept.len(), 2);
-    }
-}
+mod tests;

@@ -12,7 +12,7 @@
 //! Drawn like [`crate::render::figures`]: shapes through plotters, text through [`crate::render::glyphs`] in the
 //! embedded font, so the PNG bytes are the same everywhere.
 
-use crate::derive::model::{CellData, ExpData, ReportData};
+use crate::derive::report_data::{CellData, ExpData, ReportData};
 use crate::render::figures::{self, nice_ticks, Canvas, Picture, Res, INK, SUBTLE};
 use crate::render::text_fit::{self, Entry, Legend};
 use plotters::element::DashedPathElement;
@@ -230,8 +230,6 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         .map(|(a, c)| (a, c, Curve::of_cell(c)))
         .filter(|(_, _, k)| !k.is_empty())
         .collect();
-    let (left, right, top, bottom) =
-        (ox + 62, ox + PANEL_W as i32 - 20, oy + 30 + 17 * 2, oy + PANEL_H as i32 - 42);
     for (k, (a, c, _)) in curves.iter().enumerate() {
         let y = oy + 32 + 16 * k as i32;
         cv.line((ox + 20, y), (ox + 40, y), colour(*a).stroke_width(3))?;
@@ -243,9 +241,15 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         cv.text("no trials yet", mid, 13.0, SUBTLE, HPos::Center, VPos::Center);
         return Ok(());
     }
+    let goals = goal_lines(&curves);
+    let axes = Axes::fit((ox, oy), &curves, &goals);
+    axes.draw(cv, ox)?;
+    draw_curves(cv, &axes, &curves, &goals)
+}
 
-    // Axes: episodes 1..=n linear; lengths on decades.
-    let n = curves.iter().map(|(_, _, k)| k.len()).max().unwrap_or(1).max(2);
+/// The learning goals of the cells drawn, each once, lowest first: (episode length, label, a goal
+/// to get under rather than to rise to).
+fn goal_lines(curves: &[(Algorithm, &CellData, Curve)]) -> Vec<(f64, String, bool)> {
     let mut goals: Vec<(f64, String, bool)> = curves
         .iter()
         .map(|(_, c, _)| {
@@ -256,49 +260,102 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         .collect();
     goals.sort_by(|a, b| a.0.total_cmp(&b.0));
     goals.dedup_by(|a, b| a.0 == b.0);
-    let values =
-        curves.iter().flat_map(|(_, _, k)| k.q1.iter().chain(&k.q3)).chain(goals.iter().map(|g| &g.0));
-    let (vmin, vmax) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-    let lo = vmin.max(1.0).log10().floor() as i32;
-    let hi = (vmax.max(1.0).log10().ceil() as i32).max(lo + 1);
-    let px = |i: f64| left as f64 + (i - 1.0) / (n as f64 - 1.0) * (right - left) as f64;
-    let py = |v: f64| {
-        let t = (v.max(1.0).log10() - f64::from(lo)) / f64::from(hi - lo);
-        bottom as f64 - t * (bottom - top) as f64
-    };
-    let pt = |i: f64, v: f64| (px(i).round() as i32, py(v).round() as i32);
+    goals
+}
 
-    for d in lo..=hi {
-        let y = py(10f64.powi(d)).round() as i32;
-        cv.line((left, y), (right, y), GRID.stroke_width(1))?;
-        cv.text(&decade_label(d), (left - 6, y), 11.0, INK, HPos::Right, VPos::Center);
-        // 2× and 5× lines, labelled where decades are tall enough.
-        for m in [2.0, 5.0].into_iter().filter(|_| d < hi) {
-            let y = py(m * 10f64.powi(d)).round() as i32;
-            cv.line((left, y), (right, y), MINOR.stroke_width(1))?;
-            if hi - lo <= 2 {
-                let label = decade_label(d).replacen('1', &format!("{m}"), 1);
-                cv.text(&label, (left - 6, y), 10.0, SUBTLE, HPos::Right, VPos::Center);
-            }
+/// A panel's plot area and scales: episodes 1..=n linear, lengths on decades 10^lo … 10^hi.
+struct Axes {
+    left: i32,
+    right: i32,
+    top: i32,
+    bottom: i32,
+    n: usize,
+    lo: i32,
+    hi: i32,
+}
+
+impl Axes {
+    /// The axes of the panel at `(ox, oy)` that hold `curves` and `goals`.
+    fn fit(
+        (ox, oy): (i32, i32),
+        curves: &[(Algorithm, &CellData, Curve)],
+        goals: &[(f64, String, bool)],
+    ) -> Self {
+        let n = curves.iter().map(|(_, _, k)| k.len()).max().unwrap_or(1).max(2);
+        let values =
+            curves.iter().flat_map(|(_, _, k)| k.q1.iter().chain(&k.q3)).chain(goals.iter().map(|g| &g.0));
+        let (vmin, vmax) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let lo = vmin.max(1.0).log10().floor() as i32;
+        let hi = (vmax.max(1.0).log10().ceil() as i32).max(lo + 1);
+        Self {
+            left: ox + 62,
+            right: ox + PANEL_W as i32 - 20,
+            top: oy + 30 + 17 * 2,
+            bottom: oy + PANEL_H as i32 - 42,
+            n,
+            lo,
+            hi,
         }
     }
-    let (ticks, _) = nice_ticks(1.0, n as f64);
-    for t in ticks.into_iter().filter(|t| t.fract() == 0.0) {
-        let x = px(t).round() as i32;
-        cv.line((x, bottom), (x, bottom + 4), INK.stroke_width(1))?;
-        cv.text(&format!("{t}"), (x, bottom + 6), 11.0, INK, HPos::Center, VPos::Top);
-    }
-    cv.text("episode", ((left + right) / 2, bottom + 22), 12.0, INK, HPos::Center, VPos::Top);
-    cv.text_up("episode length (steps, log scale)", (ox + 16, (top + bottom) / 2), 12.0, INK);
 
-    // Bands first, then the goal, then the medians on top.
-    for (a, _, k) in &curves {
-        let mut poly: Vec<(i32, i32)> = (0..k.len()).map(|i| pt(i as f64 + 1.0, k.q3[i])).collect();
-        poly.extend((0..k.len()).rev().map(|i| pt(i as f64 + 1.0, k.q1[i])));
+    fn px(&self, i: f64) -> f64 {
+        self.left as f64 + (i - 1.0) / (self.n as f64 - 1.0) * (self.right - self.left) as f64
+    }
+
+    fn py(&self, v: f64) -> f64 {
+        let t = (v.max(1.0).log10() - f64::from(self.lo)) / f64::from(self.hi - self.lo);
+        self.bottom as f64 - t * (self.bottom - self.top) as f64
+    }
+
+    fn pt(&self, i: f64, v: f64) -> (i32, i32) {
+        (self.px(i).round() as i32, self.py(v).round() as i32)
+    }
+
+    /// The grid, the ticks and the axis labels (the panel's left edge at `ox`).
+    fn draw<DB: DrawingBackend>(&self, cv: &mut Canvas<DB>, ox: i32) -> Res {
+        let (left, right, top, bottom, lo, hi) =
+            (self.left, self.right, self.top, self.bottom, self.lo, self.hi);
+        for d in lo..=hi {
+            let y = self.py(10f64.powi(d)).round() as i32;
+            cv.line((left, y), (right, y), GRID.stroke_width(1))?;
+            cv.text(&decade_label(d), (left - 6, y), 11.0, INK, HPos::Right, VPos::Center);
+            // 2× and 5× lines, labelled where decades are tall enough.
+            for m in [2.0, 5.0].into_iter().filter(|_| d < hi) {
+                let y = self.py(m * 10f64.powi(d)).round() as i32;
+                cv.line((left, y), (right, y), MINOR.stroke_width(1))?;
+                if hi - lo <= 2 {
+                    let label = decade_label(d).replacen('1', &format!("{m}"), 1);
+                    cv.text(&label, (left - 6, y), 10.0, SUBTLE, HPos::Right, VPos::Center);
+                }
+            }
+        }
+        let (ticks, _) = nice_ticks(1.0, self.n as f64);
+        for t in ticks.into_iter().filter(|t| t.fract() == 0.0) {
+            let x = self.px(t).round() as i32;
+            cv.line((x, bottom), (x, bottom + 4), INK.stroke_width(1))?;
+            cv.text(&format!("{t}"), (x, bottom + 6), 11.0, INK, HPos::Center, VPos::Top);
+        }
+        cv.text("episode", ((left + right) / 2, bottom + 22), 12.0, INK, HPos::Center, VPos::Top);
+        cv.text_up("episode length (steps, log scale)", (ox + 16, (top + bottom) / 2), 12.0, INK);
+        Ok(())
+    }
+}
+
+/// The curves on `axes`: bands first, then the goals, then the medians on top, then the frame.
+fn draw_curves<DB: DrawingBackend>(
+    cv: &mut Canvas<DB>,
+    axes: &Axes,
+    curves: &[(Algorithm, &CellData, Curve)],
+    goals: &[(f64, String, bool)],
+) -> Res {
+    let (left, right) = (axes.left, axes.right);
+    for (a, _, k) in curves {
+        let mut poly: Vec<(i32, i32)> = (0..k.len()).map(|i| axes.pt(i as f64 + 1.0, k.q3[i])).collect();
+        poly.extend((0..k.len()).rev().map(|i| axes.pt(i as f64 + 1.0, k.q1[i])));
         cv.root.draw(&Polygon::new(poly, colour(*a).mix(0.22).filled())).map_err(|e| e.to_string())?;
     }
-    for (g, text, reach) in &goals {
-        let y = py(*g).round() as i32;
+    for (g, text, reach) in goals {
+        let y = axes.py(*g).round() as i32;
         let path = DashedPathElement::new(vec![(left, y), (right, y)], 6, 4, GOAL.stroke_width(2));
         cv.root.draw(&path).map_err(|e| e.to_string())?;
         // Below the line, where the curves are not: at the right for goals to get under (Reach:
@@ -306,8 +363,8 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
         let (x, hpos) = if *reach { (right - 4, HPos::Right) } else { (left + 4, HPos::Left) };
         cv.text(text, (x, y + 4), 11.0, GOAL, hpos, VPos::Top);
     }
-    for (a, _, k) in &curves {
-        let line: Vec<(i32, i32)> = (0..k.len()).map(|i| pt(i as f64 + 1.0, k.median[i])).collect();
+    for (a, _, k) in curves {
+        let line: Vec<(i32, i32)> = (0..k.len()).map(|i| axes.pt(i as f64 + 1.0, k.median[i])).collect();
         let style = colour(*a).stroke_width(2);
         if line.len() == 1 {
             cv.root.draw(&Circle::new(line[0], 3, style.filled())).map_err(|e| e.to_string())?;
@@ -315,7 +372,7 @@ fn panel<DB: DrawingBackend>(cv: &mut Canvas<DB>, (ox, oy): (i32, i32), e: &ExpD
             cv.root.draw(&PathElement::new(line, style)).map_err(|e| e.to_string())?;
         }
     }
-    cv.rect((left, top), (right, bottom), INK.stroke_width(1))
+    cv.rect((left, axes.top), (right, axes.bottom), INK.stroke_width(1))
 }
 
 /// The legend band at the bottom of a figure `h` pixels tall ([`legend_band`]).

@@ -57,7 +57,7 @@
 //! | `cpu_seconds` | float64, null | CPU seconds of the thread that ran it (load does not inflate them); null for trials cached before qsweep recorded them |
 //! | `fresh` | bool | only in pipelines with a `fresh:` block: a trial on a fresh seed of its heatmap's best cell (`fresh_n` of `cells.parquet`), not one of the cell's own; filter it out to recompute `mean`, keep only it to recompute `fresh_mean` |
 
-use crate::derive::model::{resolution_columns, CellData, ExpData, ReportData, TrialData};
+use crate::derive::report_data::{CellData, ExpData, ReportData, TrialData, Variables};
 use qsweep_engine::config::LearnerConfig;
 use qsweep_engine::Outcome;
 use qsweep_pipeline::parquet_io::Cols;
@@ -66,17 +66,17 @@ use qsweep_pipeline::plan::{Cell, Experiment};
 /// A cell's identity: its experiment and itself.
 type Id<'a> = (&'a ExpData<'a>, &'a CellData<'a>);
 
-/// The columns identifying a cell, one row per entry of `ids`.
-fn cell_identity(cols: &mut Cols, ids: &[Id]) {
+/// The columns identifying a cell, one row per entry of `ids`, with a column per state variable of
+/// `variables`.
+fn cell_identity(cols: &mut Cols, ids: &[Id], variables: &Variables) {
     fn exp<'a>(r: &Id<'a>) -> &'a Experiment {
         r.0.exp
     }
     fn cell<'a>(r: &Id<'a>) -> &'a Cell {
         r.1.cell
     }
-    fn res(r: &Id) -> [Option<u32>; 4] {
-        resolution_columns(exp(r).system, &cell(r).config.repr.resolution)
-    }
+    let res: Vec<Vec<Option<u32>>> =
+        ids.iter().map(|r| variables.resolution(exp(r).system, &cell(r).config.repr.resolution)).collect();
     // Only pipelines with variants have the column, so other pipelines' files keep their bytes.
     if ids.iter().any(|r| exp(r).variant.is_some()) {
         cols.str("variant", ids, |r| exp(r).variant.as_deref().unwrap_or_default());
@@ -92,10 +92,9 @@ fn cell_identity(cols: &mut Cols, ids: &[Id]) {
     cols.f64("axis1_value", ids, |r| cell(r).coords[0]);
     cols.str_opt("axis2_label", ids, |r| exp(r).axes.get(1).map(|a| a.label.as_str()));
     cols.f64_opt("axis2_value", ids, |r| cell(r).coords.get(1).copied());
-    cols.u32_opt("x", ids, |r| res(r)[0]);
-    cols.u32_opt("x_dot", ids, |r| res(r)[1]);
-    cols.u32_opt("theta", ids, |r| res(r)[2]);
-    cols.u32_opt("theta_dot", ids, |r| res(r)[3]);
+    for (j, name) in variables.columns.iter().enumerate() {
+        cols.u32_opt(name, &res, |r| r[j]);
+    }
     cols.u32("actions", ids, |r| cell(r).config.actions);
     cols.u32("max_episodes", ids, |r| cell(r).config.limits.max_episodes);
 }
@@ -111,7 +110,7 @@ pub fn cells_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::Rec
     let best: Vec<bool> =
         data.experiments.iter().flat_map(|e| (0..e.cells.len()).map(move |i| e.is_best(i))).collect();
     let mut cols = Cols::default();
-    cell_identity(&mut cols, &ids);
+    cell_identity(&mut cols, &ids, &data.variables);
     cols.i64("planned", &ids, |r| r.1.planned() as i64);
     cols.i64("n", &ids, |r| r.1.trials.len() as i64);
     cols.i64("successes", &ids, |r| r.1.successes as i64);
@@ -150,12 +149,23 @@ pub fn trials_parquet(data: &ReportData) -> anyhow::Result<Vec<u8>> {
 
 /// The rows of `trials.parquet` as one Arrow batch.
 pub fn trials_batch(data: &ReportData) -> anyhow::Result<arrow::record_batch::RecordBatch> {
-    trials_batch_of(&data.experiments)
+    trials_batch_of(&data.experiments, &data.variables)
+}
+
+/// The rows of `trials.parquet`, one batch per experiment, each built when it is taken (memory: one
+/// experiment's rows).
+pub fn trials_batches<'d>(
+    data: &'d ReportData,
+) -> impl Iterator<Item = anyhow::Result<arrow::record_batch::RecordBatch>> + 'd {
+    (0..data.experiments.len()).map(|k| trials_batch_of(&data.experiments[k..k + 1], &data.variables))
 }
 
 /// The rows of `trials.parquet` of some experiments, so a large report's rows can be streamed
 /// into one file an experiment at a time.
-pub fn trials_batch_of(experiments: &[ExpData]) -> anyhow::Result<arrow::record_batch::RecordBatch> {
+pub fn trials_batch_of(
+    experiments: &[ExpData],
+    variables: &Variables,
+) -> anyhow::Result<arrow::record_batch::RecordBatch> {
     let mut ids: Vec<Id> = Vec::new();
     let mut trials: Vec<(&TrialData, &LearnerConfig)> = Vec::new();
     let mut fresh: Vec<bool> = Vec::new();
@@ -174,7 +184,7 @@ pub fn trials_batch_of(experiments: &[ExpData]) -> anyhow::Result<arrow::record_
         t.0.outcome
     }
     let mut cols = Cols::default();
-    cell_identity(&mut cols, &ids);
+    cell_identity(&mut cols, &ids, variables);
     cols.u64("seed", &trials, |t| t.0.planned.seed);
     cols.str("key", &trials, |t| t.0.planned.key.hex());
     cols.bool("converged", &trials, |t| out(t).converged);

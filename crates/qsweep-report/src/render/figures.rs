@@ -10,7 +10,7 @@
 //! and the PNG is identical on every machine. In SVG a hatched cell is one rectangle filled with a
 //! `<pattern>` of the same diagonal lines ([`hatch_patterns`]), which keeps committed figures small.
 
-use crate::derive::model::{CellData, ExpData, ReportData};
+use crate::derive::report_data::{CellData, ExpData, ReportData};
 pub(crate) use crate::render::canvas::{paint_as, Canvas, Picture, Res};
 pub use crate::render::canvas::{Drawn, HEADER_H};
 pub(crate) use crate::render::canvas::{INK, SUBTLE};

@@ -2,10 +2,11 @@
 //! each atomically, and what the folder holds.
 
 use crate::formats::{Format, Formats};
+use crate::memo::folders::Counted;
 
-use crate::derive::model::ReportData;
-use crate::derive::table::{table3, table3_parts};
-use crate::render::{curves, datasets, figures, html, markdown, table};
+use crate::derive::report_data::ReportData;
+use crate::render::addition::Addition;
+use crate::render::{curves, datasets, figures, html, markdown};
 use anyhow::Context;
 use qsweep_pipeline::atomic::write_if_changed;
 use std::path::{Path, PathBuf};
@@ -44,6 +45,30 @@ impl ReportSummary {
         }
     }
 
+    /// Its counts, as a folder's memo keeps them.
+    pub fn counted(&self) -> Counted {
+        Counted {
+            experiments: self.experiments,
+            cells: self.cells,
+            cells_with_trials: self.cells_with_trials,
+            trials_planned: self.trials_planned,
+            trials_cached: self.trials_cached,
+        }
+    }
+
+    /// The summary of a folder kept as its memo's counts `c` say, without files.
+    pub fn from_counted(c: &Counted) -> Self {
+        Self {
+            experiments: c.experiments,
+            cells: c.cells,
+            cells_with_trials: c.cells_with_trials,
+            trials_planned: c.trials_planned,
+            trials_cached: c.trials_cached,
+            trials_missing: c.trials_planned - c.trials_cached.min(c.trials_planned),
+            files: Vec::new(),
+        }
+    }
+
     /// Add another report's counts (the files stay).
     pub(crate) fn add(&mut self, o: &ReportSummary) {
         self.experiments += o.experiments;
@@ -79,30 +104,20 @@ impl<'d> Folder<'d> {
     }
 }
 
-/// Write one report folder of `data` into `dir` in `formats`; `trials.parquet` only if
-/// `own_trials` (a variant's trial rows go to the pipeline's combined file instead). Returns the
-/// files written, relative to `dir`, in writing order.
+/// Write one report folder of `data` into `dir` in `formats`, with what `added` adds (its files
+/// first); `trials.parquet` only if `own_trials` (a variant's trial rows go to the pipeline's
+/// combined file instead). Returns the files written, relative to `dir`, in writing order.
 pub fn write_folder(
     data: &ReportData,
     dir: &Path,
     formats: Formats,
     own_trials: bool,
+    added: &Addition,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = Folder::create(dir)?;
     let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
-    // The CSV holds every column; the pages, Markdown and LaTeX show the uncertainty apart.
-    let t3 = table3_parts(data);
-    let both = |w: &dyn table::TableWriter, sep: &str| {
-        t3.iter().map(|t| table::render(t, w)).collect::<Vec<_>>().join(sep)
-    };
-    if formats.has(Format::Md) {
-        put("table3.md", both(&table::Markdown, "\n").as_bytes())?;
-    }
-    if formats.has(Format::Csv) {
-        put("table3.csv", table::render(&table3(data), &table::Csv).as_bytes())?;
-    }
-    if formats.has(Format::Tex) {
-        put("table3.tex", both(&table::Latex, "\n").as_bytes())?;
+    for (name, bytes) in &added.files {
+        put(name, bytes)?;
     }
     if formats.has(Format::Cells) {
         put("cells.parquet", &datasets::cells_parquet(data)?)?;
@@ -127,10 +142,10 @@ pub fn write_folder(
         }
     }
     if formats.has(Format::Html) {
-        put("index.html", html::page(data, formats).as_bytes())?;
+        put("index.html", html::page(data, formats, added).as_bytes())?;
     }
     if formats.has(Format::Md) {
-        put("README.md", markdown::page(data, &t3, formats).as_bytes())?;
+        put("README.md", markdown::page(data, formats, added).as_bytes())?;
     }
     Ok(out.files)
 }

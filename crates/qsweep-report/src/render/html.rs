@@ -1,14 +1,17 @@
 //! `index.html`: one page (inline CSS, no script, no network) with the report's identity (the
 //! pipeline, and for a variant its id, title, `set` overrides and a link back to the comparison),
-//! trial counts, Table III, each system's figures (linked from `figures/`, so every figure is
+//! trial counts, the sections a higher part adds (the replication's Table III,
+//! [`crate::render::addition`]), each system's figures (linked from `figures/`, so every figure is
 //! stored once) and a cell table per experiment, plus links to the data files.
 
-use crate::derive::model::{ExpData, ReportData};
-use crate::derive::table::{cell_table, table3_parts, TABLE3_PARTS};
+use crate::derive::report_data::{ExpData, ReportData};
+use crate::derive::table::cell_table;
 use crate::formats::{Format, Formats};
+use crate::render::addition::Addition;
 use crate::render::curves::CURVE_RULE;
 use crate::render::escape::html as esc;
 use crate::render::table::{render, Html};
+use qsweep_engine::env::SystemKind;
 use qsweep_pipeline::analysis::{BEST_RULE, CENSORING};
 
 /// The pages' stylesheet (`.aK`: the tables whose number columns follow the first K, see
@@ -49,28 +52,51 @@ pub(crate) fn identity(data: &ReportData, esc: fn(&str) -> String) -> (String, V
     (plan.report_name(), notes)
 }
 
-/// The page of one report: tables inline, figures linked as `figures/<system>.<ext>` (the SVG
-/// when written, else the PNG; none without either).
-pub fn page(data: &ReportData, formats: Formats) -> String {
-    let plan = data.plan;
+/// The page of one report with what `added` adds: tables inline, figures linked as
+/// `figures/<system>.<ext>` (the SVG when written, else the PNG; none without either).
+pub fn page(data: &ReportData, formats: Formats, added: &Addition) -> String {
     let (name, notes) = identity(data, esc);
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
     h.push_str(&format!("<title>qsweep report: {}</title>\n", esc(&name)));
     h.push_str(&format!("<style>\n{STYLE}</style>\n</head>\n<body>\n"));
     h.push_str(&format!("<h1>qsweep report: {}</h1>\n", esc(&name)));
-    if plan.report_variant().is_some() {
+    if data.plan.report_variant().is_some() {
         h.push_str(&format!(
             "<p class=\"variant\">{} <a href=\"../index.html\">All variants compared</a></p>\n",
             notes.join(" ")
         ));
     }
-    if let Some(d) = &plan.description {
+    if let Some(d) = &data.plan.description {
         h.push_str(&format!("<p>{}</p>\n", esc(d)));
     }
+    h.push_str(&counts(data));
+    h.push_str(&data_links(data, formats, added));
+    let systems = data.systems();
+    h.push_str("<nav>");
+    for s in &added.html_sections {
+        h.push_str(&format!("<a href=\"#{}\">{}</a>", s.id, s.nav));
+    }
+    for s in &systems {
+        h.push_str(&format!("<a href=\"#{}\">{}</a>", s.name(), esc(s.title())));
+    }
+    h.push_str("</nav>\n");
+    for s in &added.html_sections {
+        h.push_str(&s.html);
+    }
+    for s in systems {
+        h.push_str(&system_section(data, s, formats, &name));
+    }
+    h.push_str(&format!("<p class=\"meta\">{}</p>\n</body>\n</html>\n", esc(CENSORING)));
+    h
+}
+
+/// The paragraph of the pipeline's counts: experiments, cells, seeds, trials present.
+fn counts(data: &ReportData) -> String {
+    let plan = data.plan;
     let cells: usize = data.experiments.iter().map(|e| e.cells.len()).sum();
     let missing = data.trials_planned - data.trials_cached;
-    h.push_str(&format!(
+    let mut h = format!(
         "<p class=\"meta\">Pipeline <code>{}</code>: {} experiments, {} cells, {} seeds per cell. \
          Trials present: {} of {} planned{}.",
         esc(&plan.source.display().to_string()),
@@ -84,25 +110,23 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
         } else {
             String::new()
         }
-    ));
+    );
     if let Some(src) = &plan.reference_source {
         h.push_str(&format!(" Reference values: {}.", esc(src)));
     }
     h.push_str("</p>\n");
-    // Only the files this report writes (`--formats`).
-    let mut links = Vec::new();
-    for (f, file, note) in [
-        (Format::Csv, "table3.csv", ""),
-        (Format::Md, "table3.md", ""),
-        (Format::Tex, "table3.tex", ""),
-        (Format::Cells, "cells.parquet", " (one row per cell)"),
-    ] {
-        if formats.has(f) {
-            links.push(format!("<a href=\"{file}\">{file}</a>{note}"));
-        }
+    h
+}
+
+/// The links to the data files: what `added` adds, then the cells and trials, only those
+/// this report writes (`--formats`).
+fn data_links(data: &ReportData, formats: Formats, added: &Addition) -> String {
+    let mut links = added.html_links.clone();
+    if formats.has(Format::Cells) {
+        links.push("<a href=\"cells.parquet\">cells.parquet</a> (one row per cell)".to_string());
     }
     if formats.has(Format::Trials) {
-        links.push(if plan.report_variant().is_some() {
+        links.push(if data.plan.report_variant().is_some() {
             "<a href=\"../trials.parquet\">../trials.parquet</a> (one row per trial of every variant, with a \
              <code>variant</code> column; written by <code>qsweep report</code>, not committed)"
                 .to_string()
@@ -110,60 +134,45 @@ pub fn page(data: &ReportData, formats: Formats) -> String {
             "<a href=\"trials.parquet\">trials.parquet</a> (one row per trial)".to_string()
         });
     }
-    if !links.is_empty() {
-        h.push_str(&format!("<p>Data: {}</p>\n", links.join(" · ")));
+    if links.is_empty() {
+        String::new()
+    } else {
+        format!("<p>Data: {}</p>\n", links.join(" · "))
     }
-    let systems = data.systems();
-    h.push_str("<nav><a href=\"#table3\">Table III</a>");
-    for s in &systems {
-        h.push_str(&format!("<a href=\"#{}\">{}</a>", s.name(), esc(s.title())));
-    }
-    h.push_str("</nav>\n");
+}
 
-    h.push_str("<h2 id=\"table3\">Table III: best configurations</h2>\n<div class=\"scroll\">\n");
-    let parts = table3_parts(data);
-    h.push_str(&render(&parts[0], &Html));
-    for (t, (id, _)) in parts[1..].iter().zip(TABLE3_PARTS) {
-        h.push_str(&format!("</div>\n<div class=\"scroll\" id=\"{id}\">\n"));
-        h.push_str(&render(t, &Html));
+/// One system's section: its heatmaps and learning curves (with `formats`' figure type), then a
+/// cell table per experiment.
+fn system_section(data: &ReportData, s: SystemKind, formats: Formats, name: &str) -> String {
+    let mut h = format!("<h2 id=\"{}\">{}</h2>\n", s.name(), esc(s.title()));
+    let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == s).collect();
+    if let Some(ext) = formats.figure_ext() {
+        let (w, ht) = crate::render::figures::figure_size(&exps);
+        h.push_str(&format!(
+            "<figure><img src=\"figures/{0}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
+             <figcaption>Mean episodes to the learning goal per cell; \
+             red outline: the best cell (Table III); hatched with *: some trials never reached the goal; \
+             grey: no trials. {2}</figcaption></figure>\n",
+            s.name(),
+            esc(&format!("{}: heatmaps of mean episodes per experiment and algorithm ({name})", s.title())),
+            esc(BEST_RULE),
+        ));
+        let (w, ht) = crate::render::curves::figure_size(exps.len());
+        h.push_str(&format!(
+            "<figure><img src=\"figures/{0}-curves.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
+             <figcaption>Learning curves of the best cell of each experiment and \
+             algorithm (the Table III rows): episode length against episode, log scale; dashed red line: the \
+             learning goal. {2}</figcaption></figure>\n",
+            s.name(),
+            esc(&format!("{}: learning curves of the best cells ({name})", s.title())),
+            esc(CURVE_RULE)
+        ));
     }
-    h.push_str("</div>\n");
-
-    for s in systems {
-        h.push_str(&format!("<h2 id=\"{}\">{}</h2>\n", s.name(), esc(s.title())));
-        let exps: Vec<&ExpData> = data.experiments.iter().filter(|e| e.exp.system == s).collect();
-        if let Some(ext) = formats.figure_ext() {
-            let (w, ht) = crate::render::figures::figure_size(&exps);
-            h.push_str(&format!(
-                "<figure><img src=\"figures/{0}.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
-                 <figcaption>Mean episodes to the learning goal per cell; \
-                 red outline: the best cell (Table III); hatched with *: some trials never reached the goal; \
-                 grey: no trials. {2}</figcaption></figure>\n",
-                s.name(),
-                esc(&format!(
-                    "{}: heatmaps of mean episodes per experiment and algorithm ({name})",
-                    s.title()
-                )),
-                esc(BEST_RULE),
-            ));
-            let (w, ht) = crate::render::curves::figure_size(exps.len());
-            h.push_str(&format!(
-                "<figure><img src=\"figures/{0}-curves.{ext}\" width=\"{w}\" height=\"{ht}\" alt=\"{1}\">\n\
-                 <figcaption>Learning curves of the best cell of each experiment and \
-                 algorithm (the Table III rows): episode length against episode, log scale; dashed red line: the \
-                 learning goal. {2}</figcaption></figure>\n",
-                s.name(),
-                esc(&format!("{}: learning curves of the best cells ({name})", s.title())),
-                esc(CURVE_RULE)
-            ));
-        }
-        for e in data.experiments.iter().filter(|e| e.exp.system == s) {
-            let title = e.exp.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
-            h.push_str(&format!("<h3>Exp. {}{}</h3>\n<div class=\"scroll\">\n", esc(&e.exp.id), esc(&title)));
-            h.push_str(&render(&cell_table(e), &Html));
-            h.push_str("</div>\n");
-        }
+    for e in exps {
+        let title = e.exp.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
+        h.push_str(&format!("<h3>Exp. {}{}</h3>\n<div class=\"scroll\">\n", esc(&e.exp.id), esc(&title)));
+        h.push_str(&render(&cell_table(e), &Html));
+        h.push_str("</div>\n");
     }
-    h.push_str(&format!("<p class=\"meta\">{}</p>\n</body>\n</html>\n", esc(CENSORING)));
     h
 }

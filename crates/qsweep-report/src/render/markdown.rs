@@ -1,19 +1,19 @@
 //! `README.md` of a report folder: what a repository web page shows of it (such pages render
 //! Markdown and SVG images, not HTML pages). The same identity as `index.html` (pipeline,
-//! variant, its `set` overrides), Table III, and each system's figures. What the pipeline's author
+//! variant, its `set` overrides), what a higher part adds (the replication's Table III,
+//! [`crate::render::addition`]), and each system's figures. What the pipeline's author
 //! wrote (description, names, titles) is escaped ([`escape::markdown`]): it shows as written and
 //! never becomes HTML, a link or a heading.
 
-use crate::derive::model::ReportData;
+use crate::derive::report_data::ReportData;
 use crate::formats::{Format, Formats};
+use crate::render::addition::Addition;
 use crate::render::escape;
 use crate::render::html::identity;
-use crate::render::table::{render, Markdown, Table};
 use qsweep_pipeline::analysis::CENSORING;
 
-/// The Markdown page of one report; `t3` is its Table III in its parts
-/// ([`crate::derive::table::table3_parts`]).
-pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
+/// The Markdown page of one report, with what `added` adds.
+pub fn page(data: &ReportData, formats: Formats, added: &Addition) -> String {
     let (name, notes) = identity(data, escape::markdown);
     let name = escape::markdown(&name);
     let mut m = format!("# qsweep report: {name}\n\n");
@@ -24,12 +24,10 @@ pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
         m.push_str(&format!("{}\n\n", escape::markdown(d.trim())));
     }
     // Only the files this report writes (`--formats`).
-    let links: Vec<String> =
-        [(Format::Csv, "table3.csv"), (Format::Tex, "table3.tex"), (Format::Cells, "cells.parquet")]
-            .into_iter()
-            .filter(|(f, _)| formats.has(*f))
-            .map(|(_, file)| format!("[{file}]({file})"))
-            .collect();
+    let mut links = added.md_links.clone();
+    if formats.has(Format::Cells) {
+        links.push("[cells.parquet](cells.parquet)".to_string());
+    }
     m.push_str(&format!("Trials present: {} of {} planned.", data.trials_cached, data.trials_planned));
     if !links.is_empty() {
         m.push_str(&format!(" Data: {}", links.join(", ")));
@@ -44,8 +42,7 @@ pub fn page(data: &ReportData, t3: &[Table], formats: Formats) -> String {
         m.push('.');
     }
     m.push_str("\n\n");
-    let parts: Vec<String> = t3.iter().map(|t| render(t, &Markdown)).collect();
-    m.push_str(&parts.join("\n"));
+    m.push_str(&added.markdown);
     if let Some(ext) = formats.figure_ext() {
         for s in data.systems() {
             m.push_str(&format!("\n## {}\n\n", s.title()));

@@ -1,11 +1,12 @@
-//! From derived numbers to files: tables in CSV, Markdown, LaTeX and HTML ([`table`]), Figures 5–7
-//! and learning curves as SVG or PNG ([`figures`], [`curves`]), the pages (`index.html`,
-//! `README.md`), the Parquet datasets, one report folder written atomically ([`folder`]) and the
-//! comparison's pages and figures ([`compare`]). Pure functions of what [`crate::derive`] computed:
-//! the same numbers give the same bytes.
+//! From derived numbers to files, for any pipeline: tables in CSV, Markdown, LaTeX and HTML
+//! ([`table`]), the heatmaps (the paper's Figures 5–7) and learning curves as SVG or PNG
+//! ([`figures`], [`curves`]), the pages (`index.html`, `README.md`), the Parquet datasets, and one
+//! report folder written atomically ([`folder`]) with what a higher part adds to it
+//! ([`addition`]). Pure functions of what [`crate::derive`] computed: the same numbers give the
+//! same bytes.
 
+pub mod addition;
 pub mod canvas;
-pub mod compare;
 pub mod curves;
 pub mod datasets;
 pub mod escape;

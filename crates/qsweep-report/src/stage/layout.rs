@@ -4,9 +4,10 @@
 //! ([`all_intact`]), each variant's plan in full once something is computed ([`in_full`]), and the
 //! guard over every folder it replaces ([`guard`]).
 
-use crate::derive::compare::VariantInfo;
 use crate::formats::Formats;
 use crate::memo::folders::{self as memo, Inputs, Memo, Role};
+use crate::render::folder::ReportSummary;
+use crate::replication::compare::VariantInfo;
 use crate::stage::manifest::Counts;
 use crate::stage::outcome::{ReportOptions, ReportWritten};
 use crate::stage::target::Target;
@@ -96,7 +97,7 @@ pub(super) fn all_intact(
     let dir = &opts.dir;
     let top = intact(opts, dir, &inputs.top)?;
     let mut out = ReportWritten {
-        summary: top.summary.summary(),
+        summary: ReportSummary::from_counted(&top.summary),
         cells_reused: top.summary.cells,
         ..ReportWritten::empty(Counts::of(plan, &scan.keys))
     };

@@ -2,7 +2,7 @@
 //! (their memos, [`crate::memo::folders`]) and which cells' bootstrap intervals it computes rather than
 //! takes from the statistics' memo ([`crate::memo::stats`]).
 
-use crate::derive::model::{interval_inputs, ReportData};
+use crate::derive::report_data::{interval_inputs, ReportData};
 use crate::formats::Formats;
 use crate::memo::folders::{self as memo, Inputs, Role};
 use crate::memo::stats::StatsMemo;

@@ -13,15 +13,15 @@
 //! 7. [`Report::write_comparison_folder`]: the comparison's files;
 //! 8. [`Report::save_memo`]: the statistics' memo, and what the report did.
 
-use crate::derive::compare::{VariantDigest, VariantInfo};
-use crate::derive::model::ReportData;
+use crate::derive::report_data::ReportData;
 use crate::formats::{Format, Formats};
-use crate::memo::folders::{self as memo, Counted, Memo};
+use crate::memo::folders::{self as memo, Memo};
 use crate::memo::parts::TrialParts;
 use crate::memo::stats::StatsMemo;
-use crate::render::compare;
 use crate::render::datasets;
 use crate::render::folder::{write_folder, ReportSummary};
+use crate::replication::compare::{VariantDigest, VariantInfo};
+use crate::replication::table3;
 use crate::stage::layout::{deferred, intact, with_comparison, Folder};
 use crate::stage::manifest::Counts;
 use crate::stage::outcome::{ReportOptions, ReportWritten};
@@ -283,7 +283,15 @@ impl<'a> Report<'a> {
             || {
                 target
                     .filter(|_| draws)
-                    .map(|t| write_folder(&data, &t.dir, formats, folder.info.is_none()))
+                    .map(|t| {
+                        write_folder(
+                            &data,
+                            &t.dir,
+                            formats,
+                            folder.info.is_none(),
+                            &table3::addition(&data, formats),
+                        )
+                    })
                     .transpose()
             },
             || match (parts, &part) {
@@ -291,14 +299,14 @@ impl<'a> Report<'a> {
                     parts.reuse(d);
                     Ok(())
                 }
-                (Some(parts), Some(d)) => parts.write(d, &data),
+                (Some(parts), Some(d)) => parts.write(d, datasets::trials_batches(&data)),
                 _ => Ok(()),
             },
         );
         pushed?;
         let counted = ReportSummary::of(&data, Vec::new());
         if let (Some(t), Some(files)) = (target, written?) {
-            t.finish(sub, folder.id(), formats, files, (inputs, Counted::of(&counted), None), &mut self.out)?;
+            t.finish(sub, folder.id(), formats, files, (inputs, counted.counted(), None), &mut self.out)?;
         }
         if let (Some(m), Some(v)) = (&kept, &folder.info) {
             keep_files(m, Path::new(&v.id), &mut self.out);
@@ -319,8 +327,9 @@ impl<'a> Report<'a> {
         inputs: &[blake3::Hash],
     ) -> anyhow::Result<Option<&'a str>> {
         let (plan, opts, formats) = (self.plan, self.opts, self.opts.formats);
-        let chosen =
-            crate::derive::compare::explore::chosen(plan, &self.digests).filter(|_| plan.has_grid()).cloned();
+        let chosen = crate::replication::compare::explore::chosen(plan, &self.digests)
+            .filter(|_| plan.has_grid())
+            .cloned();
         let chosen = chosen.as_ref().map(|c| c.id.as_str());
         let Some((folder, h)) =
             folders.iter().zip(inputs).find(|(f, _)| deferred(plan, f) && f.id() == chosen)
@@ -337,8 +346,8 @@ impl<'a> Report<'a> {
             let wanted: HashSet<Key> = sub.trials().map(|(_, _, t)| t.key).collect();
             let outcomes = self.store.read_outcomes(self.scan, &wanted, self.lengths())?;
             let data = ReportData::build_as(sub, &outcomes, Some(&self.derived));
-            let files = write_folder(&data, &t.dir, formats, false)?;
-            let counted = Counted::of(&ReportSummary::of(&data, Vec::new()));
+            let files = write_folder(&data, &t.dir, formats, false, &table3::addition(&data, formats))?;
+            let counted = ReportSummary::of(&data, Vec::new()).counted();
             t.finish(sub, Some(id), formats, files, (h, counted, None), &mut self.out)?;
         }
         Ok(Some(id.as_str()))
@@ -370,8 +379,14 @@ impl<'a> Report<'a> {
         {
             files.push(PathBuf::from("trials.parquet"));
         }
-        files.extend(compare::write_comparison(dir, plan, &self.digests, formats, &self.derived)?);
-        let counted = Counted::of(&self.out.summary);
+        files.extend(crate::replication::pages::write_comparison(
+            dir,
+            plan,
+            &self.digests,
+            formats,
+            &self.derived,
+        )?);
+        let counted = self.out.summary.counted();
         top.finish(plan, None, formats, files, (inputs, counted, chosen), &mut self.out)
     }
 
@@ -394,7 +409,7 @@ impl<'a> Report<'a> {
 
 /// Count a folder kept as its memo says: its counts into the summary, its files as unchanged.
 fn reuse(m: &Memo, prefix: &Path, out: &mut ReportWritten) {
-    out.summary.add(&m.summary.summary());
+    out.summary.add(&ReportSummary::from_counted(&m.summary));
     out.cells_reused += m.summary.cells;
     keep_files(m, prefix, out);
 }

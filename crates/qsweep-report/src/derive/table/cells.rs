@@ -1,7 +1,7 @@
 //! One table per experiment: every cell with its statistics, the best cell of each algorithm
 //! highlighted (`index.html`'s cell tables).
 
-use crate::derive::model::ExpData;
+use crate::derive::report_data::ExpData;
 use crate::derive::table::model::{Align, Column, Row, Table, Value};
 use qsweep_pipeline::analysis::{CENSORING, RACE_RULE};
 

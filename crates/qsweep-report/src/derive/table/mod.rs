@@ -3,11 +3,9 @@
 //! are written. A value may span several CSV fields (mean ± std → `mean`, `std`), which is why
 //! each [`Column`] names its CSV fields.
 
-mod build;
 mod cells;
 pub(crate) mod model;
 
-pub use build::{table3, table3_parts, TABLE3_PARTS};
 pub use cells::cell_table;
 pub use model::{render, Align, Column, Row, Table, TableWriter, Value};
 
