@@ -1,7 +1,10 @@
 //! The fully resolved configuration of one trial: every value the simulation reads, nothing
 //! implicit. Pipelines expand to these; the cache key hashes their canonical JSON encoding.
 
-use super::env::{BeamControl, EnvParams, StartKind, SystemKind, TaskKind, BALL_BEAM_DEFAULT_RATE_MAX};
+use super::env::{
+    with_env_type, BeamControl, EnvParams, Environment, StartKind, SystemKind, TaskKind,
+    BALL_BEAM_DEFAULT_RATE_MAX,
+};
 use super::repr::{Binning, ReprKind};
 use super::rules;
 use serde::{Deserialize, Serialize};
@@ -438,11 +441,8 @@ impl TrialConfig {
 }
 
 impl TaskKind {
-    /// The task kind of a system.
+    /// The task kind of a system (its [`Environment::TASK`]).
     pub fn of(system: SystemKind) -> Self {
-        match system {
-            SystemKind::BallBeam | SystemKind::CartPole => Self::Survival,
-            SystemKind::MountainCar => Self::GoalReaching,
-        }
+        with_env_type!(system, E => E::TASK)
     }
 }

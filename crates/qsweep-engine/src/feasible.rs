@@ -15,7 +15,7 @@
 
 use super::actions::action_set;
 use super::config::TrialConfig;
-use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, State, TaskKind};
+use super::env::{with_env, EnvParams, Environment, StartKind, State, SystemKind, TaskKind};
 use super::repr::{Crisp, Representation};
 use super::rng::TrialRng;
 use serde::Serialize;
@@ -74,6 +74,15 @@ fn ball_beam_preference(s: &State) -> f64 {
     -(s[0] + s[1])
 }
 
+/// A survival system's [`Preference`]; `None` for a goal-reaching one, which is not searched.
+fn preference(system: SystemKind) -> Option<Preference> {
+    match system {
+        SystemKind::CartPole => Some(cart_pole_preference),
+        SystemKind::BallBeam => Some(ball_beam_preference),
+        SystemKind::MountainCar => None,
+    }
+}
+
 /// Longest survival over all deterministic policies of `cfg`'s crisp table (its system, parameters,
 /// ranges, binning and action set) from `start`. `Err` for a goal-reaching system.
 pub fn search(
@@ -85,30 +94,13 @@ pub fn search(
     let r = &cfg.repr;
     let crisp = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
     let actions = action_set(cfg.env.action_max(), cfg.actions);
-    match &cfg.env {
-        EnvParams::CartPole(p) => Ok(run(
-            CartPole::new(p.clone()),
-            &crisp,
-            &actions,
-            start,
-            max_steps,
-            max_nodes,
-            cart_pole_preference,
-        )),
-        EnvParams::BallBeam(p) => Ok(run(
-            BallBeam::new(p.clone()),
-            &crisp,
-            &actions,
-            start,
-            max_steps,
-            max_nodes,
-            ball_beam_preference,
-        )),
-        EnvParams::MountainCar(_) => Err(format!(
+    let Some(prefer) = preference(cfg.system()) else {
+        return Err(format!(
             "{} is a goal-reaching task; the feasibility search is for survival tasks (cart-pole, ball-beam)",
             cfg.system()
-        )),
-    }
+        ));
+    };
+    Ok(with_env!(&cfg.env, |env: E| run(env, &crisp, &actions, start, max_steps, max_nodes, prefer)))
 }
 
 const UNSET: u32 = u32::MAX;
@@ -218,6 +210,7 @@ pub fn episode_length(cfg: &TrialConfig, policy: &[u32], start: &State, max_step
         start: &State,
         max: u64,
     ) -> u64 {
+        assert_eq!(E::TASK, TaskKind::Survival, "episode_length is for survival tasks");
         let mut steps = 0;
         match rollout(&mut env, crisp, actions, policy, start, 0, max, &mut steps) {
             End::Failed(len) => len,
@@ -228,11 +221,7 @@ pub fn episode_length(cfg: &TrialConfig, policy: &[u32], start: &State, max_step
     let r = &cfg.repr;
     let crisp = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
     let actions = action_set(cfg.env.action_max(), cfg.actions);
-    match &cfg.env {
-        EnvParams::CartPole(p) => go(CartPole::new(p.clone()), &crisp, &actions, policy, start, max_steps),
-        EnvParams::BallBeam(p) => go(BallBeam::new(p.clone()), &crisp, &actions, policy, start, max_steps),
-        EnvParams::MountainCar(_) => panic!("episode_length is for survival tasks"),
-    }
+    with_env!(&cfg.env, |env: E| go(env, &crisp, &actions, policy, start, max_steps))
 }
 
 #[cfg(test)]
@@ -380,10 +369,8 @@ pub fn first_start(env: &EnvParams, start: StartKind, seed: u64) -> State {
         e.reset_gym(&mut TrialRng::new(seed));
         *e.state()
     }
-    match (start, env) {
-        (StartKind::Fixed, _) => env.start(),
-        (StartKind::Gym, EnvParams::CartPole(p)) => gym(CartPole::new(p.clone()), seed),
-        (StartKind::Gym, EnvParams::BallBeam(p)) => gym(BallBeam::new(p.clone()), seed),
-        (StartKind::Gym, EnvParams::MountainCar(p)) => gym(MountainCar::new(p.clone()), seed),
+    match start {
+        StartKind::Fixed => env.start(),
+        StartKind::Gym => with_env!(env, |e: E| gym(e, seed)),
     }
 }

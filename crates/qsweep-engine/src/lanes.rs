@@ -14,7 +14,7 @@
 //! (`tests::a_trial_in_lockstep_is_the_trial_alone`).
 
 use super::config::{Algorithm, TrialConfig};
-use super::env::{BallBeam, CartPole, EnvParams, Environment, MountainCar, SystemKind, Transition};
+use super::env::{with_env_type, Environment, SystemKind, Transition};
 use super::repr::{Crisp, ReprKind};
 use super::trial::{run_trial, Outcome, TrialRun};
 
@@ -53,20 +53,7 @@ pub fn run_lockstep<'c>(
     next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     done: impl FnMut(usize, Outcome),
 ) {
-    match system {
-        SystemKind::BallBeam => lockstep::<BallBeam>(next, done, |p| match p {
-            EnvParams::BallBeam(p) => Some(BallBeam::new(p.clone())),
-            _ => None,
-        }),
-        SystemKind::CartPole => lockstep::<CartPole>(next, done, |p| match p {
-            EnvParams::CartPole(p) => Some(CartPole::new(p.clone())),
-            _ => None,
-        }),
-        SystemKind::MountainCar => lockstep::<MountainCar>(next, done, |p| match p {
-            EnvParams::MountainCar(p) => Some(MountainCar::new(p.clone())),
-            _ => None,
-        }),
-    }
+    with_env_type!(system, E => lockstep::<E>(next, done))
 }
 
 /// The outcomes of `trials` (configuration and seed each), in order: the crisp trials of each
@@ -95,11 +82,10 @@ struct Lane<'c> {
 fn lockstep<'c, E: Environment>(
     mut next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     mut done: impl FnMut(usize, Outcome),
-    system: impl Fn(&EnvParams) -> Option<E>,
 ) {
     let (mut lanes, mut envs): (Vec<Option<Lane<'c>>>, Vec<E>) = (Vec::new(), Vec::new());
     while lanes.len() < LANES {
-        let Some((lane, env)) = start(&mut next, &mut done, &system) else { break };
+        let Some((lane, env)) = start::<E>(&mut next, &mut done) else { break };
         lanes.push(Some(lane));
         envs.push(env);
     }
@@ -121,7 +107,7 @@ fn lockstep<'c, E: Environment>(
             done(lane.id, o);
             *slot = None;
             if more {
-                match start(&mut next, &mut done, &system) {
+                match start::<E>(&mut next, &mut done) {
                     Some((lane, e)) => (*slot, *env) = (Some(lane), e),
                     None => more = false,
                 }
@@ -135,11 +121,10 @@ fn lockstep<'c, E: Environment>(
 fn start<'c, E: Environment>(
     next: &mut impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     done: &mut impl FnMut(usize, Outcome),
-    system: &impl Fn(&EnvParams) -> Option<E>,
 ) -> Option<(Lane<'c>, E)> {
     loop {
         let (id, cfg, seed) = next()?;
-        let env = system(&cfg.env).filter(|_| cfg.repr.kind == ReprKind::Crisp);
+        let env = E::from_params(&cfg.env).filter(|_| cfg.repr.kind == ReprKind::Crisp);
         let Some(mut env) = env else {
             done(id, run_trial(cfg, seed));
             continue;

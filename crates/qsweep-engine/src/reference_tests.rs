@@ -8,7 +8,7 @@
 
 use super::actions::action_set;
 use super::config::{Algorithm, Success, TieBreak, TrialConfig};
-use super::env::{BallBeam, CartPole, EnvParams, Environment, SystemKind};
+use super::env::{with_env, Environment, SystemKind, TaskKind};
 use super::learner::Learner;
 use super::repr::{Activations, Crisp, Fuzzy, ReprKind, Representation};
 use super::rng::TrialRng;
@@ -23,6 +23,7 @@ fn close(ours: f64, literal: f64) -> bool {
 /// it at every step; returns the steps checked.
 fn check_against_dense_equations(cfg: &TrialConfig, seed: u64) -> u64 {
     fn go<E: Environment>(cfg: &TrialConfig, seed: u64, mut env: E, repr: &dyn Representation) -> u64 {
+        assert_eq!(E::TASK, TaskKind::Survival, "survival tasks only");
         let l = &cfg.learner;
         let acts = action_set(cfg.env.action_max(), cfg.actions);
         let na = acts.len();
@@ -124,11 +125,7 @@ fn check_against_dense_equations(cfg: &TrialConfig, seed: u64) -> u64 {
         ReprKind::Crisp => Box::new(Crisp::new(&r.resolution, &r.ranges)),
         ReprKind::Fuzzy => Box::new(Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune)),
     };
-    match &cfg.env {
-        EnvParams::BallBeam(p) => go(cfg, seed, BallBeam::new(p.clone()), repr.as_ref()),
-        EnvParams::CartPole(p) => go(cfg, seed, CartPole::new(p.clone()), repr.as_ref()),
-        EnvParams::MountainCar(_) => unreachable!("survival tasks only"),
-    }
+    with_env!(&cfg.env, |env: E| go(cfg, seed, env, repr.as_ref()))
 }
 
 fn small(system: SystemKind, repr: ReprKind, algorithm: Algorithm, res: u32, actions: u32) -> TrialConfig {

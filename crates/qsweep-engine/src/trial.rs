@@ -5,9 +5,7 @@
 
 use super::actions::action_set;
 use super::config::{Success, TieBreak, TrialConfig, Truncation};
-use super::env::{
-    BallBeam, CartPole, EnvParams, Environment, MountainCar, StartKind, State, TaskKind, Transition,
-};
+use super::env::{with_env, EnvParams, Environment, StartKind, State, TaskKind, Transition};
 use super::learner::Learner;
 use super::repr::{Crisp, Encode, Fuzzy, ReprKind};
 use super::rng::TrialRng;
@@ -83,11 +81,7 @@ pub fn run_trial(cfg: &TrialConfig, seed: u64) -> Outcome {
 /// [`run_trial`] with the learner's and the activation's kernels at `simd` (capped by what the CPU
 /// has): the same outcome at every level, only the speed differs ([`crate::simd`]).
 pub fn run_trial_at(cfg: &TrialConfig, seed: u64, simd: Simd) -> Outcome {
-    match &cfg.env {
-        EnvParams::BallBeam(p) => with_repr(cfg, seed, BallBeam::new(p.clone()), simd),
-        EnvParams::CartPole(p) => with_repr(cfg, seed, CartPole::new(p.clone()), simd),
-        EnvParams::MountainCar(p) => with_repr(cfg, seed, MountainCar::new(p.clone()), simd),
-    }
+    with_env!(&cfg.env, |env: E| with_repr(cfg, seed, env, simd))
 }
 
 fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -> Outcome {
@@ -151,11 +145,7 @@ pub fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
         let (o, learner) = episodes(env, TrialRun::crisp::<E>(cfg, seed));
         (o, learner.params().to_vec())
     }
-    match &cfg.env {
-        EnvParams::BallBeam(p) => go(cfg, seed, BallBeam::new(p.clone())),
-        EnvParams::CartPole(p) => go(cfg, seed, CartPole::new(p.clone())),
-        EnvParams::MountainCar(p) => go(cfg, seed, MountainCar::new(p.clone())),
-    }
+    with_env!(&cfg.env, |env: E| go(cfg, seed, env))
 }
 
 /// One trial run alone: `run`'s steps in one loop with its system.
@@ -389,9 +379,5 @@ pub fn simulate(
         }
         out
     }
-    match env {
-        EnvParams::BallBeam(p) => go(BallBeam::new(p.clone()), state, actions),
-        EnvParams::CartPole(p) => go(CartPole::new(p.clone()), state, actions),
-        EnvParams::MountainCar(p) => go(MountainCar::new(p.clone()), state, actions),
-    }
+    with_env!(env, |e: E| go(e, state, actions))
 }

@@ -4,6 +4,9 @@
 //! its current state. States are fixed-size arrays padded to [`MAX_DIM`] so the per-step loop never
 //! allocates; only the first [`Environment::DIM`] entries are observed (the representation sees
 //! them). A system may keep hidden state in the padding: Ball-Beam's beam angle under rate control.
+//!
+//! The rest of the engine reaches a system's concrete type only through `with_env_type!` (by
+//! [`SystemKind`]) and `with_env!` (by [`EnvParams`]), so the list of systems is written once.
 
 mod ball_beam;
 mod cart_pole;
@@ -132,6 +135,45 @@ impl fmt::Display for SystemKind {
         f.write_str(self.name())
     }
 }
+
+/// `$body` with `$E` naming the [`Environment`] type of system `$kind` (a [`SystemKind`]): the one
+/// place the engine maps a system to its type, so generic code over `E: Environment` runs
+/// monomorphized per system and a new system is one arm here (the match is exhaustive). Expanded
+/// once per arm; only the taken arm runs, so `$body` may move values.
+macro_rules! with_env_type {
+    ($kind:expr, $E:ident => $body:expr) => {
+        match $kind {
+            $crate::env::SystemKind::BallBeam => {
+                type $E = $crate::env::BallBeam;
+                $body
+            }
+            $crate::env::SystemKind::CartPole => {
+                type $E = $crate::env::CartPole;
+                $body
+            }
+            $crate::env::SystemKind::MountainCar => {
+                type $E = $crate::env::MountainCar;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_env_type;
+
+/// `$body` with `$env` bound to the system `$params` (an `&EnvParams`) describe, at its start state,
+/// and `$E` naming its type: [`with_env_type`] over the parameters' system. Once per trial (or
+/// rollout), outside any step loop.
+macro_rules! with_env {
+    ($params:expr, |$env:ident: $E:ident| $body:expr) => {{
+        let params: &$crate::env::EnvParams = $params;
+        $crate::env::with_env_type!(params.system(), $E => {
+            let $env = <$E as $crate::env::Environment>::from_params(params)
+                .expect("parameters build their own system");
+            $body
+        })
+    }};
+}
+pub(crate) use with_env;
 
 /// Physical parameters of one system, tagged by system.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

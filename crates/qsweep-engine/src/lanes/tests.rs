@@ -1,6 +1,6 @@
 use super::*;
 use crate::config::{Algorithm, Success, TieBreak, TraceKind, Truncation};
-use crate::env::StartKind;
+use crate::env::{MountainCar, StartKind};
 use crate::repr::Binning;
 
 /// Crisp trials of `system` of every kind a lane must handle: both algorithms, both binnings,
