@@ -53,7 +53,7 @@ WORD_2SE = {"replicates": "replicates", "within 2×": "within-2x", "does not rep
 
 def verdict(r: pd.Series) -> str:
     """The old rule (table3.csv's `verdict_2se`), recomputed independently of qsweep's
-    (crates/qsweep-pipeline/src/analysis/verdict.rs): two standard errors, else within 2x, else not. A row without std
+    (crates/qsweep-report/src/replication/stats/verdict.rs): two standard errors, else within 2x, else not. A row without std
     (one trial) cannot be within 2 SE but can be within 2x. "replicates" here means within 2 SE,
     which no longer counts as replicating in a headline (the verdict scale decides that)."""
     if pd.isna(r["mean"]):

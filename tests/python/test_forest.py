@@ -1,5 +1,5 @@
 """The opening of the committed comparison page (reports/paper/README.md and index.html), recomputed
-from the committed files with pandas, independently of qsweep's code (crates/qsweep-report/src/render/compare/answer.rs):
+from the committed files with pandas, independently of qsweep's code (crates/qsweep-report/src/replication/pages/answer.rs):
 the plotted variants are `as-written` and the rank-1 declared variant of variants.csv; per variant,
 the replicating rows on the verdict scale of issue #46 (table3.csv's `verdict`: `equivalent` or
 `within-2x`, the paper's means taken over 10 runs) and the scale's other verdicts, the rows

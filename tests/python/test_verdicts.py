@@ -33,7 +33,7 @@ What is checked, each against what qsweep wrote:
   `consistent_but_wide_n10`, `differs_n10`), and the declared variants' order by the fit measure.
 
 Not recomputed: the permutation yardstick's exact numbers (its ChaCha8 stream is qsweep's own); its
-unit tests check its behaviour (crates/qsweep-pipeline/src/analysis/selection.rs).
+unit tests check its behaviour (crates/qsweep-report/src/replication/stats/selection.rs).
 """
 
 from __future__ import annotations
@@ -384,7 +384,7 @@ def yes(flag: bool) -> str:
     return "yes" if flag else "no"
 
 
-# The fit measure of 2026-11-30 (crates/qsweep-report/src/derive/compare/fit.rs `fit_order` uses the same keys): rows
+# The fit measure of 2026-11-30 (crates/qsweep-report/src/replication/compare/fit.rs `fit_order` uses the same keys): rows
 # within 2 SE desc, rows within 2x by ratio (not within 2 SE) desc, matching configurations desc,
 # |ln geometric mean of m/M| asc, then pipeline order. With the first key tied, counting the second
 # key inclusively or exclusively ranks alike.

@@ -107,7 +107,7 @@ fn by_hand(d: &ReportData) -> (usize, usize, usize, usize, usize, usize, f64) {
 
 #[test]
 fn fit_order_and_diff_labels() {
-    // The verdicts themselves are tested in analysis::verdict; here the order they rank.
+    // The verdicts themselves are tested in replication::stats::verdict; here the order they rank.
     let f = |within_2se, ratio_within_2x, geo_mean| Fit {
         within_2se,
         ratio_within_2x,

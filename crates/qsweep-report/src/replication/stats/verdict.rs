@@ -150,7 +150,7 @@ pub enum Cause {
     /// The best cell replicates (`equivalent` or `within-2x`).
     Replicates,
     /// The rule designates this row of a pair of Table III rows that contradict each other
-    /// ([`crate::analysis::consistency`]).
+    /// ([`crate::replication::stats::consistency`]).
     PaperInconsistent,
     /// Ours at the paper's configuration replicates, the best cell does not: our grid picks
     /// another configuration.
