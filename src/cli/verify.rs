@@ -3,8 +3,11 @@
 
 use super::pipeline_args::CacheArgs;
 use clap::Args;
+use qsweep_pipeline::cache::store::Store;
 use qsweep_pipeline::cache::verify::QUARANTINE;
+use qsweep_pipeline::cache::ENGINE_VERSION;
 use qsweep_pipeline::error::exit;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `qsweep verify`.
 #[derive(Debug, Args)]
@@ -32,10 +35,28 @@ pub struct VerifyArgs {
 /// cache does not exist.
 pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     let store = a.cache.required_store()?;
+    let mut ok = check_segments(&store, a.no_quarantine)?;
+    // The statistics' memos: a damaged one loses nothing (the next report recomputes it), but it
+    // is damage all the same, like a damaged segment.
+    ok &= check_stats_memos(&store);
+    ok &= check_trial_parts(&store);
+    let reports = a.reports.clone().unwrap_or_else(|| PathBuf::from("reports"));
+    if reports.is_dir() {
+        ok &= check_report_memos(&reports);
+    }
+    if let Some(n) = a.recompute {
+        ok &= recompute(&store, n, a.seed)?;
+    }
+    Ok(if ok { exit::OK } else { exit::FAILURE })
+}
+
+/// Read every segment, print the damaged ones (moved aside unless `no_quarantine`) and the
+/// totals; whether all are intact.
+fn check_segments(store: &Store, no_quarantine: bool) -> anyhow::Result<bool> {
     let report = store.verify()?;
     for d in &report.damaged {
         println!("damaged: {d}");
-        if !a.no_quarantine {
+        if !no_quarantine {
             let to = store.quarantine(&d.path)?;
             println!("  moved to {}", to.display());
         }
@@ -46,21 +67,27 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
         report.rows,
         report.distinct,
         report.damaged.len(),
-        if report.damaged.is_empty() || a.no_quarantine {
+        if report.damaged.is_empty() || no_quarantine {
             String::new()
         } else {
             format!("; their trials run again on the next `qsweep run` (segments kept in {QUARANTINE}/)")
         }
     );
-    let mut ok = report.damaged.is_empty();
-    // The statistics' memos: a damaged one loses nothing (the next report recomputes it), but it
-    // is damage all the same, like a damaged segment.
+    Ok(report.damaged.is_empty())
+}
+
+/// Check and print the cache's statistics' memos; whether none is damaged.
+fn check_stats_memos(store: &Store) -> bool {
     let d = qsweep_report::memo::stats::check(store.dir());
     for (p, why) in &d.damaged {
         println!("damaged statistics' memo: {} ({why}; the next report recomputes it)", p.display());
     }
     println!("statistics' memos: {} intact ({} entries), {} damaged", d.intact, d.entries, d.damaged.len());
-    ok &= d.damaged.is_empty();
+    d.damaged.is_empty()
+}
+
+/// Check and print the cache's encoded trial parts; whether none is damaged.
+fn check_trial_parts(store: &Store) -> bool {
     let parts = qsweep_report::memo::parts::check(store.dir());
     for p in &parts.damaged {
         println!("damaged trial part: {} (the next report encodes it again)", p.display());
@@ -71,65 +98,67 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
         parts.damaged.len(),
         parts.unrecorded
     );
-    ok &= parts.damaged.is_empty();
-    let reports = a.reports.clone().unwrap_or_else(|| std::path::PathBuf::from("reports"));
-    if reports.is_dir() {
-        let m = qsweep_report::memo::folders::check_tree(&reports);
-        for (p, why) in &m.damaged {
-            println!("damaged memo: {} ({why})", p.display());
-        }
-        for p in &m.differing {
-            println!(
-                "differs from its memo: {} (edited since written; the next report rewrites it)",
-                p.display()
-            );
-        }
-        println!(
-            "report memos in {}: {} intact, {} damaged, {} with edited files, {} listed files not there (the next \
-             report writes them)",
-            reports.display(),
-            m.intact,
-            m.damaged.len(),
-            m.differing.len(),
-            m.missing.len()
-        );
-        ok &= m.damaged.is_empty() && m.differing.is_empty();
+    parts.damaged.is_empty()
+}
+
+/// Check and print the report memos under `reports`; whether none is damaged or differs.
+fn check_report_memos(reports: &Path) -> bool {
+    let m = qsweep_report::memo::folders::check_tree(reports);
+    for (p, why) in &m.damaged {
+        println!("damaged memo: {} ({why})", p.display());
     }
-    if let Some(n) = a.recompute {
-        let started = std::time::Instant::now();
-        let r = store.recompute(n, a.seed)?;
-        if n > 0 && r.checked == 0 {
-            // Nothing to check is not a pass: say why, and fail.
-            println!(
-                "recompute: no trial of engine {} to recompute ({} trials of other engine versions are stored; \
-                 `qsweep run` a pipeline with this binary to compute them)",
-                qsweep_pipeline::cache::ENGINE_VERSION,
-                r.other_engine
-            );
-            return Ok(exit::FAILURE);
-        }
-        for m in &r.differing {
-            println!("differs: {} ({})", m.key, m.fields.join(", "));
-        }
-        let others = if r.other_engine > 0 {
-            format!(" ({} trials of other engine versions left out)", r.other_engine)
+    for p in &m.differing {
+        println!(
+            "differs from its memo: {} (edited since written; the next report rewrites it)",
+            p.display()
+        );
+    }
+    println!(
+        "report memos in {}: {} intact, {} damaged, {} with edited files, {} listed files not there (the next \
+         report writes them)",
+        reports.display(),
+        m.intact,
+        m.damaged.len(),
+        m.differing.len(),
+        m.missing.len()
+    );
+    m.damaged.is_empty() && m.differing.is_empty()
+}
+
+/// Recompute `n` stored trials drawn with `seed` and print how they compare with their rows;
+/// whether all agree (false when there was nothing of this engine to recompute).
+fn recompute(store: &Store, n: usize, seed: u64) -> anyhow::Result<bool> {
+    let started = std::time::Instant::now();
+    let r = store.recompute(n, seed)?;
+    if n > 0 && r.checked == 0 {
+        // Nothing to check is not a pass: say why, and fail.
+        println!(
+            "recompute: no trial of engine {} to recompute ({} trials of other engine versions are stored; \
+             `qsweep run` a pipeline with this binary to compute them)",
+            ENGINE_VERSION, r.other_engine
+        );
+        return Ok(false);
+    }
+    for m in &r.differing {
+        println!("differs: {} ({})", m.key, m.fields.join(", "));
+    }
+    let others = if r.other_engine > 0 {
+        format!(" ({} trials of other engine versions left out)", r.other_engine)
+    } else {
+        String::new()
+    };
+    println!(
+        "recomputed {} of {} trials of engine {} (draw seed {}) in {:.1} s: {}{others}",
+        r.checked,
+        r.eligible,
+        ENGINE_VERSION,
+        seed,
+        started.elapsed().as_secs_f64(),
+        if r.differing.is_empty() {
+            format!("all {} agree with the stored rows", r.checked)
         } else {
-            String::new()
-        };
-        println!(
-            "recomputed {} of {} trials of engine {} (draw seed {}) in {:.1} s: {}{others}",
-            r.checked,
-            r.eligible,
-            qsweep_pipeline::cache::ENGINE_VERSION,
-            a.seed,
-            started.elapsed().as_secs_f64(),
-            if r.differing.is_empty() {
-                format!("all {} agree with the stored rows", r.checked)
-            } else {
-                format!("{} differ from the stored rows", r.differing.len())
-            }
-        );
-        ok &= r.differing.is_empty();
-    }
-    Ok(if ok { exit::OK } else { exit::FAILURE })
+            format!("{} differ from the stored rows", r.differing.len())
+        }
+    );
+    Ok(r.differing.is_empty())
 }

@@ -59,9 +59,41 @@ pub struct Submission {
     pub rounds: u32,
 }
 
+/// The script's shell words that every job uses, resolved once.
+struct Words {
+    /// The qsweep executable.
+    qsweep: String,
+    /// The pipeline file.
+    pipeline: String,
+    /// The cache directory.
+    cache: String,
+    /// The log directory.
+    logs: String,
+    /// sbatch options of every job: the named ones, `--chdir`, the further ones.
+    common: Vec<String>,
+    /// Arguments passed on to every `qsweep` command: `--set`, `--variant`, `--yes`.
+    tail: String,
+}
+
 impl Submission {
     /// The submission script.
     pub fn render(&self) -> anyhow::Result<String> {
+        let w = self.words()?;
+        let mut s = String::new();
+        self.write_header(&mut s, &w)?;
+        let (opts, body) = self.shard_job(&w)?;
+        sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
+        writeln!(s)?;
+        self.write_stages(&mut s, &opts, &body)?;
+        let (opts, body) = self.report_job(&w)?;
+        sbatch_call(&mut s, "report_job", &opts, "QSWEEP_REPORT_JOB", &body)?;
+        writeln!(s)?;
+        self.write_footer(&mut s, &w)?;
+        Ok(s)
+    }
+
+    /// The shell words of the paths, the common sbatch options and the passed-on arguments.
+    fn words(&self) -> anyhow::Result<Words> {
         let (qsweep, pipeline, cache) =
             (quote(&self.qsweep), path_word(&self.pipeline)?, path_word(&self.cache)?);
         let logs = path_word(&self.log_dir)?;
@@ -89,15 +121,12 @@ impl Submission {
         if self.yes {
             tail.push_str(" --yes");
         }
-        let n = self.tasks;
-        let array = match self.max_running {
-            Some(m) => format!("1-{n}%{m}"),
-            None => format!("1-{n}"),
-        };
-        let log = |pattern: &str| path_word(&self.log_dir.join(pattern));
+        Ok(Words { qsweep, pipeline, cache, logs, common, tail })
+    }
 
-        let mut s = String::new();
-        let name = &self.pipeline_name;
+    /// The script's opening comments and shell settings, and the log directory made.
+    fn write_header(&self, s: &mut String, w: &Words) -> anyhow::Result<()> {
+        let (n, name, logs) = (self.tasks, &self.pipeline_name, &w.logs);
         writeln!(s, "#!/usr/bin/env bash")?;
         writeln!(
             s,
@@ -113,13 +142,23 @@ impl Submission {
         writeln!(s, "set -euo pipefail")?;
         writeln!(s, "mkdir -p {logs}")?;
         writeln!(s)?;
+        Ok(())
+    }
+
+    /// The sbatch options and script of the array job whose task I runs shard I.
+    fn shard_job(&self, w: &Words) -> anyhow::Result<(Vec<String>, String)> {
+        let (n, qsweep, pipeline, cache, tail) = (self.tasks, &w.qsweep, &w.pipeline, &w.cache, &w.tail);
+        let array = match self.max_running {
+            Some(m) => format!("1-{n}%{m}"),
+            None => format!("1-{n}"),
+        };
         let mut opts = vec![
             format!("--job-name={}", quote(&self.job_name)),
             format!("--array={array}"),
             format!("--cpus-per-task={}", self.cpus_per_task),
         ];
-        opts.extend(common.iter().cloned());
-        opts.push(format!("--output={}", log("%x-%A_%a.out")?));
+        opts.extend(w.common.iter().cloned());
+        opts.push(format!("--output={}", path_word(&self.log_dir.join("%x-%A_%a.out"))?));
         let body = format!(
             "# Task I runs shard I of {n}. N is written out rather than read from $SLURM_ARRAY_TASK_COUNT\n\
              # so that resubmitting some tasks (sbatch --array=2,5 ...) keeps the same split.\n\
@@ -127,22 +166,29 @@ impl Submission {
              --shard \"$SLURM_ARRAY_TASK_ID/{n}\" --jobs \"${{SLURM_CPUS_PER_TASK:-{}}}\" --no-report\n",
             self.cpus_per_task
         );
-        sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
-        writeln!(s)?;
-        // A staged plan (a race, fresh seeds): one array per stage, each starting when the one
-        // before has ended, since a stage's trials are planned from the outcomes of the stages
-        // before. Each task runs its shard of the first stage whose trials are missing.
+        Ok((opts, body))
+    }
+
+    /// A staged plan (a race, fresh seeds): one array per stage after the first, each starting
+    /// when the one before has ended, since a stage's trials are planned from the outcomes of the
+    /// stages before. Each task runs its shard of the first stage whose trials are missing.
+    fn write_stages(&self, s: &mut String, opts: &[String], body: &str) -> anyhow::Result<()> {
         for round in 2..=self.rounds {
-            let mut opts = opts.clone();
+            let mut opts = opts.to_vec();
             opts[0] = format!("--job-name={}", quote(&format!("{}-round{round}", self.job_name)));
             // afterany: a failed round array (a diverged trial exits 1) must not cancel the rounds
             // after it; they plan from what is stored and run whatever is missing.
             opts.insert(1, "--dependency=afterany:\"$array_job\"".to_string());
             opts.insert(2, "--kill-on-invalid-dep=yes".to_string());
             writeln!(s, "# Stage {round} of at most {} (a race round, or the fresh seeds).", self.rounds)?;
-            sbatch_call(&mut s, "array_job", &opts, "QSWEEP_SHARD_JOB", &body)?;
+            sbatch_call(s, "array_job", &opts, "QSWEEP_SHARD_JOB", body)?;
             writeln!(s)?;
         }
+        Ok(())
+    }
+
+    /// The sbatch options and script of the report job, which starts once every task has succeeded.
+    fn report_job(&self, w: &Words) -> anyhow::Result<(Vec<String>, String)> {
         let mut opts = vec![
             format!("--job-name={}", quote(&format!("{}-report", self.job_name))),
             "--dependency=afterok:\"$array_job\"".to_string(),
@@ -150,14 +196,22 @@ impl Submission {
             "--kill-on-invalid-dep=yes".to_string(),
             "--cpus-per-task=1".to_string(),
         ];
-        opts.extend(common.iter().cloned());
-        opts.push(format!("--output={}", log("%x-%j.out")?));
+        opts.extend(w.common.iter().cloned());
+        opts.push(format!("--output={}", path_word(&self.log_dir.join("%x-%j.out"))?));
         let body = format!(
-            "exec {qsweep} report {pipeline} --cache {cache}{tail} --out {}\n",
+            "exec {} report {} --cache {}{} --out {}\n",
+            w.qsweep,
+            w.pipeline,
+            w.cache,
+            w.tail,
             path_word(&self.report_dir)?
         );
-        sbatch_call(&mut s, "report_job", &opts, "QSWEEP_REPORT_JOB", &body)?;
-        writeln!(s)?;
+        Ok((opts, body))
+    }
+
+    /// The lines that say what was submitted and where to watch it.
+    fn write_footer(&self, s: &mut String, w: &Words) -> anyhow::Result<()> {
+        let (n, logs) = (self.tasks, &w.logs);
         if self.rounds > 1 {
             writeln!(
                 s,
@@ -172,7 +226,7 @@ impl Submission {
         }
         writeln!(s, "echo \"watch: squeue -j $array_job,$report_job   logs: \"{logs}")?;
         writeln!(s, "echo \"report: \"{}", path_word(&self.report_dir.join("index.html"))?)?;
-        Ok(s)
+        Ok(())
     }
 }
 

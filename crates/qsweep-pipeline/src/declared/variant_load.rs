@@ -2,11 +2,14 @@
 //! to the pipeline text as overrides, checked, and loaded.
 
 use super::experiment::AXIS_SETTINGS;
+use super::grid::Combination;
 use super::locate::locate;
 use super::overrides::Override;
 use super::pipeline::PipelineSpec;
+use super::variants::VariantSpec;
 use crate::error::user_error;
 use qsweep_engine::env::{EnvParams, SystemKind};
+use std::collections::HashSet;
 
 /// A variant, resolved: its pipeline with the `set` applied.
 #[derive(Debug, Clone)]
@@ -36,46 +39,33 @@ pub fn resolve(
     origin: &str,
     overrides: &[Override],
 ) -> anyhow::Result<Vec<LoadedVariant>> {
-    // Listed variants first, then the grid's combinations; each entry knows where it was written.
-    let mut entries: Vec<Entry> = Vec::new();
-    for (i, v) in base.variants.iter().flatten().enumerate() {
-        let set = v
-            .set
-            .iter()
-            .map(|(k, value)| {
-                let key = match k {
-                    serde_yaml::Value::String(s) => s.clone(),
-                    other => serde_yaml::to_string(other).unwrap_or_default().trim().to_string(),
-                };
-                (key, value.clone())
-            })
-            .collect();
-        entries.push(Entry {
-            id: v.id.clone(),
-            title: v.title.clone(),
-            description: v.description.clone(),
-            set,
-            listed: Some(i),
-            exploratory: v.exploratory,
-        });
-    }
-    if let Some(g) = &base.variant_grid {
-        for c in g.combinations() {
-            let title =
-                c.set.iter().map(|(p, v)| format!("{p} = {}", super::grid::shown(v))).collect::<Vec<_>>();
-            entries.push(Entry {
-                title: Some(format!("grid: {}", title.join(", "))),
-                description: None,
-                id: c.id,
-                set: c.set,
-                listed: None,
-                exploratory: false,
-            });
-        }
-    }
+    let entries = entries(base);
     if entries.is_empty() {
         return Ok(Vec::new());
     }
+    check_grid_ids(&entries, text, origin)?;
+    let doc: serde_yaml::Value =
+        serde_yaml::from_str(text).map_err(|e| user_error(format!("{origin}: {e}")))?;
+    let source = Source { base, text, origin, doc };
+    let mut out = Vec::with_capacity(entries.len());
+    // A grid entry is checked once, however many combinations hold it.
+    let mut checked: HashSet<String> = HashSet::new();
+    for v in &entries {
+        out.push(source.load(v, overrides, &mut checked)?);
+    }
+    Ok(out)
+}
+
+/// The variants to resolve: the listed ones first, then the grid's combinations; each entry
+/// knows where it was written.
+fn entries(base: &PipelineSpec) -> Vec<Entry> {
+    let listed = base.variants.iter().flatten().enumerate().map(|(i, v)| Entry::listed(i, v));
+    let generated = base.variant_grid.iter().flat_map(|g| g.combinations()).map(Entry::generated);
+    listed.chain(generated).collect()
+}
+
+/// Refuse a generated variant with the id of a listed one.
+fn check_grid_ids(entries: &[Entry], text: &str, origin: &str) -> anyhow::Result<()> {
     let grid_at =
         || locate(text, &["variant_grid".to_string()]).map(|(l, c)| format!("{l}:{c}:")).unwrap_or_default();
     for (i, e) in entries.iter().enumerate() {
@@ -87,58 +77,41 @@ pub fn resolve(
             )));
         }
     }
-    let doc: serde_yaml::Value =
-        serde_yaml::from_str(text).map_err(|e| user_error(format!("{origin}: {e}")))?;
-    let mut out = Vec::with_capacity(entries.len());
-    // A grid entry is checked once, however many combinations hold it.
-    let mut checked: std::collections::HashSet<String> = std::collections::HashSet::new();
-    for v in &entries {
-        let mut d = doc.clone();
-        let mut set = Vec::new();
-        for (key, value) in &v.set {
-            let at = |msg: String| {
-                let path = match v.listed {
-                    Some(i) => vec!["variants".to_string(), i.to_string(), "set".to_string(), key.clone()],
-                    None => vec!["variant_grid".to_string(), key.clone()],
-                };
-                let pos = locate(text, &path).map(|(l, c)| format!("{l}:{c}:")).unwrap_or_default();
-                match v.listed {
-                    Some(_) => user_error(format!("{origin}:{pos} variant `{}`: set `{key}`: {msg}", v.id)),
-                    None => user_error(format!(
-                        "{origin}:{pos} variant_grid: `{key}` = {}: {msg}",
-                        super::grid::shown(value)
-                    )),
-                }
-            };
-            let o = override_of(key, value).map_err(at)?;
-            o.apply(&mut d).map_err(|m| at(m.replace(&format!("--set {}: ", o.raw), "")))?;
-            if checked.insert(o.raw.clone()) {
-                check_target(base, &o).map_err(at)?;
-                check_not_varied(base, &o).map_err(at)?;
-                // Every entry alone must still give a valid pipeline, so an error points at its line.
-                let mut alone = doc.clone();
-                o.apply(&mut alone).map_err(at)?;
-                strip_variants(&mut alone);
-                serde_yaml::from_value::<PipelineSpec>(alone).map_err(|e| at(super::fields::message(&e)))?;
-            }
-            set.push(o.raw);
-        }
+    Ok(())
+}
+
+/// The pipeline file the variants are resolved against: its typed form, its text (for the
+/// positions in messages) and its document (each variant's starting point).
+struct Source<'a> {
+    /// The pipeline as typed.
+    base: &'a PipelineSpec,
+    /// The file's text.
+    text: &'a str,
+    /// The file as named in messages.
+    origin: &'a str,
+    /// The file's YAML document.
+    doc: serde_yaml::Value,
+}
+
+impl Source<'_> {
+    /// Variant `v`: its `set` applied to the document, then `overrides`, typed and checked whole.
+    fn load(
+        &self,
+        v: &Entry,
+        overrides: &[Override],
+        checked: &mut HashSet<String>,
+    ) -> anyhow::Result<LoadedVariant> {
+        let mut d = self.doc.clone();
+        let set = self.apply_set(v, &mut d, checked)?;
         for o in overrides {
             o.apply(&mut d).map_err(user_error)?;
         }
         strip_variants(&mut d);
-        let whole = |msg: String| {
-            let path = match v.listed {
-                Some(i) => vec!["variants".to_string(), i.to_string()],
-                None => vec!["variant_grid".to_string()],
-            };
-            let pos = locate(text, &path).map(|(l, c)| format!("{l}:{c}:")).unwrap_or_default();
-            user_error(format!("{origin}:{pos} variant `{}`: {msg}", v.id))
-        };
-        let spec: PipelineSpec = serde_yaml::from_value(d).map_err(|e| whole(super::fields::message(&e)))?;
+        let spec: PipelineSpec =
+            serde_yaml::from_value(d).map_err(|e| self.whole_error(v, super::fields::message(&e)))?;
         super::check::check_whole(&spec)
-            .map_err(|p| whole(format!("{}: {}", p.path.join("."), p.message)))?;
-        out.push(LoadedVariant {
+            .map_err(|p| self.whole_error(v, format!("{}: {}", p.path.join("."), p.message)))?;
+        Ok(LoadedVariant {
             id: v.id.clone(),
             title: v.title.clone(),
             description: v.description.clone(),
@@ -146,9 +119,69 @@ pub fn resolve(
             spec,
             generated: v.listed.is_none(),
             exploratory: v.exploratory,
-        });
+        })
     }
-    Ok(out)
+
+    /// Apply `v`'s `set` entries to `d`, checking each entry not yet `checked`; the entries as
+    /// `PATH=VALUE`.
+    fn apply_set(
+        &self,
+        v: &Entry,
+        d: &mut serde_yaml::Value,
+        checked: &mut HashSet<String>,
+    ) -> anyhow::Result<Vec<String>> {
+        let mut set = Vec::new();
+        for (key, value) in &v.set {
+            let at = |msg: String| self.set_error(v, key, value, msg);
+            let o = override_of(key, value).map_err(at)?;
+            o.apply(d).map_err(|m| at(m.replace(&format!("--set {}: ", o.raw), "")))?;
+            if checked.insert(o.raw.clone()) {
+                self.check_alone(&o).map_err(at)?;
+            }
+            set.push(o.raw);
+        }
+        Ok(set)
+    }
+
+    /// One `set` entry on its own: a system the pipeline has, nothing an axis varies, and a
+    /// valid pipeline once applied.
+    fn check_alone(&self, o: &Override) -> Result<(), String> {
+        check_target(self.base, o)?;
+        check_not_varied(self.base, o)?;
+        // Every entry alone must still give a valid pipeline, so an error points at its line.
+        let mut alone = self.doc.clone();
+        o.apply(&mut alone)?;
+        strip_variants(&mut alone);
+        serde_yaml::from_value::<PipelineSpec>(alone).map_err(|e| super::fields::message(&e))?;
+        Ok(())
+    }
+
+    /// The error of `set` entry `key` = `value` of variant `v`, at the entry's line.
+    fn set_error(&self, v: &Entry, key: &str, value: &serde_yaml::Value, msg: String) -> anyhow::Error {
+        let (text, origin) = (self.text, self.origin);
+        let path = match v.listed {
+            Some(i) => vec!["variants".to_string(), i.to_string(), "set".to_string(), key.to_string()],
+            None => vec!["variant_grid".to_string(), key.to_string()],
+        };
+        let pos = locate(text, &path).map(|(l, c)| format!("{l}:{c}:")).unwrap_or_default();
+        match v.listed {
+            Some(_) => user_error(format!("{origin}:{pos} variant `{}`: set `{key}`: {msg}", v.id)),
+            None => user_error(format!(
+                "{origin}:{pos} variant_grid: `{key}` = {}: {msg}",
+                super::grid::shown(value)
+            )),
+        }
+    }
+
+    /// The error of variant `v` as a whole, at its line.
+    fn whole_error(&self, v: &Entry, msg: String) -> anyhow::Error {
+        let path = match v.listed {
+            Some(i) => vec!["variants".to_string(), i.to_string()],
+            None => vec!["variant_grid".to_string()],
+        };
+        let pos = locate(self.text, &path).map(|(l, c)| format!("{l}:{c}:")).unwrap_or_default();
+        user_error(format!("{}:{pos} variant `{}`: {msg}", self.origin, v.id))
+    }
 }
 
 /// A variant's pipeline has no variants of its own.
@@ -262,10 +295,54 @@ pub(super) fn check_not_varied(base: &PipelineSpec, o: &Override) -> Result<(), 
 
 /// A variant to resolve: listed (with its index in `variants:`) or generated by the grid.
 struct Entry {
+    /// Identifier.
     id: String,
+    /// Title.
     title: Option<String>,
+    /// Description.
     description: Option<String>,
+    /// The `set` entries, path and value, in file order.
     set: Vec<(String, serde_yaml::Value)>,
+    /// Its index in `variants:`; `None` when the grid generated it.
     listed: Option<usize>,
+    /// Declared exploratory.
     exploratory: bool,
+}
+
+impl Entry {
+    /// The `i`-th entry of `variants:`.
+    fn listed(i: usize, v: &VariantSpec) -> Self {
+        let set = v
+            .set
+            .iter()
+            .map(|(k, value)| {
+                let key = match k {
+                    serde_yaml::Value::String(s) => s.clone(),
+                    other => serde_yaml::to_string(other).unwrap_or_default().trim().to_string(),
+                };
+                (key, value.clone())
+            })
+            .collect();
+        Entry {
+            id: v.id.clone(),
+            title: v.title.clone(),
+            description: v.description.clone(),
+            set,
+            listed: Some(i),
+            exploratory: v.exploratory,
+        }
+    }
+
+    /// A combination of `variant_grid:`, titled by its `set`.
+    fn generated(c: Combination) -> Self {
+        let title = c.set.iter().map(|(p, v)| format!("{p} = {}", super::grid::shown(v))).collect::<Vec<_>>();
+        Entry {
+            title: Some(format!("grid: {}", title.join(", "))),
+            description: None,
+            id: c.id,
+            set: c.set,
+            listed: None,
+            exploratory: false,
+        }
+    }
 }

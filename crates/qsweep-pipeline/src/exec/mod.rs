@@ -225,7 +225,7 @@ pub fn estimated_cost(c: &TrialConfig) -> f64 {
 pub fn execute(
     jobs: &[Job<'_>],
     opts: &ExecOptions,
-    mut sink: impl FnMut(&[TrialRecord]) -> anyhow::Result<()>,
+    sink: impl FnMut(&[TrialRecord]) -> anyhow::Result<()>,
     reporter: &mut dyn Reporter,
 ) -> anyhow::Result<ExecReport> {
     let order = schedule(jobs);
@@ -236,7 +236,7 @@ pub fn execute(
     let stop = AtomicBool::new(false);
     let lockstep = opts.lockstep;
     let (tx, rx) = mpsc::channel::<TrialRecord>();
-    let mut report = ExecReport::default();
+    let mut collector = Collector::new(sink, leases);
     reporter.event(&Event::Started { trials: jobs.len() });
 
     let collected = std::thread::scope(|scope| -> anyhow::Result<()> {
@@ -249,65 +249,71 @@ pub fn execute(
                 }
             });
         });
+        collector.collect(&rx, opts, sched, stop, reporter)
+    });
+    let report = finish(collector.report, jobs.len(), &sched, leases, reporter);
+    collected?;
+    Ok(report)
+}
 
-        let mut batch: Vec<TrialRecord> = Vec::new();
-        let mut last_flush = Instant::now();
-        let mut last_beat = Instant::now();
-        let mut elsewhere = (0, 0);
-        let mut flush = |batch: &mut Vec<TrialRecord>,
-                         report: &mut ExecReport,
-                         reporter: &mut dyn Reporter|
-         -> anyhow::Result<()> {
-            if !batch.is_empty() {
-                sink(batch)?;
-                if let Some(c) = leases {
-                    c.release(&batch.iter().map(|r| r.key).collect::<Vec<_>>());
-                }
-                reporter.event(&Event::Flushed { trials: batch.len() });
-                report.executed += batch.len();
-                report.failed += batch.iter().filter(|r| r.outcome.failure.is_some()).count();
-                batch.clear();
-            }
-            Ok(())
-        };
+/// The calling thread's side of a run: finished records, gathered into batches, handed to the
+/// sink; leases kept alive; events reported.
+struct Collector<'l, S> {
+    /// Where batches go.
+    sink: S,
+    /// The cache's leases, when the run takes them.
+    leases: Option<&'l Leases>,
+    /// Records finished since the last flush.
+    batch: Vec<TrialRecord>,
+    /// What the run did so far.
+    report: ExecReport,
+    /// When the batch was last flushed.
+    last_flush: Instant,
+    /// When the leases were last renewed.
+    last_beat: Instant,
+    /// Trials running and stored elsewhere, as last reported.
+    elsewhere: (usize, usize),
+}
+
+impl<'l, S: FnMut(&[TrialRecord]) -> anyhow::Result<()>> Collector<'l, S> {
+    /// A collector with nothing collected yet.
+    fn new(sink: S, leases: Option<&'l Leases>) -> Self {
+        Self {
+            sink,
+            leases,
+            batch: Vec::new(),
+            report: ExecReport::default(),
+            last_flush: Instant::now(),
+            last_beat: Instant::now(),
+            elsewhere: (0, 0),
+        }
+    }
+
+    /// Collect records from `rx` until the workers are done or a flush fails; on a failure, stop
+    /// the workers and drain the channel so that none is left blocked.
+    fn collect(
+        &mut self,
+        rx: &mpsc::Receiver<TrialRecord>,
+        opts: &ExecOptions,
+        sched: &Scheduler<'_>,
+        stop: &AtomicBool,
+        reporter: &mut dyn Reporter,
+    ) -> anyhow::Result<()> {
         let result = loop {
             match rx.recv_timeout(Duration::from_millis(200)) {
                 Ok(rec) => {
                     reporter.event(&Event::Finished { key: rec.key, failed: rec.outcome.failure.is_some() });
-                    batch.push(rec);
+                    self.batch.push(rec);
                 }
                 Err(mpsc::RecvTimeoutError::Timeout) => reporter.event(&Event::Tick),
-                Err(mpsc::RecvTimeoutError::Disconnected) => {
-                    break flush(&mut batch, &mut report, &mut *reporter)
-                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => break self.flush(reporter),
             }
-            if let Some(c) = leases {
-                if last_beat.elapsed() >= HEARTBEAT {
-                    c.heartbeat();
-                    last_beat = Instant::now();
-                }
-                let now = (
-                    sched.running_elsewhere.load(Ordering::Relaxed),
-                    sched.stored_elsewhere.load(Ordering::Relaxed),
-                );
-                if now != elsewhere {
-                    elsewhere = now;
-                    reporter.event(&Event::Elsewhere { running: now.0, stored: now.1 });
-                }
-            }
-            // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
-            // SIGKILL soon after) store what is finished at once rather than at the next batch.
-            // So in the tail of a run that shares the cache: other runs may be waiting for
-            // exactly these trials, which their leases keep from them until they are stored.
-            if batch.len() >= opts.batch_trials
-                || last_flush.elapsed() >= opts.batch_interval
-                || INTERRUPTED.load(Ordering::Relaxed)
-                || (!batch.is_empty() && sched.exhausted() && leases.is_some_and(|c| c.others_present()))
-            {
-                if let Err(e) = flush(&mut batch, &mut report, &mut *reporter) {
+            self.tend_leases(sched, reporter);
+            if self.flush_due(opts, sched) {
+                if let Err(e) = self.flush(reporter) {
                     break Err(e);
                 }
-                last_flush = Instant::now();
+                self.last_flush = Instant::now();
             }
         };
         if result.is_err() {
@@ -316,186 +322,76 @@ pub fn execute(
             while rx.recv().is_ok() {}
         }
         result
-    });
+    }
+
+    /// With leases: renew them every [`HEARTBEAT`], and report a change in the trials other runs
+    /// are computing or have stored.
+    fn tend_leases(&mut self, sched: &Scheduler<'_>, reporter: &mut dyn Reporter) {
+        let Some(c) = self.leases else { return };
+        if self.last_beat.elapsed() >= HEARTBEAT {
+            c.heartbeat();
+            self.last_beat = Instant::now();
+        }
+        let now =
+            (sched.running_elsewhere.load(Ordering::Relaxed), sched.stored_elsewhere.load(Ordering::Relaxed));
+        if now != self.elsewhere {
+            self.elsewhere = now;
+            reporter.event(&Event::Elsewhere { running: now.0, stored: now.1 });
+        }
+    }
+
+    /// Whether the batch is to be flushed now: full, old, or wanted at once.
+    fn flush_due(&self, opts: &ExecOptions, sched: &Scheduler<'_>) -> bool {
+        // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
+        // SIGKILL soon after) store what is finished at once rather than at the next batch.
+        // So in the tail of a run that shares the cache: other runs may be waiting for
+        // exactly these trials, which their leases keep from them until they are stored.
+        self.batch.len() >= opts.batch_trials
+            || self.last_flush.elapsed() >= opts.batch_interval
+            || INTERRUPTED.load(Ordering::Relaxed)
+            || (!self.batch.is_empty()
+                && sched.exhausted()
+                && self.leases.is_some_and(|c| c.others_present()))
+    }
+
+    /// Hand the batch to the sink, release its leases and count it.
+    fn flush(&mut self, reporter: &mut dyn Reporter) -> anyhow::Result<()> {
+        let batch = &mut self.batch;
+        if !batch.is_empty() {
+            (self.sink)(batch)?;
+            if let Some(c) = self.leases {
+                c.release(&batch.iter().map(|r| r.key).collect::<Vec<_>>());
+            }
+            reporter.event(&Event::Flushed { trials: batch.len() });
+            self.report.executed += batch.len();
+            self.report.failed += batch.iter().filter(|r| r.outcome.failure.is_some()).count();
+            batch.clear();
+        }
+        Ok(())
+    }
+}
+
+/// The run's report once its workers are done: leases released, trials stored elsewhere counted,
+/// an interruption and the end reported.
+fn finish(
+    mut report: ExecReport,
+    jobs: usize,
+    sched: &Scheduler<'_>,
+    leases: Option<&Leases>,
+    reporter: &mut dyn Reporter,
+) -> ExecReport {
     // Nothing is held between executions: leases of trials a failing sink did not store go now.
     if let Some(c) = leases {
         c.release_all();
     }
     report.elsewhere = sched.stored_elsewhere.load(Ordering::Relaxed);
-    report.interrupted =
-        INTERRUPTED.load(Ordering::Relaxed) && report.executed + report.elsewhere < jobs.len();
+    report.interrupted = INTERRUPTED.load(Ordering::Relaxed) && report.executed + report.elsewhere < jobs;
     if report.interrupted {
         reporter.event(&Event::Interrupted);
     }
     reporter.event(&Event::Done { executed: report.executed, failed: report.failed });
-    collected?;
-    Ok(report)
+    report
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::cache::Key;
-    use qsweep_engine::env::SystemKind;
-    use qsweep_engine::Algorithm;
-
-    fn jobs_for(configs: &[TrialConfig]) -> Vec<Job<'_>> {
-        configs
-            .iter()
-            .flat_map(|c| (0..3).map(move |seed| Job { config: c, seed, key: Key::of(c, seed) }))
-            .collect()
-    }
-
-    #[test]
-    fn results_are_identical_on_one_or_two_threads_in_lockstep_or_alone_and_batches_cover_every_job() {
-        let mut configs = Vec::new();
-        for (sys, res) in [(SystemKind::BallBeam, vec![3, 3]), (SystemKind::MountainCar, vec![4, 4])] {
-            for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
-                let mut c = TrialConfig::paper(sys, repr, Algorithm::QLambda, res.clone(), 3);
-                c.limits.max_episodes = 30;
-                configs.push(c);
-            }
-        }
-        let jobs = jobs_for(&configs);
-        let run = |threads, lockstep| {
-            let opts = ExecOptions { jobs: threads, batch_trials: 4, lockstep, ..Default::default() };
-            let mut got = Vec::new();
-            let mut batches = 0;
-            let mut events: Vec<Event> = Vec::new();
-            let r = execute(
-                &jobs,
-                &opts,
-                |b| {
-                    assert!(b.len() <= 4);
-                    batches += 1;
-                    got.extend(b.iter().cloned());
-                    Ok(())
-                },
-                &mut events,
-            )
-            .unwrap();
-            assert_eq!(r.executed, jobs.len());
-            // Started first, Done last, one Finished per trial, the flushes add up to the trials.
-            assert_eq!(events.first(), Some(&Event::Started { trials: jobs.len() }));
-            assert_eq!(events.last(), Some(&Event::Done { executed: jobs.len(), failed: 0 }));
-            let finished = events.iter().filter(|e| matches!(e, Event::Finished { .. })).count();
-            let flushed: usize =
-                events.iter().map(|e| if let Event::Flushed { trials } = e { *trials } else { 0 }).sum();
-            assert_eq!((finished, flushed), (jobs.len(), jobs.len()));
-            assert!(batches >= jobs.len() / 4);
-            got.sort_by_key(|r| r.key);
-            got.into_iter().map(|r| (r.key, r.outcome)).collect::<Vec<_>>()
-        };
-        // Crisp trials in lockstep (interleaved with fuzzy ones that run alone) or all alone.
-        let alone = run(1, false);
-        assert_eq!(run(1, true), alone);
-        assert_eq!(run(2, true), alone);
-        assert_eq!(run(2, false), alone);
-    }
-
-    /// Regression: lockstep rows were charged their loop's time so far in proportion to their
-    /// steps, which over-counts (the crisp cells of `paper.yaml` summed to 10 % more CPU than the
-    /// process used). On one thread, the rows' seconds add up to at most the run's.
-    #[test]
-    fn lockstep_rows_charge_no_more_time_than_the_run_took() {
-        let mut configs = Vec::new();
-        for res in [vec![6, 6], vec![10, 10], vec![3, 8]] {
-            let mut c = TrialConfig::paper(SystemKind::MountainCar, ReprKind::Crisp, Algorithm::Q0, res, 3);
-            c.limits.max_episodes = 40;
-            configs.push(c);
-        }
-        let jobs = jobs_for(&configs);
-        let opts = ExecOptions { jobs: 1, lockstep: true, ..Default::default() };
-        let mut rows = Vec::new();
-        let start = Instant::now();
-        let sink = |b: &[TrialRecord]| {
-            rows.extend(b.iter().cloned());
-            Ok(())
-        };
-        execute(&jobs, &opts, sink, &mut Vec::<Event>::new()).unwrap();
-        let took = start.elapsed().as_secs_f64();
-        assert_eq!(rows.len(), jobs.len());
-        let charged: f64 = rows.iter().map(|r| r.seconds).sum();
-        assert!(charged <= took, "rows charged {charged} s of a {took} s run");
-        assert!(rows.iter().all(|r| r.seconds > 0.0), "every trial took some time");
-        if let Some(cpu) = rows.iter().map(|r| r.cpu_seconds).sum::<Option<f64>>() {
-            assert!(cpu <= took * 1.01 + 0.01, "rows charged {cpu} CPU s in a {took} s run on one thread");
-        }
-    }
-
-    #[test]
-    fn trials_that_run_alone_go_first_then_each_lockstep_group_together_longest_first() {
-        let mut configs = Vec::new();
-        for sys in [SystemKind::MountainCar, SystemKind::BallBeam] {
-            for alg in [Algorithm::Q0, Algorithm::QLambda] {
-                for (repr, actions) in [(ReprKind::Crisp, 3), (ReprKind::Fuzzy, 3), (ReprKind::Crisp, 9)] {
-                    configs.push(TrialConfig::paper(sys, repr, alg, vec![3, 3], actions));
-                }
-            }
-        }
-        let jobs = jobs_for(&configs);
-        let order: Vec<&Job<'_>> = schedule(&jobs).into_iter().map(|j| &jobs[j]).collect();
-        let groups: Vec<_> = order.iter().map(|j| lanes::group(j.config)).collect();
-        let alone = groups.iter().take_while(|g| g.is_none()).count();
-        assert_eq!(alone, jobs.iter().filter(|j| j.config.repr.kind == ReprKind::Fuzzy).count());
-        // Each group is one run of the order, its trials longest first.
-        let mut runs = groups.clone();
-        runs.dedup();
-        assert_eq!(runs.len(), 1 + 4, "{runs:?}");
-        for w in order.windows(2) {
-            if lanes::group(w[0].config) == lanes::group(w[1].config) {
-                assert!(estimated_cost(w[0].config) >= estimated_cost(w[1].config));
-            }
-        }
-        let mut sorted = schedule(&jobs);
-        sorted.sort_unstable();
-        assert_eq!(sorted, (0..jobs.len()).collect::<Vec<_>>(), "every job once");
-    }
-
-    #[test]
-    fn rows_are_the_same_with_leases_taken_in_batches_as_without_leases() {
-        let mut configs = Vec::new();
-        for repr in [ReprKind::Crisp, ReprKind::Fuzzy] {
-            for actions in [2, 3] {
-                let mut c =
-                    TrialConfig::paper(SystemKind::BallBeam, repr, Algorithm::Q0, vec![2, 3], actions);
-                c.limits.max_episodes = 10;
-                configs.push(c);
-            }
-        }
-        // 12 trials on 1 thread: batches of 3 at first, then of 1.
-        let jobs = jobs_for(&configs);
-        let dir = tempfile::tempdir().unwrap();
-        let store = crate::cache::Store::open(dir.path()).unwrap();
-        let run = |leases: Option<Arc<Leases>>| {
-            let opts = ExecOptions { jobs: 1, leases, ..Default::default() };
-            let mut got: Vec<TrialRecord> = Vec::new();
-            let sink = |b: &[TrialRecord]| {
-                got.extend(b.iter().cloned());
-                Ok(())
-            };
-            let r = execute(&jobs, &opts, sink, &mut Vec::<Event>::new()).unwrap();
-            assert_eq!((r.executed, r.elsewhere), (jobs.len(), 0));
-            got.sort_by_key(|r| r.key);
-            // Everything but the timings, which no two runs share.
-            got.into_iter()
-                .map(|r| (r.key, r.engine_version, r.config_json(), r.seed, r.outcome))
-                .collect::<Vec<_>>()
-        };
-        let leases = Leases::open(&store).unwrap();
-        assert_eq!(run(Some(Arc::clone(&leases))), run(None));
-        assert_eq!(leases.held(), 0, "every lease is released once its trial is stored");
-    }
-
-    #[test]
-    fn a_failing_sink_stops_the_run_and_reports_the_error() {
-        let c = TrialConfig::paper(SystemKind::BallBeam, ReprKind::Crisp, Algorithm::Q0, vec![2, 2], 3);
-        let cs = vec![c];
-        let jobs = jobs_for(&cs);
-        let opts = ExecOptions { jobs: 2, batch_trials: 1, ..Default::default() };
-        let mut events: Vec<Event> = Vec::new();
-        let err = execute(&jobs, &opts, |_| anyhow::bail!("disk full"), &mut events).unwrap_err();
-        assert!(err.to_string().contains("disk full"));
-        assert!(matches!(events.last(), Some(Event::Done { executed: 0, .. })), "{events:?}");
-    }
-}
+mod tests;

@@ -2,7 +2,7 @@
 //! pipeline's cell (spec → plan, every default filled in), so that a trial and a pipeline cell with
 //! the same settings have the same configuration and the same cache key.
 
-use super::resolve::plan;
+use super::variants::plan;
 use crate::declared::{load_value, LoadedSpec, Override};
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;

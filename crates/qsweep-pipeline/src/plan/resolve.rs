@@ -1,22 +1,18 @@
-//! Expanding a typed pipeline into a [`Plan`]: layering settings, building each cell's
-//! `TrialConfig`, validating it, and keying its trials.
+//! Expanding a typed pipeline into the experiments of a [`super::Plan`]: layering settings,
+//! building each cell's `TrialConfig`, validating it, and keying its trials.
 
 use super::keys::KeyMemo;
-use super::resolved::{Cell, Experiment, Plan, Variant};
-use crate::cache::Key;
+use super::resolved::{Cell, Experiment};
 use crate::declared::{each_system, BallBeamM, CartPoleM, MountainCarM};
 use crate::declared::{
-    format_value, BalanceSpec, ExperimentSpec, LoadedSpec, LoadedVariant, PipelineSpec, ReachSpec, Settings,
-    SystemMarker, SystemSpec, Target,
+    format_value, BalanceSpec, ExperimentSpec, PipelineSpec, ReachSpec, Settings, SystemMarker, SystemSpec,
+    Target,
 };
 use crate::error::user_error;
 use qsweep_engine::config::{default_ranges, default_success, Success, TrialConfig};
 use qsweep_engine::env::{EnvParams, SystemKind};
 use qsweep_engine::Algorithm;
 use rayon::prelude::*;
-
-/// Plans larger than this many trials need confirmation (`--yes`).
-pub const DEFAULT_MAX_TRIALS: usize = 200_000;
 
 /// How a system's typed sections become resolved values.
 trait Resolve: SystemMarker {
@@ -134,175 +130,8 @@ impl Settings {
     }
 }
 
-/// Expand a loaded pipeline into a plan (every variant). Fails (as a user error naming the
-/// file) if a resolved configuration is invalid or the plan exceeds `max_trials`.
-pub fn plan(loaded: &LoadedSpec, max_trials: Option<usize>) -> anyhow::Result<Plan> {
-    plan_variants(loaded, max_trials, &[])
-}
-
-/// Like [`plan`], with only the variants named in `select` (all when empty; `--variant`).
-pub fn plan_variants(
-    loaded: &LoadedSpec,
-    max_trials: Option<usize>,
-    select: &[String],
-) -> anyhow::Result<Plan> {
-    let spec = &loaded.spec;
-    let origin = loaded.path.display().to_string();
-    if loaded.variants.is_empty() && !select.is_empty() {
-        return Err(user_error(format!(
-            "--variant {}: {origin} declares no variants; remove --variant",
-            select[0]
-        )));
-    }
-    for id in select {
-        if !loaded.variants.iter().any(|v| &v.id == id) {
-            let ids: Vec<&str> = loaded.variants.iter().map(|v| v.id.as_str()).collect();
-            let hint = crate::declared::suggest(id, ids.iter().copied())
-                .map(|s| format!("; did you mean `{s}`?"))
-                .unwrap_or_default();
-            return Err(user_error(format!(
-                "--variant {id}: {origin} has no such variant; its variants are {}{hint}",
-                ids.join(", ")
-            )));
-        }
-    }
-    let generated = loaded.variants.iter().filter(|v| v.generated).count();
-    if max_trials.is_some() && generated > crate::declared::grid::DEFAULT_MAX_VARIANTS {
-        // The position is read again from the file: the typed pipeline does not keep it.
-        let pos = std::fs::read_to_string(&loaded.path)
-            .ok()
-            .and_then(|t| crate::declared::locate(&t, &["variant_grid".to_string()]))
-            .map(|(l, c)| format!("{l}:{c}:"))
-            .unwrap_or_default();
-        return Err(user_error(format!(
-            "{origin}:{pos} variant_grid: {generated} variants, more than the confirmation limit of {}; \
-             rerun with --yes if this is intended, or add `sample: N` to try a random N of them",
-            crate::declared::grid::DEFAULT_MAX_VARIANTS
-        )));
-    }
-    let chosen: Vec<&LoadedVariant> =
-        loaded.variants.iter().filter(|v| select.is_empty() || select.contains(&v.id)).collect();
-    if let Some(limit) = max_trials {
-        // Counted from the spec, before any configuration is built or hashed, so an accidental
-        // huge grid is refused at once.
-        // A variant that differs from an earlier one only in report settings plans the same
-        // trials: counted once.
-        fn trial_set(v: &LoadedVariant) -> Vec<&String> {
-            let mut s: Vec<&String> =
-                v.set.iter().filter(|e| !crate::declared::is_report_setting(e)).collect();
-            s.sort();
-            s
-        }
-        let n: u128 = if chosen.is_empty() {
-            planned_trials(spec)
-        } else {
-            let mut seen = Vec::new();
-            chosen
-                .iter()
-                .filter(|v| {
-                    let s = trial_set(v);
-                    let new = !seen.contains(&s);
-                    seen.push(s);
-                    new
-                })
-                .map(|v| planned_trials(&v.spec))
-                .sum()
-        };
-        if n > limit as u128 {
-            return Err(too_many(&origin, n, limit));
-        }
-    }
-    let mut experiments = Vec::new();
-    let mut variants = Vec::new();
-    let mut warnings = Vec::new();
-    if chosen.is_empty() {
-        expand_all(spec, &origin, None, &mut experiments, &KeyMemo::default())?;
-    } else {
-        // The variants share most of their cells: each distinct cell's keys are computed once.
-        let memo = KeyMemo::shared();
-        // The pipeline as written, to tell which variants change nothing. A variant without a
-        // `set` is exactly that, so it is planned first and its keys reused (no second plan).
-        let mut chosen = chosen;
-        chosen.sort_by_key(|v| !v.set.is_empty());
-        let keys_of = |exps: &[Experiment]| -> std::collections::HashSet<Key> {
-            exps.iter().flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key))).collect()
-        };
-        let mut written: Option<std::collections::HashSet<Key>> = None;
-        let mut by_variant: Vec<(usize, Vec<Experiment>)> = Vec::new();
-        for v in &chosen {
-            if v.set.is_empty() && written.is_none() {
-                let mut mine = Vec::new();
-                expand_all(&v.spec, &format!("{origin} (variant {})", v.id), Some(&v.id), &mut mine, &memo)?;
-                written = Some(keys_of(&mine));
-                let at = loaded.variants.iter().position(|x| x.id == v.id).unwrap_or(0);
-                by_variant.push((at, mine));
-            }
-        }
-        let written = match written {
-            Some(w) => w,
-            None => {
-                let mut as_written = Vec::new();
-                expand_all(spec, &origin, None, &mut as_written, &memo)?;
-                keys_of(&as_written)
-            }
-        };
-        chosen.sort_by_key(|v| loaded.variants.iter().position(|x| x.id == v.id));
-        for v in chosen {
-            let origin = format!("{origin} (variant {})", v.id);
-            let first = experiments.len();
-            let at = loaded.variants.iter().position(|x| x.id == v.id).unwrap_or(0);
-            if let Some(i) = by_variant.iter().position(|(a, _)| *a == at) {
-                experiments.extend(by_variant.swap_remove(i).1);
-            } else {
-                expand_all(&v.spec, &origin, Some(&v.id), &mut experiments, &memo)?;
-            }
-            let changed = experiments[first..]
-                .iter()
-                .flat_map(|e| e.cells.iter().flat_map(|c| c.trials.iter()))
-                .any(|t| !written.contains(&t.key));
-            // A report setting changes what the trials count, not the trials: no warning for it.
-            if !changed && v.set.iter().any(|e| !crate::declared::is_report_setting(e)) {
-                warnings.push(format!(
-                    "variant `{}` changes no trial (its set gives the same configurations as the pipeline as written)",
-                    v.id
-                ));
-            }
-            variants.push(Variant {
-                id: v.id.clone(),
-                title: v.title.clone(),
-                description: v.description.clone(),
-                set: v.set.clone(),
-                seeds: v.spec.seeds.0.clone(),
-                generated: v.generated,
-                exploratory: v.exploratory,
-            });
-        }
-    }
-    let plan = Plan {
-        name: spec.name.clone(),
-        description: spec.description.clone(),
-        source: loaded.path.clone(),
-        reference_source: spec.reference_source.clone(),
-        seeds: spec.seeds.0.clone(),
-        variant_subset: !select.is_empty() && variants.len() < loaded.variants.len(),
-        // Over every variant, selected or not, so a variant's folder has the same columns however
-        // it was reported.
-        raced: if loaded.variants.is_empty() {
-            spec_races(spec)
-        } else {
-            loaded.variants.iter().any(|v| spec_races(&v.spec))
-        },
-        exploratory: spec.exploratory.clone(),
-        variant_count: loaded.variants.len(),
-        experiments,
-        variants,
-        warnings,
-    };
-    Ok(plan)
-}
-
 /// Expand every system of `spec`, tagging the experiments with `variant`.
-fn expand_all(
+pub(super) fn expand_all(
     spec: &PipelineSpec,
     origin: &str,
     variant: Option<&str>,
@@ -315,55 +144,6 @@ fn expand_all(
         e.variant = variant.map(str::to_string);
     }
     Ok(())
-}
-
-fn too_many(origin: &str, n: u128, limit: usize) -> anyhow::Error {
-    user_error(format!(
-        "{origin}: the plan has {n} trials, more than the confirmation limit of {limit}; \
-         rerun with --yes if this is intended, or shrink the grid or the seeds"
-    ))
-}
-
-/// Whether some experiment of `spec` races.
-fn spec_races(spec: &PipelineSpec) -> bool {
-    let mut races = spec.race.is_some();
-    each_system!(&spec.systems, |s| races |= s.experiments.iter().any(|e| e.race.is_some()));
-    races
-}
-
-/// Trials the spec expands to (cells × seeds; a raced experiment counted at `max_seeds`, the most
-/// its race can run), without building anything.
-fn planned_trials(spec: &PipelineSpec) -> u128 {
-    let seeds = spec.seeds.0.len() as u128;
-    let system = |experiments: Vec<(u128, Option<crate::declared::RaceSpec>)>| -> u128 {
-        experiments
-            .into_iter()
-            .map(|(cells, race)| {
-                cells * race.or(spec.race).map_or(seeds, |r| seeds.max(u128::from(r.max_seeds)))
-            })
-            .sum()
-    };
-    fn cells<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<(u128, Option<crate::declared::RaceSpec>)> {
-        s.experiments
-            .iter()
-            .map(|e| {
-                let n = e.axes.iter().map(|a| a.values.len() as u128).product::<u128>()
-                    * e.algorithms.len() as u128;
-                (n, e.race)
-            })
-            .collect()
-    }
-    // A `fresh:` block adds its seeds to one cell per heatmap (experiment × algorithm).
-    let heatmaps = |s: Vec<u128>| -> u128 { s.into_iter().sum() };
-    fn algorithms<M: SystemMarker>(s: &SystemSpec<M>) -> Vec<u128> {
-        s.experiments.iter().map(|e| e.algorithms.len() as u128).collect()
-    }
-    let (mut trials, mut maps) = (0, 0);
-    each_system!(&spec.systems, |s| {
-        trials += system(cells(s));
-        maps += heatmaps(algorithms(s));
-    });
-    trials + spec.fresh.map_or(0, |f| u128::from(f.seeds)) * maps
 }
 
 fn expand<M: Resolve>(
@@ -501,7 +281,8 @@ fn grid_points(lens: &[usize]) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::declared::load_str;
+    use crate::declared::{load_str, LoadedSpec};
+    use crate::plan::{plan, Plan};
 
     fn plan_of(text: &str) -> Plan {
         let spec = load_str(text, "test.yaml", &[]).unwrap();

@@ -29,7 +29,7 @@
 use crate::analysis::{best_cell, episodes_counted, welch, Candidate};
 use crate::cache::store::{KeySet, Store};
 use crate::cache::{Key, ENGINE_VERSION};
-use crate::plan::{Plan, PlannedTrial, TrialBrief};
+use crate::plan::{Experiment, Plan, PlannedTrial, TrialBrief};
 use qsweep_engine::{Algorithm, Outcome};
 use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
@@ -119,22 +119,6 @@ impl Plan {
 
 fn rounds_max(first: u32, batch: u32, max_seeds: u32) -> u32 {
     1 + max_seeds.saturating_sub(first).div_ceil(batch)
-}
-
-/// One heatmap's race while it is replayed.
-struct Heat {
-    exp: usize,
-    algorithm: Algorithm,
-    /// Indices of the heatmap's cells in the experiment.
-    cells: Vec<usize>,
-    /// Their canonical configurations (for the keys of extra seeds).
-    canonical: Vec<String>,
-    contender: Vec<bool>,
-    /// The first extra seed's number.
-    next_seed: u64,
-    first: u32,
-    rounds_done: u32,
-    finished: bool,
 }
 
 /// How a run has a plan it replays round by round back as planned for the next round: by undoing
@@ -234,14 +218,91 @@ pub fn replay<'p>(
     read: &mut ReadOutcomes,
 ) -> anyhow::Result<Replayed> {
     let mut out = plan.into().into_owned();
-    let mut heats: Vec<Heat> = Vec::new();
-    for (ei, e) in out.experiments.iter_mut().enumerate() {
-        if e.race.is_none() {
-            continue;
+    let mut heats = Heat::enter_all(&mut out);
+    // Every heatmap advances as far as the cache allows; they share one read per pass.
+    let mut known: HashMap<Key, TrialBrief> = HashMap::new();
+    loop {
+        let wanted = wanted(&heats, &out, cached, &known);
+        if !wanted.is_empty() {
+            let got = read(&wanted)?;
+            known.reserve(got.len());
+            known.extend(got);
         }
+        let mut advanced = false;
+        for h in heats.iter_mut().filter(|h| !h.finished) {
+            advanced |= h.advance(&mut out.experiments[h.exp], &known);
+        }
+        if !advanced {
+            break;
+        }
+    }
+    // The best cells are decided only once the races are: fresh seeds come last.
+    if out.has_fresh() {
+        crate::fresh::plan_fresh(&mut out, cached, &mut known, read)?;
+    }
+    let heats = heats.into_iter().map(|h| h.standing(&out, cached)).collect();
+    Ok(Replayed { plan: out, heats })
+}
+
+/// The cached trials of the unfinished races' contenders whose outcomes are not yet `known`.
+fn wanted(
+    heats: &[Heat],
+    plan: &Plan,
+    cached: &HashSet<Key>,
+    known: &HashMap<Key, TrialBrief>,
+) -> HashSet<Key> {
+    let mut wanted = HashSet::new();
+    for h in heats.iter().filter(|h| !h.finished) {
+        let e = &plan.experiments[h.exp];
+        let live = h.cells.iter().zip(&h.contender).filter(|(_, c)| **c);
+        for (&i, _) in live {
+            let keys = e.cells[i].trials.iter().map(|t| t.key);
+            wanted.extend(keys.filter(|key| cached.contains(key) && !known.contains_key(key)));
+        }
+    }
+    wanted
+}
+
+/// One heatmap's race while it is replayed.
+struct Heat {
+    /// Index of the experiment in the plan.
+    exp: usize,
+    /// The heatmap's algorithm.
+    algorithm: Algorithm,
+    /// Indices of the heatmap's cells in the experiment.
+    cells: Vec<usize>,
+    /// Their canonical configurations (for the keys of extra seeds).
+    canonical: Vec<String>,
+    /// Per cell, whether it is still in the race.
+    contender: Vec<bool>,
+    /// The first extra seed's number.
+    next_seed: u64,
+    /// Seeds of the first round.
+    first: u32,
+    /// Rounds decided.
+    rounds_done: u32,
+    /// The race is over.
+    finished: bool,
+}
+
+impl Heat {
+    /// Every heatmap of every raced experiment of `plan`, with each of its cells marked a contender.
+    fn enter_all(plan: &mut Plan) -> Vec<Heat> {
+        let mut heats = Vec::new();
+        for (ei, e) in plan.experiments.iter_mut().enumerate() {
+            if e.race.is_some() {
+                heats.extend(Self::enter(ei, e));
+            }
+        }
+        heats
+    }
+
+    /// The heatmaps of raced experiment `e` (index `ei`), one per algorithm, every cell a contender.
+    fn enter(ei: usize, e: &mut Experiment) -> Vec<Heat> {
         let first_seeds: Vec<u64> =
             e.cells.first().map(|c| c.trials.iter().map(|t| t.seed).collect()).unwrap_or_default();
         let next_seed = first_seeds.iter().max().map_or(0, |m| m + 1);
+        let mut heats = Vec::new();
         for &algorithm in &e.algorithms {
             let cells: Vec<usize> =
                 (0..e.cells.len()).filter(|&i| e.cells[i].algorithm == algorithm).collect();
@@ -263,108 +324,87 @@ pub fn replay<'p>(
                 finished: false,
             });
         }
+        heats
     }
-    // Every heatmap advances as far as the cache allows; they share one read per pass.
-    let mut known: HashMap<Key, TrialBrief> = HashMap::new();
-    loop {
-        let mut wanted = HashSet::new();
-        for h in heats.iter().filter(|h| !h.finished) {
-            let e = &out.experiments[h.exp];
-            let live = h.cells.iter().zip(&h.contender).filter(|(_, c)| **c);
-            for (&i, _) in live {
-                let keys = e.cells[i].trials.iter().map(|t| t.key);
-                wanted.extend(keys.filter(|key| cached.contains(key) && !known.contains_key(key)));
-            }
+
+    /// Decide the next round if every contender's trials are `known`, and plan the one after it
+    /// unless the race is over; whether a round was decided.
+    fn advance(&mut self, e: &mut Experiment, known: &HashMap<Key, TrialBrief>) -> bool {
+        let race = e.race.expect("raced experiment");
+        let Some(samples) = self.samples(e, known) else { return false };
+        let keep = decide(&samples, 1.0 - race.confidence.0);
+        for (k, &i) in self.cells.iter().enumerate() {
+            self.contender[k] = keep[k];
+            e.cells[i].contender = Some(keep[k]);
         }
-        if !wanted.is_empty() {
-            let got = read(&wanted)?;
-            known.reserve(got.len());
-            known.extend(got);
+        self.rounds_done += 1;
+        let left: Vec<usize> = (0..self.cells.len()).filter(|&k| self.contender[k]).collect();
+        let n_max = race.max_seeds as usize;
+        if left.len() <= 1 || left.iter().all(|&k| e.cells[self.cells[k]].trials.len() >= n_max) {
+            self.finished = true;
+        } else {
+            self.plan_round(e, &left, n_max, race.batch as usize);
         }
-        let mut advanced = false;
-        for h in heats.iter_mut().filter(|h| !h.finished) {
-            let e = &mut out.experiments[h.exp];
-            let race = e.race.expect("raced experiment");
-            // Each contender's sample, or nothing while one of its trials is missing.
-            let mut samples: Vec<Option<Sample>> = Vec::with_capacity(h.cells.len());
-            let mut complete = true;
-            for (k, &i) in h.cells.iter().enumerate() {
-                if !h.contender[k] {
-                    samples.push(None);
-                    continue;
-                }
-                let cell = &e.cells[i];
-                let (limits, counting) = (&cell.config.limits, e.counting);
-                let outcomes: Option<Vec<Outcome>> =
-                    cell.trials.iter().map(|t| known.get(&t.key).map(TrialBrief::outcome)).collect();
-                match outcomes {
-                    Some(os) => samples.push(Some(Sample {
-                        values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
-                        successes: os.iter().filter(|o| o.converged).count(),
-                    })),
-                    None => {
-                        complete = false;
-                        break;
-                    }
-                }
-            }
-            if !complete {
+        true
+    }
+
+    /// Each contender's sample (`None` for a cell out of the race), or nothing while one of its
+    /// trials is missing.
+    fn samples(&self, e: &Experiment, known: &HashMap<Key, TrialBrief>) -> Option<Vec<Option<Sample>>> {
+        let mut samples: Vec<Option<Sample>> = Vec::with_capacity(self.cells.len());
+        for (k, &i) in self.cells.iter().enumerate() {
+            if !self.contender[k] {
+                samples.push(None);
                 continue;
             }
-            let keep = decide(&samples, 1.0 - race.confidence.0);
-            for (k, &i) in h.cells.iter().enumerate() {
-                h.contender[k] = keep[k];
-                e.cells[i].contender = Some(keep[k]);
-            }
-            h.rounds_done += 1;
-            advanced = true;
-            let left: Vec<usize> = (0..h.cells.len()).filter(|&k| h.contender[k]).collect();
-            let n_max = race.max_seeds as usize;
-            if left.len() <= 1 || left.iter().all(|&k| e.cells[h.cells[k]].trials.len() >= n_max) {
-                h.finished = true;
-                continue;
-            }
-            for &k in &left {
-                let cell = &mut e.cells[h.cells[k]];
-                let have = cell.trials.len();
-                let add = (n_max - have).min(race.batch as usize);
-                let extra = (have - h.first as usize) as u64;
-                for j in 0..add as u64 {
-                    let seed = h.next_seed + extra + j;
-                    let key = Key::from_canonical(&h.canonical[k], seed, ENGINE_VERSION);
-                    cell.trials.push(PlannedTrial { seed, key });
-                }
+            let cell = &e.cells[i];
+            let (limits, counting) = (&cell.config.limits, e.counting);
+            let os: Vec<Outcome> = cell
+                .trials
+                .iter()
+                .map(|t| known.get(&t.key).map(TrialBrief::outcome))
+                .collect::<Option<_>>()?;
+            samples.push(Some(Sample {
+                values: os.iter().map(|o| f64::from(episodes_counted(o, limits, counting))).collect(),
+                successes: os.iter().filter(|o| o.converged).count(),
+            }));
+        }
+        Some(samples)
+    }
+
+    /// Give each contender in `left` up to `batch` more seeds, at most `n_max` in all.
+    fn plan_round(&self, e: &mut Experiment, left: &[usize], n_max: usize, batch: usize) {
+        for &k in left {
+            let cell = &mut e.cells[self.cells[k]];
+            let have = cell.trials.len();
+            let add = (n_max - have).min(batch);
+            let extra = (have - self.first as usize) as u64;
+            for j in 0..add as u64 {
+                let seed = self.next_seed + extra + j;
+                let key = Key::from_canonical(&self.canonical[k], seed, ENGINE_VERSION);
+                cell.trials.push(PlannedTrial { seed, key });
             }
         }
-        if !advanced {
-            break;
+    }
+
+    /// How the race stands in the replayed `plan`.
+    fn standing(self, plan: &Plan, cached: &HashSet<Key>) -> HeatRace {
+        let e = &plan.experiments[self.exp];
+        let race = e.race.expect("raced experiment");
+        let trials: Vec<&PlannedTrial> = self.cells.iter().flat_map(|&i| &e.cells[i].trials).collect();
+        HeatRace {
+            experiment: self.exp,
+            algorithm: self.algorithm,
+            cells: self.cells.len(),
+            rounds_done: self.rounds_done,
+            rounds_max: rounds_max(self.first, race.batch, race.max_seeds),
+            finished: self.finished,
+            contenders: self.contender.iter().filter(|&&c| c).count(),
+            trials: trials.len(),
+            cached: trials.iter().filter(|t| cached.contains(&t.key)).count(),
+            without_race: self.cells.len() * (race.max_seeds as usize).max(self.first as usize),
         }
     }
-    // The best cells are decided only once the races are: fresh seeds come last.
-    if out.has_fresh() {
-        crate::fresh::plan_fresh(&mut out, cached, &mut known, read)?;
-    }
-    let heats = heats
-        .into_iter()
-        .map(|h| {
-            let e = &out.experiments[h.exp];
-            let race = e.race.expect("raced experiment");
-            let trials: Vec<&PlannedTrial> = h.cells.iter().flat_map(|&i| &e.cells[i].trials).collect();
-            HeatRace {
-                experiment: h.exp,
-                algorithm: h.algorithm,
-                cells: h.cells.len(),
-                rounds_done: h.rounds_done,
-                rounds_max: rounds_max(h.first, race.batch, race.max_seeds),
-                finished: h.finished,
-                contenders: h.contender.iter().filter(|&&c| c).count(),
-                trials: trials.len(),
-                cached: trials.iter().filter(|t| cached.contains(&t.key)).count(),
-                without_race: h.cells.len() * (race.max_seeds as usize).max(h.first as usize),
-            }
-        })
-        .collect();
-    Ok(Replayed { plan: out, heats })
 }
 
 /// A contender's sample: the counted episodes of its trials and how many reached the goal.
@@ -403,179 +443,4 @@ pub fn decide(samples: &[Option<Sample>], level: f64) -> Vec<bool> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::declared::load_str;
-    use qsweep_engine::trial::StopReason;
-
-    fn sample(values: &[f64], cap: f64) -> Option<Sample> {
-        Some(Sample { values: values.to_vec(), successes: values.iter().filter(|&&v| v < cap).count() })
-    }
-
-    #[test]
-    fn a_clearly_worse_cell_leaves_and_the_best_and_ties_stay() {
-        let s = [
-            sample(&[5.0, 6.0, 4.0, 5.0], 30.0),
-            sample(&[30.0; 4], 30.0),            // censored everywhere: far worse
-            sample(&[5.0, 6.0, 4.0, 5.0], 30.0), // the same as the best: a tie
-            sample(&[6.0, 7.0, 5.0, 6.0], 30.0), // a little worse: not significantly at n = 4
-            None,                                // left in an earlier round: stays out
-        ];
-        assert_eq!(decide(&s, 0.05), vec![true, false, true, true, false]);
-        // Nothing is dropped at a confidence that demands more than 4 seeds can give.
-        assert_eq!(decide(&s[..4], 1e-12), vec![true, true, true, true]);
-    }
-
-    #[test]
-    fn holm_protects_the_family_of_a_round() {
-        // Each of these alone is worse at 5 % one-sided (p ≈ 0.03), but not after Holm over 3.
-        let best = [10.0, 11.0, 9.0, 10.0, 10.0];
-        let worse = [10.5, 12.5, 10.5, 11.5, 11.0];
-        let p = welch::welch_p_greater(&worse, &best);
-        assert!(p < 0.05 && p > 0.05 / 3.0, "{p}");
-        let s = [sample(&best, 1e9), sample(&worse, 1e9), sample(&worse, 1e9), sample(&worse, 1e9)];
-        assert_eq!(decide(&s, 0.05), vec![true; 4]);
-        assert_eq!(decide(&s[..2], 0.05), vec![true, false], "alone it leaves");
-    }
-
-    /// A plan of one raced heatmap of three cells, and outcomes made up per (cell, seed).
-    fn plan(race: &str) -> Plan {
-        let text = format!(
-            "name: t\nseeds: 3\nrace: {race}\nsystems:\n  cart-pole:\n    settings: {{ max_episodes: 50 }}\n    experiments:\n      - {{ id: a, repr: crisp, algorithms: [q0], vary: {{ actions: [2, 3, 4] }}, fixed: {{ x == x_dot == theta == theta_dot: 2 }} }}\n"
-        );
-        let spec = load_str(&text, "t.yaml", &[]).unwrap();
-        let loaded = crate::declared::LoadedSpec { spec, path: "t.yaml".into(), variants: Vec::new() };
-        crate::plan::plan(&loaded, None).unwrap()
-    }
-
-    fn outcome(episodes: u32) -> Outcome {
-        Outcome {
-            converged: episodes < 50,
-            episodes_to_goal: (episodes < 50).then_some(episodes),
-            episodes,
-            total_steps: 0,
-            stop: StopReason::Goal,
-            failure: None,
-            episode_lengths: Vec::new(),
-        }
-    }
-
-    /// Resolve against a cache that holds every planned trial the closure gives an outcome for,
-    /// running "trials" until the race is over; returns the rounds' trial counts and the outcomes.
-    /// Outcomes by key: a cache.
-    type Stored = HashMap<Key, Outcome>;
-
-    /// Read from `store`, as a replay reads a cache.
-    fn reader(store: &Stored) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<Vec<(Key, TrialBrief)>> + '_ {
-        |w| Ok(w.iter().map(|k| (*k, TrialBrief::from(&store[k]))).collect())
-    }
-
-    fn race_to_the_end(plan: &Plan, value: impl Fn(usize, u64) -> u32) -> (Replayed, Vec<usize>, Stored) {
-        let mut store: Stored = HashMap::new();
-        let mut per_round = Vec::new();
-        loop {
-            let cached: HashSet<Key> = store.keys().copied().collect();
-            let raced = replay(plan, &cached, &mut reader(&store)).unwrap();
-            let missing: Vec<(usize, u64, Key)> = raced.plan.experiments[0]
-                .cells
-                .iter()
-                .enumerate()
-                .flat_map(|(i, c)| c.trials.iter().map(move |t| (i, t.seed, t.key)))
-                .filter(|(_, _, k)| !cached.contains(k))
-                .collect();
-            if missing.is_empty() {
-                return (raced, per_round, store);
-            }
-            per_round.push(missing.len());
-            for (i, seed, key) in missing {
-                store.insert(key, outcome(value(i, seed)));
-            }
-        }
-    }
-
-    #[test]
-    fn a_worse_cell_leaves_after_round_0_and_a_tie_runs_to_max_seeds() {
-        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        // Cells 0 and 2 alternate 4 and 6 episodes (a tie); cell 1 always fails (50).
-        let (raced, rounds, _) =
-            race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
-        assert_eq!(rounds, vec![9, 4, 4, 2], "round 0: 3 cells × 3 seeds; then 2 contenders × 2, 2, 1 seeds");
-        let cells = &raced.plan.experiments[0].cells;
-        let n: Vec<usize> = cells.iter().map(|c| c.trials.len()).collect();
-        assert_eq!(n, vec![8, 3, 8]);
-        assert_eq!(
-            cells.iter().map(|c| c.contender).collect::<Vec<_>>(),
-            vec![Some(true), Some(false), Some(true)]
-        );
-        let seeds: Vec<u64> = cells[0].trials.iter().map(|t| t.seed).collect();
-        assert_eq!(seeds, (0..8).collect::<Vec<_>>(), "extra seeds continue the numbering");
-        let h = &raced.heats[0];
-        assert_eq!((h.rounds_done, h.rounds_max, h.finished, h.contenders), (4, 4, true, 2));
-        assert_eq!((h.trials, h.cached, h.without_race), (19, 19, 24));
-    }
-
-    /// Each cell's trials, race state and fresh trials.
-    type CellState = (Vec<PlannedTrial>, Option<bool>, Vec<PlannedTrial>);
-
-    fn cells(p: &Plan) -> Vec<CellState> {
-        p.experiments
-            .iter()
-            .flat_map(|e| &e.cells)
-            .map(|c| (c.trials.clone(), c.contender, c.fresh.clone()))
-            .collect()
-    }
-
-    #[test]
-    fn an_undone_replay_is_the_plan_as_planned() {
-        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        let (raced, _, store) =
-            race_to_the_end(&p, |i, seed| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 });
-        assert_ne!(cells(&raced.plan), cells(&p), "the replay added rounds and decided the race");
-        let cached: HashSet<Key> = store.keys().copied().collect();
-        // Replayed in place: the same replay, taken back to the plan as planned.
-        let (in_place, undo) = Unreplay::replay(p.clone(), false, &cached, &mut reader(&store)).unwrap();
-        assert!(undo.planned().is_none(), "no copy is kept");
-        assert_eq!(cells(&in_place.plan), cells(&raced.plan));
-        assert_eq!(cells(&undo.undo(in_place)), cells(&p));
-        // A copy replayed when asked: the plan as planned is kept beside it.
-        let (copied, kept) = Unreplay::replay(p.clone(), true, &cached, &mut reader(&store)).unwrap();
-        assert_eq!(kept.planned().map(cells), Some(cells(&p)));
-        assert_eq!(cells(&copied.plan), cells(&raced.plan));
-        assert_eq!(cells(&kept.undo(copied)), cells(&p));
-        // A plan whose cells already have fresh trials is not undone (a replay replaces them): a
-        // copy is replayed.
-        let mut with_fresh = p.clone();
-        with_fresh.experiments[0].fresh = Some(vec![100]);
-        with_fresh.experiments[0].cells[0].fresh = with_fresh.experiments[0].cells[1].trials.clone();
-        let (_, kept) = Unreplay::replay(with_fresh.clone(), false, &cached, &mut reader(&store)).unwrap();
-        assert_eq!(kept.planned().map(cells), Some(cells(&with_fresh)));
-    }
-
-    #[test]
-    fn raising_max_seeds_adds_rounds_and_keeps_the_earlier_ones() {
-        let value = |i: usize, seed: u64| if i == 1 { 50 } else { 4 + 2 * (seed % 2) as u32 };
-        let (short, _, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 5 }"), value);
-        let (long, _, _) = race_to_the_end(&plan("{ confidence: 0.95, batch: 2, max_seeds: 9 }"), value);
-        for (a, b) in short.plan.experiments[0].cells.iter().zip(&long.plan.experiments[0].cells) {
-            assert_eq!(a.trials[..], b.trials[..a.trials.len()], "the short race's trials are a prefix");
-        }
-        assert_eq!(long.plan.experiments[0].cells[0].trials.len(), 9);
-    }
-
-    #[test]
-    fn a_race_stops_where_the_cache_stops_and_plans_the_next_round() {
-        let p = plan("{ confidence: 0.95, batch: 2, max_seeds: 8 }");
-        let none = replay(&p, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
-        let h = &none.heats[0];
-        assert_eq!((h.rounds_done, h.finished, h.contenders, h.trials, h.cached), (0, false, 3, 9, 0));
-        assert!(none.plan.experiments[0]
-            .cells
-            .iter()
-            .all(|c| c.contender == Some(true) && c.trials.len() == 3));
-        // Without a race the plan comes back untouched.
-        let mut plain = p.clone();
-        plain.experiments[0].race = None;
-        let r = replay(&plain, &HashSet::new(), &mut |_| Ok(Vec::new())).unwrap();
-        assert!(r.heats.is_empty() && r.plan.experiments[0].cells.iter().all(|c| c.contender.is_none()));
-    }
-}
+mod tests;
