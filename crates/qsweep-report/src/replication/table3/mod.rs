@@ -201,3 +201,6 @@ pub fn addition(data: &ReportData, formats: Formats) -> Addition {
     added.markdown = joined(&Markdown);
     added
 }
+
+#[cfg(test)]
+mod tests;
