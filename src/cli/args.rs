@@ -6,8 +6,7 @@ use qsweep_engine::rules::{self, Real};
 
 /// A system name.
 pub fn system(s: &str) -> Result<SystemKind, String> {
-    SystemKind::parse(s)
-        .ok_or_else(|| format!("unknown system '{s}'; use ball-beam, cart-pole or mountain-car"))
+    SystemKind::parse(s).ok_or_else(|| format!("unknown system '{s}'; use {}", SystemKind::listed()))
 }
 
 /// A finite floating-point number.

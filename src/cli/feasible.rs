@@ -97,10 +97,8 @@ fn start_state(a: &FeasibleArgs, env: &EnvParams) -> anyhow::Result<State> {
 /// Run `qsweep feasible`.
 pub fn run(a: FeasibleArgs) -> anyhow::Result<u8> {
     let system = a.env;
-    if system == SystemKind::MountainCar {
-        return Err(user_error(
-            "--env: mountain-car is a goal-reaching task; the feasibility search is for survival tasks (cart-pole, ball-beam)",
-        ));
+    if !qsweep_engine::feasible::searchable(system) {
+        return Err(user_error(format!("--env: {}", qsweep_engine::feasible::not_searchable(system))));
     }
     let dim = system.dim();
     let resolution = match a.resolution.0[..] {

@@ -83,6 +83,22 @@ fn preference(system: SystemKind) -> Option<Preference> {
     }
 }
 
+/// Whether the feasibility search takes `system`: a survival task, whose controllers' action order
+/// it knows.
+pub fn searchable(system: SystemKind) -> bool {
+    preference(system).is_some()
+}
+
+/// Why the feasibility search does not take `system`, naming the systems it takes.
+pub fn not_searchable(system: SystemKind) -> String {
+    let taken: Vec<&str> =
+        SystemKind::ALL.into_iter().filter(|&s| searchable(s)).map(SystemKind::name).collect();
+    format!(
+        "{system} is a goal-reaching task; the feasibility search is for survival tasks ({})",
+        taken.join(", ")
+    )
+}
+
 /// Longest survival over all deterministic policies of `cfg`'s crisp table (its system, parameters,
 /// ranges, binning and action set) from `start`. `Err` for a goal-reaching system.
 pub fn search(
@@ -95,10 +111,7 @@ pub fn search(
     let crisp = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
     let actions = action_set(cfg.env.action_max(), cfg.actions);
     let Some(prefer) = preference(cfg.system()) else {
-        return Err(format!(
-            "{} is a goal-reaching task; the feasibility search is for survival tasks (cart-pole, ball-beam)",
-            cfg.system()
-        ));
+        return Err(not_searchable(cfg.system()));
     };
     Ok(with_env!(&cfg.env, |env: E| run(env, &crisp, &actions, start, max_steps, max_nodes, prefer)))
 }

@@ -14,7 +14,7 @@
 //! (`tests::a_trial_in_lockstep_is_the_trial_alone`).
 
 use super::config::{Algorithm, TrialConfig};
-use super::env::{with_env_type, Environment, SystemKind, Transition};
+use super::env::{with_env_type, FromParams, SystemKind, Transition};
 use super::repr::{Crisp, ReprKind};
 use super::trial::{run_trial, Outcome, TrialRun};
 
@@ -79,7 +79,7 @@ struct Lane<'c> {
     run: TrialRun<'c, Crisp>,
 }
 
-fn lockstep<'c, E: Environment>(
+fn lockstep<'c, E: FromParams>(
     mut next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     mut done: impl FnMut(usize, Outcome),
 ) {
@@ -118,7 +118,7 @@ fn lockstep<'c, E: Environment>(
 
 /// The next trial that needs a lane, with its system at the start of its first episode. A trial
 /// that stops before its first step, or is not a crisp trial of `E`, is settled here.
-fn start<'c, E: Environment>(
+fn start<'c, E: FromParams>(
     next: &mut impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     done: &mut impl FnMut(usize, Outcome),
 ) -> Option<(Lane<'c>, E)> {

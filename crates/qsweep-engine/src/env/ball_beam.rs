@@ -9,7 +9,6 @@
 //! sees only (x, ẋ).
 
 use super::environment::{scalar_params, Environment, State, TaskKind, Transition, LANES};
-use super::EnvParams;
 use serde::{Deserialize, Serialize};
 
 /// What a Ball-Beam action sets.
@@ -122,13 +121,6 @@ impl BallBeam {
 impl Environment for BallBeam {
     const DIM: usize = 2;
     const TASK: TaskKind = TaskKind::Survival;
-
-    fn from_params(params: &EnvParams) -> Option<Self> {
-        match params {
-            EnvParams::BallBeam(p) => Some(Self::new(p.clone())),
-            _ => None,
-        }
-    }
 
     fn reset(&mut self) {
         self.state = [self.p.start[0], self.p.start[1], 0.0, 0.0];

@@ -2,7 +2,6 @@
 //! CartPole-v1 step, with the paper's g = 9.81). Reward eq. (24): 0, or −1 on failure.
 
 use super::environment::{scalar_params, Environment, State, TaskKind, Transition, LANES};
-use super::EnvParams;
 use crate::math;
 use crate::rng::TrialRng;
 use serde::{Deserialize, Serialize};
@@ -93,13 +92,6 @@ impl CartPole {
 impl Environment for CartPole {
     const DIM: usize = 4;
     const TASK: TaskKind = TaskKind::Survival;
-
-    fn from_params(params: &EnvParams) -> Option<Self> {
-        match params {
-            EnvParams::CartPole(p) => Some(Self::new(p.clone())),
-            _ => None,
-        }
-    }
 
     fn reset(&mut self) {
         self.state = self.p.start;

@@ -1,7 +1,6 @@
 //! What a system is to the trial loop: the [`Environment`] trait, its state and the result of a
 //! step, and the macro that gives every parameter struct its `--param NAME=VALUE` names.
 
-use super::EnvParams;
 use crate::rng::TrialRng;
 use crate::simd::Simd;
 
@@ -35,10 +34,6 @@ pub trait Environment {
     const DIM: usize;
     /// Whether the task is survival or goal reaching.
     const TASK: TaskKind;
-    /// The system `params` describe, at its start state; `None` for another system's parameters.
-    fn from_params(params: &EnvParams) -> Option<Self>
-    where
-        Self: Sized;
     /// Return to the configured start state.
     fn reset(&mut self);
     /// Start an episode from Gymnasium's `reset()` distribution, drawn from `rng` (the fixed start

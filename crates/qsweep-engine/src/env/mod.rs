@@ -6,7 +6,9 @@
 //! them). A system may keep hidden state in the padding: Ball-Beam's beam angle under rate control.
 //!
 //! The rest of the engine reaches a system's concrete type only through `with_env_type!` (by
-//! [`SystemKind`]) and `with_env!` (by [`EnvParams`]), so the list of systems is written once.
+//! [`SystemKind`]) and `with_env!` (by [`EnvParams`], building the system through [`FromParams`],
+//! implemented here), so the list of systems is written here once, and a system's own file knows
+//! only itself.
 
 mod ball_beam;
 mod cart_pole;
@@ -90,6 +92,16 @@ impl SystemKind {
         Self::ALL.into_iter().find(|s| s.name() == name)
     }
 
+    /// The systems' names as a message lists them: `ball-beam, cart-pole or mountain-car`.
+    pub fn listed() -> String {
+        let names: Vec<&str> = Self::ALL.iter().map(|s| s.name()).collect();
+        match names.split_last() {
+            Some((last, [])) => last.to_string(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        }
+    }
+
     /// State variable names, in state-vector order.
     pub fn variables(self) -> &'static [&'static str] {
         match self {
@@ -167,13 +179,48 @@ macro_rules! with_env {
     ($params:expr, |$env:ident: $E:ident| $body:expr) => {{
         let params: &$crate::env::EnvParams = $params;
         $crate::env::with_env_type!(params.system(), $E => {
-            let $env = <$E as $crate::env::Environment>::from_params(params)
+            let $env = <$E as $crate::env::FromParams>::from_params(params)
                 .expect("parameters build their own system");
             $body
         })
     }};
 }
 pub(crate) use with_env;
+
+/// A system built from its tagged parameters, as [`with_env`] and the lockstep lanes build one.
+/// Implemented here, beside [`EnvParams`], so that a system's own file needs nothing of the enum
+/// that lists every system.
+pub trait FromParams: Environment + Sized {
+    /// The system `params` describe, at its start state; `None` for another system's parameters.
+    fn from_params(params: &EnvParams) -> Option<Self>;
+}
+
+impl FromParams for BallBeam {
+    fn from_params(params: &EnvParams) -> Option<Self> {
+        match params {
+            EnvParams::BallBeam(p) => Some(Self::new(p.clone())),
+            _ => None,
+        }
+    }
+}
+
+impl FromParams for CartPole {
+    fn from_params(params: &EnvParams) -> Option<Self> {
+        match params {
+            EnvParams::CartPole(p) => Some(Self::new(p.clone())),
+            _ => None,
+        }
+    }
+}
+
+impl FromParams for MountainCar {
+    fn from_params(params: &EnvParams) -> Option<Self> {
+        match params {
+            EnvParams::MountainCar(p) => Some(Self::new(p.clone())),
+            _ => None,
+        }
+    }
+}
 
 /// Physical parameters of one system, tagged by system.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

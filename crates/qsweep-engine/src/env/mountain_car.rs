@@ -3,7 +3,6 @@
 //! the left wall. Reward eq. (25): 1 (terminal) at the goal x ≥ goal, −1 otherwise.
 
 use super::environment::{scalar_params, Environment, State, TaskKind, Transition, LANES};
-use super::EnvParams;
 use crate::math;
 use crate::rng::TrialRng;
 use serde::{Deserialize, Serialize};
@@ -69,13 +68,6 @@ impl MountainCar {
 impl Environment for MountainCar {
     const DIM: usize = 2;
     const TASK: TaskKind = TaskKind::GoalReaching;
-
-    fn from_params(params: &EnvParams) -> Option<Self> {
-        match params {
-            EnvParams::MountainCar(p) => Some(Self::new(p.clone())),
-            _ => None,
-        }
-    }
 
     fn reset(&mut self) {
         self.state = [self.p.start[0], self.p.start[1], 0.0, 0.0];

@@ -84,10 +84,8 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
     // Typed parse of the text itself first, so every error has a position.
     let spec: PipelineSpec = typed(serde_yaml::Deserializer::from_str(text)).map_err(located)?;
     if spec.systems.kinds().is_empty() {
-        return Err(located(Failure::at(
-            &["systems"],
-            "the section is empty; add ball-beam, cart-pole or mountain-car",
-        )));
+        let msg = format!("the section is empty; add {}", qsweep_engine::env::SystemKind::listed());
+        return Err(located(Failure::at(&["systems"], &msg)));
     }
     if overrides.is_empty() {
         if let Err(p) = super::check::check_whole(&spec) {

@@ -4,11 +4,17 @@
 //! cell as the claims read it, and a Table III estimate's Kaplan–Meier median.
 
 use crate::derive::report_data::{seed_of, Estimate, ExpData, ReportData};
-use crate::replication::stats::claims::ClaimCell;
+use crate::replication::stats::claims::{ClaimCell, PAPER_SYSTEMS};
 use crate::replication::stats::consistency::{designated, in_contradiction, pairs, Published};
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::Algorithm;
 use qsweep_pipeline::plan::Plan;
+
+/// Whether `data` covers every system of the paper's study ([`PAPER_SYSTEMS`]).
+pub fn covers_the_paper(data: &ReportData) -> bool {
+    let systems = data.systems();
+    PAPER_SYSTEMS.iter().all(|s| systems.contains(s))
+}
 
 /// Whether any experiment of `data` carries published reference values.
 pub fn has_reference(data: &ReportData) -> bool {

@@ -6,7 +6,7 @@ use crate::memo::stats::StatsMemo;
 use crate::replication::compare::fit::{rows_of, Fit, RowFit};
 pub use crate::replication::compare::info::VariantInfo;
 use crate::replication::compare::ratios::ForestRow;
-use crate::replication::published::{claim_cells, has_reference};
+use crate::replication::published::{claim_cells, covers_the_paper, has_reference};
 use crate::replication::stats::claims::ClaimResult;
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::Algorithm;
@@ -96,7 +96,7 @@ impl<'p> VariantDigest<'p> {
             .collect();
         let rows = rows_of(data);
         // The claims speak of the paper's whole study: every system, with the published values.
-        let claims = if has_reference(data) && data.systems().len() == SystemKind::ALL.len() {
+        let claims = if has_reference(data) && covers_the_paper(data) {
             crate::replication::stats::claims::evaluate_memoized(memo, &claim_cells(data))
         } else {
             Vec::new()

@@ -10,6 +10,7 @@ mod statistic;
 
 pub use definitions::{
     result, Claim, ClaimCell, ClaimResult, ClaimVerdict, Side, CLAIMS, CLAIM_RESAMPLES, CLAIM_RULE,
+    PAPER_SYSTEMS,
 };
 
 use crate::memo::stats::{put_params, put_values, StatsMemo};

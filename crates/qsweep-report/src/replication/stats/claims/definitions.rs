@@ -5,6 +5,11 @@
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::Algorithm;
 
+/// The systems of the paper's study: its claims speak of these three, whatever other systems the
+/// engine runs.
+pub const PAPER_SYSTEMS: [SystemKind; 3] =
+    [SystemKind::BallBeam, SystemKind::CartPole, SystemKind::MountainCar];
+
 /// Bootstrap resamples per claim.
 pub const CLAIM_RESAMPLES: usize = 1000;
 

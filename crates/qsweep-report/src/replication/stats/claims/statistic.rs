@@ -2,7 +2,7 @@
 //! resample), each claim a method of [`Resample`], which holds what several claims share: each
 //! heatmap's best cell (Table III's rule) and its rank correlation of state count and mean.
 
-use super::definitions::{ClaimCell, View, CLAIMS};
+use super::definitions::{ClaimCell, View, CLAIMS, PAPER_SYSTEMS};
 use super::groups::Groups;
 use crate::derive::rank::{average_ranks, pearson, spearman};
 use qsweep_engine::env::SystemKind;
@@ -103,7 +103,7 @@ impl<'a> Resample<'a> {
     /// Per system, the share of paired cells where Q(λ) needs fewer episodes than Q(0) (ties
     /// count half); the smallest system's share.
     fn qlambda_beats_q0(&self) -> Option<f64> {
-        if self.g.algorithm_pairs.len() < SystemKind::ALL.len() {
+        if self.g.algorithm_pairs.len() < PAPER_SYSTEMS.len() {
             return None;
         }
         self.g
