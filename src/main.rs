@@ -12,6 +12,13 @@ fn main() -> ExitCode {
     match qsweep::cli::dispatch(cli) {
         Ok(code) => ExitCode::from(code),
         Err(err) => {
+            // Not an error: what was asked stopped early, and says what is left.
+            if let Some(stop) =
+                err.chain().find_map(|c| c.downcast_ref::<qsweep_pipeline::error::Interrupted>())
+            {
+                eprintln!("{stop}");
+                return ExitCode::from(qsweep_pipeline::error::exit::INTERRUPTED);
+            }
             eprintln!("error: {err}");
             for cause in err.chain().skip(1) {
                 eprintln!("  caused by: {cause}");

@@ -1,5 +1,5 @@
 //! `qsweep gc`: compact the cache and drop rows (and statistics' memos) no given pipeline
-//! references.
+//! references; the segments of runs still alive stay as they are (`qsweep_pipeline::cache::gc`).
 
 use super::pipeline_args::CacheArgs;
 use clap::Args;
@@ -55,12 +55,13 @@ pub fn run(a: GcArgs) -> anyhow::Result<u8> {
         )
     };
     println!(
-        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} duplicates dropped, {} stale temp files, {} dead runs' leases, {} statistics' memos and trial parts; {sizes}",
+        "{}{} segments → {}, {} rows kept, {} removed (no given pipeline references them), {} rows kept: written by a live run, {} duplicates dropped, {} stale temp files, {} dead runs' leases, {} statistics' memos and trial parts; {sizes}",
         if a.dry_run { "dry run: " } else { "" },
         r.segments_before,
         r.segments_after,
         r.rows_kept,
         r.rows_removed,
+        r.rows_live,
         r.duplicates,
         r.stale_temps,
         r.stale_leases,

@@ -3,10 +3,15 @@
 //! It never replaces a report with one lacking trials of its own plan when the kept one holds
 //! more (a fresh clone's empty cache would otherwise overwrite the committed report) unless told
 //! to with `--force`, and never creates the cache.
+//!
+//! Ctrl-C or SIGTERM stops it before its next file and exits 130; every file is written
+//! atomically and a folder's memo comes after its files, so the next report completes the folder.
 
 use super::pipeline_args::{print_report, warn_quarantined, PipelineArgs, ReportFlags};
 use clap::Args;
 use qsweep_pipeline::error::exit;
+use qsweep_pipeline::exec::INTERRUPTED;
+use std::sync::atomic::Ordering;
 
 /// Arguments of `qsweep report`.
 #[derive(Debug, Args)]
@@ -30,6 +35,7 @@ pub struct ReportArgs {
 /// Run `qsweep report`.
 pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
     let start = std::time::Instant::now();
+    install_ctrlc();
     let plan = a.pipeline.plan()?;
     let pipeline = plan.name.clone();
     let store = a.pipeline.cache.required_store()?;
@@ -58,4 +64,15 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
         print_report(&outcome, &opts);
     }
     Ok(exit::OK)
+}
+
+/// Ctrl-C or SIGTERM stops the report before its next file (`Folder::put` checks); a second one
+/// exits at once (every file written so far is whole).
+fn install_ctrlc() {
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(i32::from(exit::INTERRUPTED));
+        }
+        eprintln!("\ninterrupted (Ctrl-C or SIGTERM): stopping before the next file; press Ctrl-C again to stop now");
+    });
 }

@@ -24,9 +24,9 @@ fn the_guide_table_lists_exactly_the_exit_constants() {
     assert_eq!(readme_codes(), constants);
 }
 
-/// One invocation per (subcommand, code) that applies. 130 (interrupted) applies to `run` only and
-/// needs a signal mid-run: `pipeline::ctrl_c_flushes_finished_trials_exits_130_…` and
-/// `pipeline::sigterm_…` cover it.
+/// One invocation per (subcommand, code) that applies. 130 (interrupted) applies to `run` and
+/// `report` and needs a signal mid-way: `pipeline::ctrl_c_flushes_finished_trials_exits_130_…`,
+/// `pipeline::sigterm_…` and `gc_beside::ctrl_c_stops_a_report_…` cover it.
 #[test]
 fn every_subcommand_exits_with_the_documented_codes() {
     let ok = i32::from(exit::OK);

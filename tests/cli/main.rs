@@ -12,6 +12,7 @@ mod feasible;
 mod figure_text;
 mod forest;
 mod fresh;
+mod gc_beside;
 mod heatmap_blocks;
 mod helpers;
 mod hostile_text;

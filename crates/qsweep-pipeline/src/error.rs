@@ -19,6 +19,11 @@ pub fn user_error(msg: impl Into<String>) -> anyhow::Error {
     UserError::new(msg).into()
 }
 
+/// A command stopped by Ctrl-C or SIGTERM before it was done, saying what is left: exit 130.
+#[derive(Debug, Error)]
+#[error("interrupted (Ctrl-C or SIGTERM): {0}")]
+pub struct Interrupted(pub String);
+
 /// Exit codes, as documented in docs/commands.md.
 pub mod exit {
     /// Success.
@@ -27,6 +32,7 @@ pub mod exit {
     pub const FAILURE: u8 = 1;
     /// Bad input: arguments or pipeline file.
     pub const USAGE: u8 = 2;
-    /// Interrupted by Ctrl-C (after flushing finished trials).
+    /// Interrupted by Ctrl-C or SIGTERM (a run after flushing finished trials, a report before
+    /// its next file).
     pub const INTERRUPTED: u8 = 130;
 }

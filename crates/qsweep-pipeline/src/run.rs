@@ -129,8 +129,11 @@ pub fn run_trials_replayed(
     opts: &ExecOptions,
     reporter: &mut dyn crate::exec::Reporter,
 ) -> anyhow::Result<(RunSummary, AfterRun)> {
+    // A run on a shared cache names its segments after its mark, so `gc` leaves them alone.
+    let ours = opts.leases.as_ref().map(|l| store.clone().writing_as(l.run_mark()));
+    let writer = ours.as_ref().unwrap_or(store);
     let flush = |batch: &[crate::cache::TrialRecord]| {
-        store.write_segment(batch)?;
+        writer.write_segment(batch)?;
         Ok(())
     };
     if !plan.is_staged() {

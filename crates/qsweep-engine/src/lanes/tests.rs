@@ -1,6 +1,6 @@
 use super::*;
-use crate::env::Environment;
 use crate::config::{Algorithm, Success, TieBreak, TraceKind, Truncation};
+use crate::env::Environment;
 use crate::env::{MountainCar, StartKind};
 use crate::repr::Binning;
 

@@ -123,6 +123,12 @@ fn open_reader(path: &Path) -> anyhow::Result<ParquetRecordBatchReaderBuilder<Fi
     Ok(builder)
 }
 
+/// Whether the segment at `path` has every column of [`schema`] (none of [`LATER_COLUMNS`]
+/// missing): `gc` rewrites one that has not.
+pub(super) fn in_current_layout(path: &Path) -> bool {
+    open_reader(path).is_ok_and(|b| LATER_COLUMNS.iter().all(|c| b.schema().index_of(c).is_ok()))
+}
+
 pub(super) fn read_keys(path: &Path) -> anyhow::Result<Vec<Key>> {
     let builder = open_reader(path)?;
     let idx = builder.schema().index_of("key")?;

@@ -4,11 +4,22 @@
 //! place, so a trial is stored exactly when its row is in a renamed `seg-*.parquet`. Nothing is ever
 //! rewritten in place; several processes may append at once (segment names are unique), and a trial
 //! stored twice is identical by determinism, so duplicates are dropped on read. Reading which keys
-//! exist reads only the `key` column.
+//! exist reads only the `key` column. A segment written by a run (`qsweep run`) names it:
+//! `seg-<hash>.<run>.parquet`, where `<run>` is the run's mark in `_runs/`
+//! ([`super::leases::runs`]), so that `qsweep gc` leaves a live run's rows alone.
 //!
 //! A segment that cannot be read (truncated, garbage, wrong schema) is reported as damaged and its
 //! rows are treated as missing, so they are recomputed rather than served.
 //! How a row is encoded and decoded is [`super::rows`].
+//!
+//! Segments do go away: `qsweep gc` replaces many by few (writing the new ones before removing the
+//! old, [`super::gc`]) and `qsweep verify` moves damaged ones aside. A reader that listed a segment
+//! which is gone when it opens it ([`Vanished`]) lists the segments again and reads again, from
+//! the segments the cache holds now (at most [`RELISTS`] times: only a gc that replaced segments
+//! in between makes it read again, and a gc with nothing to change replaces none). It costs
+//! nothing until it happens; then one more listing and read of every segment's keys and of the
+//! rows wanted. No lock is taken, so the rule holds for any store that can list and read files
+//! (a bucket too: a listed object that is gone reads as "not found").
 
 use super::key::Key;
 use super::record::TrialRecord;
@@ -82,10 +93,62 @@ impl KeySet {
     }
 }
 
+/// How many times a reader lists the segments again when one it listed was removed meanwhile
+/// (see the module documentation); past that it fails, naming the cache.
+pub const RELISTS: usize = 8;
+
+/// A segment listed by a reader was gone when the reader opened it: compacted by `qsweep gc` or
+/// moved aside by `qsweep verify` since the listing. The reader lists the segments again.
+#[derive(Debug, thiserror::Error)]
+#[error("cache segment {} was removed while it was being read (compacted by `qsweep gc`)", .0.display())]
+pub struct Vanished(pub PathBuf);
+
+/// `error`, met reading the segment at `path`, as [`Vanished`] when the segment is gone.
+pub(super) fn vanished_or(path: &Path, error: anyhow::Error) -> anyhow::Error {
+    if std::fs::symlink_metadata(path).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound) {
+        Vanished(path.to_path_buf()).into()
+    } else {
+        error
+    }
+}
+
+/// Whether `error` says that a listed segment vanished.
+pub fn is_vanished(error: &anyhow::Error) -> bool {
+    error.chain().any(|c| c.is::<Vanished>())
+}
+
+/// Run `read` (which lists the segments itself) until it does not meet a [`Vanished`] segment,
+/// at most [`RELISTS`] times more.
+pub(super) fn relisting<T>(dir: &Path, mut read: impl FnMut() -> anyhow::Result<T>) -> anyhow::Result<T> {
+    for _ in 0..RELISTS {
+        match read() {
+            Err(e) if is_vanished(&e) => continue,
+            other => return other,
+        }
+    }
+    read().map_err(|e| {
+        e.context(format!(
+            "cannot read the cache {}: its segments were replaced {RELISTS} times while it was read \
+             (`qsweep gc` in a loop?)",
+            dir.display()
+        ))
+    })
+}
+
+/// The run that wrote the segment at `path`, as its name says (`seg-<hash>.<run>.parquet`);
+/// `None` for a segment written by anything else (`gc`, an older qsweep, a library user).
+pub fn writer_of(path: &Path) -> Option<&str> {
+    let name = path.file_name()?.to_str()?;
+    let stem = name.strip_prefix(SEGMENT_PREFIX)?.strip_suffix(".parquet")?;
+    stem.split_once('.').map(|(_, run)| run).filter(|run| !run.is_empty())
+}
+
 /// A cache directory.
 #[derive(Debug, Clone)]
 pub struct Store {
     dir: PathBuf,
+    /// The run whose segments this store writes ([`Store::writing_as`]).
+    writer: Option<String>,
 }
 
 impl Store {
@@ -95,7 +158,14 @@ impl Store {
         if !std::fs::metadata(dir)?.is_dir() {
             return Err(std::io::Error::other("not a directory"));
         }
-        Ok(Self { dir: dir.to_path_buf() })
+        Ok(Self { dir: dir.to_path_buf(), writer: None })
+    }
+
+    /// This store, writing segments named for the run `writer` (its mark in `_runs/`,
+    /// [`super::leases::runs::RunMark::name`]): `qsweep gc` leaves them alone while it lives.
+    pub fn writing_as(mut self, writer: &str) -> Self {
+        self.writer = Some(writer.to_string());
+        self
     }
 
     /// The cache directory.
@@ -124,26 +194,30 @@ impl Store {
     /// Append `records` as one new segment (temp file + fsync + rename); returns its path.
     pub fn write_segment(&self, records: &[TrialRecord]) -> anyhow::Result<PathBuf> {
         anyhow::ensure!(!records.is_empty(), "refusing to write an empty segment");
-        let path = self.dir.join(segment_name(records));
+        let path = self.dir.join(segment_name(records, self.writer.as_deref()));
         to_parquet(&to_batch(records)?)
             .and_then(|bytes| write_atomic(&path, &bytes))
             .map_err(|e| e.context(format!("cannot write cache segment in {}", self.dir.display())))?;
         Ok(path)
     }
 
-    /// Every stored key, reading only the `key` column of each segment.
+    /// Every stored key, reading only the `key` column of each segment (listed again when one
+    /// vanishes meanwhile: see the module documentation).
     pub fn keys(&self) -> anyhow::Result<KeySet> {
-        let mut scan = KeySet::default();
-        for path in self.segments()? {
-            match read_keys(&path) {
-                Ok(keys) => {
-                    scan.keys.extend(keys.iter().copied());
-                    scan.segments.push((path, keys));
+        relisting(&self.dir, || {
+            let mut scan = KeySet::default();
+            for path in self.segments()? {
+                match read_keys(&path).map_err(|e| vanished_or(&path, e)) {
+                    Ok(keys) => {
+                        scan.keys.extend(keys.iter().copied());
+                        scan.segments.push((path, keys));
+                    }
+                    Err(e) if is_vanished(&e) => return Err(e),
+                    Err(e) => scan.damaged.push(Damaged { path, error: format!("{e:#}") }),
                 }
-                Err(e) => scan.damaged.push(Damaged { path, error: format!("{e:#}") }),
             }
-        }
-        Ok(scan)
+            Ok(scan)
+        })
     }
 
     /// The outcomes of the `wanted` keys, one per key (the first segment holding it wins), reading
@@ -161,6 +235,9 @@ impl Store {
 
     /// [`Store::read_outcomes`], each outcome mapped by `f` as its segment is decoded (a caller
     /// that keeps a little of each holds no full outcome of every key at once), in segment order.
+    /// A segment of `scan` that is gone (gc compacted it since) makes the read start again from
+    /// the segments the cache holds now; it fails only if a row of `wanted` that `scan` found is
+    /// no longer stored at all (gc given other pipelines removed it).
     pub fn read_outcomes_as<T: Send>(
         &self,
         scan: &KeySet,
@@ -168,21 +245,21 @@ impl Store {
         lengths: bool,
         f: impl Fn(Key, StoredTrial) -> T + Sync,
     ) -> anyhow::Result<Vec<T>> {
-        use rayon::prelude::*;
-        let work = scan.rows_to_read(wanted);
-        let parts: Vec<Vec<T>> = work
-            .par_iter()
-            .map(|(path, rows)| {
-                read_outcome_rows(path, rows, lengths)
-                    .map(|got| got.into_iter().map(|(k, s)| f(k, s)).collect())
-                    .map_err(|e| e.context(format!("cannot read cache segment {}", path.display())))
-            })
-            .collect::<anyhow::Result<_>>()?;
-        let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
-        for p in parts {
-            out.extend(p);
+        match read_outcomes_of(scan, wanted, lengths, &f) {
+            Err(e) if is_vanished(&e) => {}
+            done => return done,
         }
-        Ok(out)
+        relisting(&self.dir, || {
+            let now = self.keys()?;
+            let gone = scan.keys.iter().filter(|k| wanted.contains(k) && !now.keys.contains(k)).count();
+            anyhow::ensure!(
+                gone == 0,
+                "{gone} trials read from the cache {} were removed from it while they were read (by \
+                 `qsweep gc` given other pipelines): run the command again",
+                self.dir.display()
+            );
+            read_outcomes_of(&now, wanted, lengths, &f)
+        })
     }
 
     /// The stored records whose key is in `wanted`, one per key (duplicates dropped), in segment
@@ -197,22 +274,57 @@ impl Store {
     }
 
     fn read_filtered(&self, keep: impl Fn(&Key) -> bool) -> anyhow::Result<Vec<TrialRecord>> {
-        let mut seen = HashSet::new();
-        let mut out = Vec::new();
-        for path in self.segments()? {
-            let Ok(records) = read_segment(&path, &|k| keep(k) && !seen.contains(k)) else { continue };
-            for r in records {
-                if seen.insert(r.key) {
-                    out.push(r);
+        relisting(&self.dir, || {
+            let mut seen = HashSet::new();
+            let mut out = Vec::new();
+            for path in self.segments()? {
+                let records = match read_segment(&path, &|k| keep(k) && !seen.contains(k)) {
+                    Ok(records) => records,
+                    Err(e) => match vanished_or(&path, e) {
+                        e if is_vanished(&e) => return Err(e),
+                        _ => continue,
+                    },
+                };
+                for r in records {
+                    if seen.insert(r.key) {
+                        out.push(r);
+                    }
                 }
             }
-        }
-        Ok(out)
+            Ok(out)
+        })
     }
 }
 
-/// A name no other writer picks: a hash of the batch's keys, the process and the time.
-fn segment_name(records: &[TrialRecord]) -> String {
+/// The outcomes of the `wanted` keys at the rows `scan` found ([`Store::read_outcomes_as`]);
+/// [`Vanished`] when a segment of `scan` is gone.
+fn read_outcomes_of<T: Send>(
+    scan: &KeySet,
+    wanted: &HashSet<Key>,
+    lengths: bool,
+    f: &(impl Fn(Key, StoredTrial) -> T + Sync),
+) -> anyhow::Result<Vec<T>> {
+    use rayon::prelude::*;
+    let work = scan.rows_to_read(wanted);
+    let parts: Vec<Vec<T>> = work
+        .par_iter()
+        .map(|(path, rows)| {
+            read_outcome_rows(path, rows, lengths)
+                .map(|got| got.into_iter().map(|(k, s)| f(k, s)).collect())
+                .map_err(|e| vanished_or(path, e))
+                .map_err(|e| e.context(format!("cannot read cache segment {}", path.display())))
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+    for p in parts {
+        out.extend(p);
+    }
+    Ok(out)
+}
+
+/// A name no other writer picks: a hash of the batch's keys, the process and the time, then the
+/// run that writes it, if any ([`writer_of`]).
+fn segment_name(records: &[TrialRecord], writer: Option<&str>) -> String {
     let mut h = blake3::Hasher::new();
     for r in records {
         h.update(&r.key.0);
@@ -221,7 +333,11 @@ fn segment_name(records: &[TrialRecord]) -> String {
     let nanos =
         std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
     h.update(&nanos.to_le_bytes());
-    format!("{SEGMENT_PREFIX}{}.parquet", &h.finalize().to_hex()[..32])
+    let hash = h.finalize().to_hex();
+    match writer {
+        Some(run) => format!("{SEGMENT_PREFIX}{}.{run}.parquet", &hash[..32]),
+        None => format!("{SEGMENT_PREFIX}{}.parquet", &hash[..32]),
+    }
 }
 
 #[cfg(test)]
@@ -361,7 +477,7 @@ mod tests {
         }
         assert_eq!(again.column_by_name("cpu_seconds").unwrap().null_count(), 30);
         // Its outcomes read through the report's projected read too.
-        let store = Store { dir: path.parent().unwrap().to_path_buf() };
+        let store = Store { dir: path.parent().unwrap().to_path_buf(), writer: None };
         let scan = KeySet {
             segments: vec![(path.clone(), recs.iter().map(|r| r.key).collect())],
             ..KeySet::default()

@@ -16,7 +16,7 @@
 use super::key::{Key, ENGINE_VERSION};
 use super::record::TrialRecord;
 use super::rows::read_segment;
-use super::store::{Damaged, Store};
+use super::store::{is_vanished, relisting, vanished_or, Damaged, Store};
 use qsweep_engine::{run_trial, Outcome, TrialConfig};
 use rayon::prelude::*;
 use std::collections::HashSet;
@@ -86,36 +86,8 @@ impl Store {
     /// trials are recomputed when there are at most `n`.
     pub fn recompute(&self, n: usize, seed: u64) -> anyhow::Result<RecomputeReport> {
         let mut report = RecomputeReport::default();
-        let (mut current, mut other) = (HashSet::new(), HashSet::new());
-        let mut intact = Vec::new();
-        for path in self.segments()? {
-            let Ok(records) = read_segment(&path, &|_| true) else { continue };
-            for r in &records {
-                if r.engine_version == ENGINE_VERSION {
-                    current.insert(r.key);
-                } else {
-                    other.insert(r.key);
-                }
-            }
-            intact.push(path);
-        }
-        report.eligible = current.len();
-        report.other_engine = other.len();
-        // A partial Fisher–Yates shuffle of the sorted keys by the trial random stream: the same
-        // sample for the same seed and cache contents on every machine.
-        let mut keys: Vec<Key> = current.into_iter().collect();
-        keys.sort_unstable();
-        let take = n.min(keys.len());
-        let mut rng = qsweep_engine::rng::TrialRng::new(seed);
-        for i in 0..take {
-            let j = i + rng.below(keys.len() - i);
-            keys.swap(i, j);
-        }
-        let sample: HashSet<Key> = keys[..take].iter().copied().collect();
-        let mut rows: Vec<TrialRecord> = Vec::with_capacity(take);
-        for path in &intact {
-            rows.extend(read_segment(path, &|k| sample.contains(k))?);
-        }
+        // Listed again if gc replaces a segment meanwhile (see `store`).
+        let mut rows = relisting(self.dir(), || self.draw(n, seed, &mut report))?;
         rows.sort_by_key(|r| r.key);
         // One recomputation per trial, compared with each of its stored rows.
         let trials: Vec<&[TrialRecord]> = rows.chunk_by(|a, b| a.key == b.key).collect();
@@ -149,31 +121,75 @@ impl Store {
         Ok(report)
     }
 
-    /// Read every segment in full and re-hash every row's configuration.
-    pub fn verify(&self) -> anyhow::Result<VerifyReport> {
-        let mut report = VerifyReport::default();
-        let mut keys = std::collections::HashSet::new();
+    /// The rows of `n` trials of this engine version drawn at random (see [`Self::recompute`]),
+    /// the population counted into `report`.
+    fn draw(&self, n: usize, seed: u64, report: &mut RecomputeReport) -> anyhow::Result<Vec<TrialRecord>> {
+        let (mut current, mut other) = (HashSet::new(), HashSet::new());
+        let mut intact = Vec::new();
         for path in self.segments()? {
-            report.segments += 1;
-            match read_segment(&path, &|_| true) {
-                Ok(records) => {
-                    let bad = records.iter().position(|r| {
-                        let canonical = r.config_json();
-                        Key::from_canonical(&canonical, r.seed, r.engine_version) != r.key
-                    });
-                    if let Some(i) = bad {
-                        let error = format!("row {i}: the stored configuration does not hash to its key");
-                        report.damaged.push(Damaged { path, error });
-                    } else {
-                        report.rows += records.len();
-                        keys.extend(records.iter().map(|r| r.key));
-                    }
+            let records = match read_segment(&path, &|_| true).map_err(|e| vanished_or(&path, e)) {
+                Ok(records) => records,
+                Err(e) if is_vanished(&e) => return Err(e),
+                Err(_) => continue,
+            };
+            for r in &records {
+                if r.engine_version == ENGINE_VERSION {
+                    current.insert(r.key);
+                } else {
+                    other.insert(r.key);
                 }
-                Err(e) => report.damaged.push(Damaged { path, error: format!("{e:#}") }),
             }
+            intact.push(path);
         }
-        report.distinct = keys.len();
-        Ok(report)
+        report.eligible = current.len();
+        report.other_engine = other.len();
+        // A partial Fisher–Yates shuffle of the sorted keys by the trial random stream: the same
+        // sample for the same seed and cache contents on every machine.
+        let mut keys: Vec<Key> = current.into_iter().collect();
+        keys.sort_unstable();
+        let take = n.min(keys.len());
+        let mut rng = qsweep_engine::rng::TrialRng::new(seed);
+        for i in 0..take {
+            let j = i + rng.below(keys.len() - i);
+            keys.swap(i, j);
+        }
+        let sample: HashSet<Key> = keys[..take].iter().copied().collect();
+        let mut rows: Vec<TrialRecord> = Vec::with_capacity(take);
+        for path in &intact {
+            rows.extend(read_segment(path, &|k| sample.contains(k)).map_err(|e| vanished_or(path, e))?);
+        }
+        Ok(rows)
+    }
+
+    /// Read every segment in full and re-hash every row's configuration; listed again if gc
+    /// replaces a segment meanwhile (a segment gone is not damage).
+    pub fn verify(&self) -> anyhow::Result<VerifyReport> {
+        relisting(self.dir(), || {
+            let mut report = VerifyReport::default();
+            let mut keys = std::collections::HashSet::new();
+            for path in self.segments()? {
+                report.segments += 1;
+                match read_segment(&path, &|_| true).map_err(|e| vanished_or(&path, e)) {
+                    Ok(records) => {
+                        let bad = records.iter().position(|r| {
+                            let canonical = r.config_json();
+                            Key::from_canonical(&canonical, r.seed, r.engine_version) != r.key
+                        });
+                        if let Some(i) = bad {
+                            let error = format!("row {i}: the stored configuration does not hash to its key");
+                            report.damaged.push(Damaged { path, error });
+                        } else {
+                            report.rows += records.len();
+                            keys.extend(records.iter().map(|r| r.key));
+                        }
+                    }
+                    Err(e) if is_vanished(&e) => return Err(e),
+                    Err(e) => report.damaged.push(Damaged { path, error: format!("{e:#}") }),
+                }
+            }
+            report.distinct = keys.len();
+            Ok(report)
+        })
     }
 
     /// Move a damaged segment into the quarantine folder; returns where it went.

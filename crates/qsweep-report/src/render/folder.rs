@@ -9,6 +9,7 @@ use crate::render::addition::Addition;
 use crate::render::{curves, datasets, figures, html, markdown};
 use anyhow::Context;
 use qsweep_pipeline::atomic::write_if_changed;
+use qsweep_pipeline::error::Interrupted;
 use std::path::{Path, PathBuf};
 
 /// What a report wrote.
@@ -96,8 +97,18 @@ impl<'d> Folder<'d> {
     }
 
     /// Write `name` (relative to the folder), unless it already holds these bytes (then it is
-    /// left alone, its mtime kept); either way it is one of the folder's files.
+    /// left alone, its mtime kept); either way it is one of the folder's files. After Ctrl-C or
+    /// SIGTERM it writes nothing and fails ([`Interrupted`]): the folder's memo and manifest come
+    /// after its files, so the next report sees it incomplete and writes it again.
     pub fn put(&mut self, name: &str, bytes: &[u8]) -> anyhow::Result<()> {
+        if qsweep_pipeline::exec::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) {
+            let at = self.dir.join(name);
+            return Err(Interrupted(format!(
+                "stopped before {}: that report is not complete; the next report completes it",
+                at.display()
+            ))
+            .into());
+        }
         write_if_changed(&self.dir.join(name), bytes)?;
         self.files.push(PathBuf::from(name));
         Ok(())

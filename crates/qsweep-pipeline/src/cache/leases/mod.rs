@@ -16,10 +16,14 @@
 //! removed and taken by whoever meets it next. Older builds ignore the folder, and the segments
 //! stay the only truth: a trial stored twice (only possible where neither layer can see a live
 //! holder) is identical and dropped on read. `docs/sharing-a-cache.md` is the user's account.
+//!
+//! A run also keeps a mark in the cache for its whole life ([`runs`]), which its segments name,
+//! so that `qsweep gc` never removes the rows of a run that is still alive.
 
 mod batch;
 pub mod lease;
 pub mod lock;
+pub mod runs;
 mod seen;
 
 use self::batch::Batch;
@@ -99,6 +103,8 @@ fn inspect(path: &Path, me: &Holder) -> std::io::Result<(File, Liveness)> {
 pub struct Leases {
     dir: PathBuf,
     me: Holder,
+    /// The run's mark, which its segments carry ([`runs`]).
+    mark: runs::RunMark,
     /// Each leased key's file; the keys of one batch share one file (one lock, one heartbeat),
     /// closed, and so unlocked, once the last of them is released.
     held: Mutex<HashMap<Key, Arc<File>>>,
@@ -106,13 +112,14 @@ pub struct Leases {
 }
 
 impl Leases {
-    /// The leases of a run on `store` (creating the leases folder).
+    /// The leases of a run on `store` (creating the leases folder), and the run's mark.
     pub fn open(store: &Store) -> std::io::Result<Arc<Self>> {
         let dir = store.dir().join(LEASES_DIR);
         std::fs::create_dir_all(&dir)?;
         Ok(Arc::new(Self {
             dir,
             me: Holder::me(),
+            mark: runs::RunMark::register(store)?,
             held: Mutex::new(HashMap::new()),
             seen: Mutex::new(Seen::from_scan(store.dir(), &KeySet::default(), false)),
         }))
@@ -127,6 +134,12 @@ impl Leases {
 
     fn path(&self, key: &Key) -> PathBuf {
         self.dir.join(key.hex())
+    }
+
+    /// The run's mark: the segments it writes carry it ([`Store::writing_as`]), and `qsweep gc`
+    /// leaves them alone while the run lives.
+    pub fn run_mark(&self) -> &str {
+        self.mark.name()
     }
 
     /// Lease `key`: [`Take::Taken`] when this run now holds it, [`Take::Busy`] when a live holder
