@@ -105,9 +105,25 @@ pub fn to_batch(records: &[TrialRecord]) -> anyhow::Result<RecordBatch> {
     columns(records).into_batch()
 }
 
+/// The Arrow schema metadata entry that marks a segment of a program pipeline's rows
+/// (`crate::program`), its value the rows' schema id. Such a segment has its own typed columns;
+/// what the store reads of every segment, the `key` column, it shares with the engine's.
+pub const PROGRAM_ROWS: &str = "qsweep.program_rows";
+
+/// Whether the segment `builder` reads is a program pipeline's ([`PROGRAM_ROWS`]).
+fn is_program_segment(builder: &ParquetRecordBatchReaderBuilder<File>) -> bool {
+    builder.schema().metadata().contains_key(PROGRAM_ROWS)
+}
+
 fn open_reader(path: &Path) -> anyhow::Result<ParquetRecordBatchReaderBuilder<File>> {
     let file = File::open(path)?;
     let builder = ParquetRecordBatchReaderBuilder::try_new(file)?;
+    check_engine_schema(&builder)?;
+    Ok(builder)
+}
+
+/// That an engine segment has every column of [`schema`] with its type.
+fn check_engine_schema(builder: &ParquetRecordBatchReaderBuilder<File>) -> anyhow::Result<()> {
     let expected = schema();
     let found = builder.schema();
     for f in expected.fields() {
@@ -120,7 +136,7 @@ fn open_reader(path: &Path) -> anyhow::Result<ParquetRecordBatchReaderBuilder<Fi
             Err(_) => anyhow::bail!("column `{}` is missing (not a qsweep segment?)", f.name()),
         }
     }
-    Ok(builder)
+    Ok(())
 }
 
 /// Whether the segment at `path` has every column of [`schema`] (none of [`LATER_COLUMNS`]
@@ -129,8 +145,13 @@ pub(super) fn in_current_layout(path: &Path) -> bool {
     open_reader(path).is_ok_and(|b| LATER_COLUMNS.iter().all(|c| b.schema().index_of(c).is_ok()))
 }
 
-pub(super) fn read_keys(path: &Path) -> anyhow::Result<Vec<Key>> {
-    let builder = open_reader(path)?;
+/// The keys of a segment, in row order: an engine segment's schema is checked whole (a segment
+/// that is not one is damaged), a program pipeline's ([`PROGRAM_ROWS`]) only for its `key` column.
+pub(crate) fn read_keys(path: &Path) -> anyhow::Result<Vec<Key>> {
+    let builder = ParquetRecordBatchReaderBuilder::try_new(File::open(path)?)?;
+    if !is_program_segment(&builder) {
+        check_engine_schema(&builder)?;
+    }
     let idx = builder.schema().index_of("key")?;
     let mask = ProjectionMask::roots(builder.parquet_schema(), [idx]);
     let mut out = Vec::new();

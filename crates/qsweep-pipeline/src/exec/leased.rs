@@ -11,7 +11,6 @@
 //! aside, a killed run's is taken over). Batches shrink with the trials left, so at the end a
 //! run holds no more than it is about to start and the runs sharing a cache finish together.
 
-use super::job::Job;
 use crate::cache::leases::{lock_ok, Leases, Take};
 use crate::cache::Key;
 use std::collections::VecDeque;
@@ -68,9 +67,11 @@ struct Waiting {
     last_poll: Option<Instant>,
 }
 
-/// Hands out the jobs of one execution, longest first, leasing each when the run has leases.
+/// Hands out the jobs of one execution (by index into their keys), longest first, leasing each
+/// when the run has leases. It knows only the jobs' keys, so engine trials and program trials
+/// (`crate::program`) share it.
 pub struct Scheduler<'a> {
-    jobs: &'a [Job<'a>],
+    keys: Vec<Key>,
     order: Vec<usize>,
     next: AtomicUsize,
     threads: usize,
@@ -85,10 +86,11 @@ pub struct Scheduler<'a> {
 }
 
 impl<'a> Scheduler<'a> {
-    /// Jobs in `order` for `threads` workers, leased through `leases` if given.
-    pub fn new(jobs: &'a [Job<'a>], order: Vec<usize>, threads: usize, leases: Option<&'a Leases>) -> Self {
+    /// The jobs with these `keys`, in `order`, for `threads` workers, leased through `leases` if
+    /// given.
+    pub fn new(keys: Vec<Key>, order: Vec<usize>, threads: usize, leases: Option<&'a Leases>) -> Self {
         Self {
-            jobs,
+            keys,
             order,
             next: AtomicUsize::new(0),
             threads,
@@ -131,7 +133,7 @@ impl<'a> Scheduler<'a> {
             if batch.is_empty() {
                 break;
             }
-            let keys: Vec<Key> = batch.iter().map(|&j| self.jobs[j].key).collect();
+            let keys: Vec<Key> = batch.iter().map(|&j| self.keys[j]).collect();
             let mut mine = Vec::with_capacity(batch.len());
             for (&j, take) in batch.iter().zip(leases.try_take_batch(&keys)) {
                 match take {
@@ -173,7 +175,7 @@ impl<'a> Scheduler<'a> {
         w.last_poll = Some(Instant::now());
         // Every free one is leased in one batch: a dead run may have held a whole batch, and its
         // trials go to this run's free workers together, not one per look.
-        let keys: Vec<Key> = w.jobs.iter().map(|&j| self.jobs[j].key).collect();
+        let keys: Vec<Key> = w.jobs.iter().map(|&j| self.keys[j]).collect();
         let mut mine = Vec::new();
         let mut still = Vec::with_capacity(w.jobs.len());
         for (&j, take) in w.jobs.iter().zip(leases.try_take_batch(&keys)) {
@@ -206,6 +208,7 @@ impl<'a> Scheduler<'a> {
 mod tests {
     use super::*;
     use crate::cache::{Store, TrialRecord};
+    use crate::exec::Job;
     use qsweep_engine::env::SystemKind;
     use qsweep_engine::repr::ReprKind;
     use qsweep_engine::{run_trial, Algorithm, TrialConfig};
@@ -232,8 +235,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let store = Store::open(dir.path()).unwrap();
         let (la, lb) = (Leases::open(&store).unwrap(), Leases::open(&store).unwrap());
-        let a = Scheduler::new(&jobs, (0..64).collect(), 1, Some(&la));
-        let b = Scheduler::new(&jobs, (0..64).collect(), 1, Some(&lb));
+        let a = Scheduler::new(jobs.iter().map(|j| j.key).collect(), (0..64).collect(), 1, Some(&la));
+        let b = Scheduler::new(jobs.iter().map(|j| j.key).collect(), (0..64).collect(), 1, Some(&lb));
         // Run a starts one trial and holds the rest of its batch, not yet started.
         assert_eq!(a.pick(), Pick::Run(0));
         let batch = batch_len(64, 1);

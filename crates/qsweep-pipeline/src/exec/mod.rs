@@ -232,7 +232,7 @@ pub fn execute(
     let threads = opts.jobs.max(1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let leases = opts.leases.as_deref();
-    let sched = Scheduler::new(jobs, order, threads, leases);
+    let sched = Scheduler::new(jobs.iter().map(|j| j.key).collect(), order, threads, leases);
     let stop = AtomicBool::new(false);
     let lockstep = opts.lockstep;
     let (tx, rx) = mpsc::channel::<TrialRecord>();
