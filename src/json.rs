@@ -1,5 +1,5 @@
-//! The `--json` outputs of `run`, `report`, `status`, `trial`, `bench` and `feasible`: one struct per format, each with
-//! a `format_version`.
+//! The `--json` outputs of `run`, `report`, `status` (an engine's or a program's pipeline), `trial`, `bench` and
+//! `feasible`: one struct per format, each with a `format_version`.
 //!
 //! Like cargo-nextest's machine-readable formats, a format's version is bumped only on an
 //! incompatible change (a field removed, renamed or given another type or meaning); new fields may
@@ -30,6 +30,11 @@ pub struct RunSummary {
     pub elsewhere: usize,
     /// Executed trials that diverged (stored with their reason; the run exits 1).
     pub failed: usize,
+    /// A program pipeline's trials that did not finish (timed out or killed: nothing stored, they
+    /// run next time; the run exits 1); absent for the engine's pipelines. An addition, not a new
+    /// version.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unfinished: Option<usize>,
     /// The run was stopped by Ctrl-C or SIGTERM (it exits 130).
     pub interrupted: bool,
     /// Wall-clock seconds of the run.
@@ -205,6 +210,59 @@ pub struct StatusExperiment {
     /// Of those, in the cache.
     pub cached: usize,
     /// Of those, not in the cache.
+    pub missing: usize,
+}
+
+/// `qsweep status --json` on a program pipeline (docs/programs.md): its distinct trials, stored
+/// (succeeded or failed) and missing, overall and per experiment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProgramStatusReport {
+    /// Version of this format ([`ProgramStatusReport::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Pipeline name.
+    pub pipeline: String,
+    /// The folder of the cache that holds this pipeline's rows (`<cache>/_programs/<schema-id>`).
+    pub folder: String,
+    /// Distinct trials of the plan.
+    pub trials: usize,
+    /// Of those, stored (succeeded or failed: a run does not run them again).
+    pub cached: usize,
+    /// Of the stored, failed (`qsweep run --retry-failed` runs them again).
+    pub failed: usize,
+    /// Of the trials, not stored.
+    pub missing: usize,
+    /// Of the missing, being computed now by another run on the cache (a live lease).
+    pub running_elsewhere: usize,
+    /// One entry per experiment (of each variant), in plan order.
+    pub experiments: Vec<ProgramStatusExperiment>,
+    /// Segments of the folder that cannot be read (their trials count as missing).
+    pub damaged_segments: usize,
+    /// When the folder holds no rows: the schema ids of the other program folders that do.
+    pub other_schemas: Vec<String>,
+}
+
+impl ProgramStatusReport {
+    /// The current version of the format.
+    pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// One experiment of [`ProgramStatusReport`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProgramStatusExperiment {
+    /// The variant's id; only for pipelines that declare `variants:`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
+    /// Experiment id.
+    pub experiment: String,
+    /// Cells of the experiment.
+    pub cells: usize,
+    /// Distinct trials of the experiment.
+    pub trials: usize,
+    /// Of those, stored.
+    pub cached: usize,
+    /// Of the stored, failed.
+    pub failed: usize,
+    /// Of those, not stored.
     pub missing: usize,
 }
 

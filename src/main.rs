@@ -8,6 +8,16 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // A program's supervisor starts once per trial: straight to it, without building the whole
+    // command line parser (`qsweep __supervise -- PROGRAM [ARGS…]`, qsweep's own use only).
+    let mut args = std::env::args_os().skip(1);
+    if args.next().is_some_and(|a| a == "__supervise") {
+        let mut argv: Vec<std::ffi::OsString> = args.collect();
+        if argv.first().is_some_and(|a| a == "--") {
+            argv.remove(0);
+        }
+        qsweep_pipeline::program::supervise::supervise(&argv);
+    }
     let cli = qsweep::cli::parse();
     match qsweep::cli::dispatch(cli) {
         Ok(code) => ExitCode::from(code),

@@ -5,12 +5,14 @@ mod bench;
 mod feasible;
 mod gc;
 mod pipeline_args;
+mod program;
 mod progress;
 mod report;
 mod run;
 mod simulate;
 mod slurm;
 mod status;
+mod supervise;
 mod trial;
 mod trial_args;
 mod trial_config;
@@ -58,6 +60,9 @@ pub enum Command {
     Gc(gc::GcArgs),
     /// Print a script that submits a pipeline to Slurm: a job array of shards, then a report job.
     Slurm(slurm::SlurmArgs),
+    /// Run a program as qsweep's child, its process group dying with qsweep (qsweep's own).
+    #[command(name = "__supervise", hide = true)]
+    Supervise(supervise::SuperviseArgs),
 }
 
 /// The guide chapter of each subcommand: its long help (`--help`) ends with "Guide: CHAPTER",
@@ -101,9 +106,14 @@ pub fn parse() -> Cli {
     <Cli as clap::FromArgMatches>::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
-/// Run a parsed command line; returns the process exit code.
+/// Run a parsed command line; returns the process exit code. A pipeline that declares
+/// `program:` goes to [`program`] (its commands' own file), every other to the command's file.
 pub fn dispatch(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
+        Command::Run(a) if program::is_program(&a.pipeline) => program::run(a),
+        Command::Status(a) if program::is_program(&a.pipeline) => program::status(a),
+        Command::Report(a) if program::is_program(&a.pipeline) => program::report(a),
+        Command::Slurm(a) if program::is_program(&a.pipeline) => program::slurm(a),
         Command::Bench(a) => bench::run(a),
         Command::Feasible(a) => feasible::run(a),
         Command::Simulate(a) => simulate::run(a),
@@ -114,5 +124,6 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         Command::Verify(a) => verify::run(a),
         Command::Gc(a) => gc::run(a),
         Command::Slurm(a) => slurm::run(a),
+        Command::Supervise(a) => supervise::run(a),
     }
 }

@@ -68,7 +68,7 @@ pub fn run(a: ReportArgs) -> anyhow::Result<u8> {
 
 /// Ctrl-C or SIGTERM stops the report before its next file (`Folder::put` checks); a second one
 /// exits at once (every file written so far is whole).
-fn install_ctrlc() {
+pub(super) fn install_ctrlc() {
     let _ = ctrlc::set_handler(|| {
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(i32::from(exit::INTERRUPTED));

@@ -19,6 +19,9 @@ pub struct RunArgs {
     /// Run every trial again, even those already cached.
     #[arg(long)]
     pub force: bool,
+    /// Run again the trials stored as failed (a program pipeline's: docs/programs.md).
+    #[arg(long)]
+    pub retry_failed: bool,
     /// Run only shard I of N (1 ≤ I ≤ N, as `sbatch --array=1-N` numbers tasks): a deterministic,
     /// cost-balanced split of the plan's trials, so shards on several machines sharing one cache
     /// run every trial exactly once. Cached trials are skipped as usual.
@@ -45,10 +48,16 @@ pub struct RunArgs {
 
 /// Run `qsweep run`.
 pub fn run(a: RunArgs) -> anyhow::Result<u8> {
+    if a.retry_failed {
+        return Err(qsweep_pipeline::error::user_error(
+            "--retry-failed is for program pipelines (docs/programs.md): an engine trial that diverged is a \
+             result, stored as such; run it again with --force",
+        ));
+    }
     let start = Instant::now();
     let plan = a.pipeline.plan()?;
     let store = a.pipeline.cache.writable_store()?;
-    install_ctrlc();
+    install_ctrlc("finishing running ones");
     let scan = qsweep_pipeline::run::scan(&store)?;
     warn_quarantined(&scan);
     let opts = ExecOptions {
@@ -66,29 +75,18 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
         qsweep_pipeline::run::run_trials_replayed(plan, &store, &scan.stored, sel, &opts, reporter)?;
     let report = &done.exec;
     let seconds = start.elapsed().as_secs_f64();
-    if a.json {
-        let v = crate::json::RunSummary {
-            format_version: crate::json::RunSummary::FORMAT_VERSION,
-            pipeline: name,
-            executed: report.executed,
-            cached: done.cached,
-            elsewhere: report.elsewhere,
-            failed: report.failed,
-            interrupted: report.interrupted,
-            seconds,
-        };
-        println!("{}", serde_json::to_string(&v)?);
-    } else if !a.quiet {
-        // Appended, so scripts that read the line's start (scripts/slurm/test.sh) still can.
-        let elsewhere = match report.elsewhere {
-            0 => String::new(),
-            n => format!("; {n} computed meanwhile by another run on this cache"),
-        };
-        println!(
-            "executed {}, cached {}, failed {} in {:.1} s{elsewhere}",
-            report.executed, done.cached, report.failed, seconds
-        );
-    }
+    let v = crate::json::RunSummary {
+        format_version: crate::json::RunSummary::FORMAT_VERSION,
+        pipeline: name,
+        executed: report.executed,
+        cached: done.cached,
+        elsewhere: report.elsewhere,
+        failed: report.failed,
+        unfinished: None,
+        interrupted: report.interrupted,
+        seconds,
+    };
+    print_summary(&v, a.json, a.quiet)?;
     if report.interrupted {
         if !a.quiet {
             eprintln!("interrupted: {} finished trials are stored; run again to continue", report.executed);
@@ -126,8 +124,27 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     Ok(qsweep_pipeline::error::exit::OK)
 }
 
+/// A run's summary: as JSON (`--json`), or one line (`executed N, cached M, failed F in S s`,
+/// what another run computed meanwhile appended, so scripts that read the line's start, such as
+/// scripts/slurm/test.sh, still can), or nothing (`--quiet`). The engine's and program pipelines'.
+pub(super) fn print_summary(v: &crate::json::RunSummary, json: bool, quiet: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(v)?);
+    } else if !quiet {
+        let elsewhere = match v.elsewhere {
+            0 => String::new(),
+            n => format!("; {n} computed meanwhile by another run on this cache"),
+        };
+        println!(
+            "executed {}, cached {}, failed {} in {:.1} s{elsewhere}",
+            v.executed, v.cached, v.failed, v.seconds
+        );
+    }
+    Ok(())
+}
+
 /// This run's leases on the cache, released at once by Ctrl-C / SIGTERM.
-fn leases(
+pub(super) fn leases(
     store: &qsweep_pipeline::cache::Store,
 ) -> anyhow::Result<std::sync::Arc<qsweep_pipeline::cache::leases::Leases>> {
     let dir = store.dir().join(qsweep_pipeline::cache::leases::LEASES_DIR);
@@ -137,14 +154,16 @@ fn leases(
     Ok(leases)
 }
 
-fn install_ctrlc() {
+/// Ctrl-C or SIGTERM stops the run: finished trials are stored, and the running ones are let
+/// finish (`running`: what happens to them, as the message says).
+pub(super) fn install_ctrlc(running: &'static str) {
     // A second Ctrl-C exits at once; finished trials are already in renamed segments.
-    let _ = ctrlc::set_handler(|| {
+    let _ = ctrlc::set_handler(move || {
         // Other runs on the cache may take this run's unfinished trials now.
         qsweep_pipeline::cache::leases::release_registered();
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(i32::from(qsweep_pipeline::error::exit::INTERRUPTED));
         }
-        eprintln!("\ninterrupted (Ctrl-C or SIGTERM): storing finished trials, finishing running ones; press Ctrl-C again to stop now");
+        eprintln!("\ninterrupted (Ctrl-C or SIGTERM): storing finished trials, {running}; press Ctrl-C again to stop now");
     });
 }

@@ -59,6 +59,38 @@ pub struct SlurmArgs {
 pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     // Plan now, so a broken pipeline fails here rather than in N jobs on the cluster.
     let plan = a.pipeline.plan()?;
+    let report_dir = a.out.clone().unwrap_or_else(|| qsweep_report::default_dir(&plan));
+    let submission = submission(&a, &plan.name, (report_dir, "index.html"), plan.stages_max())?;
+    let script = submission.render()?;
+    print!("{script}");
+
+    let unique = qsweep_pipeline::exec::jobs(&plan);
+    let cached: HashSet<_> = match a.pipeline.cache.existing_store()? {
+        Some(store) => store.keys()?.keys,
+        None => HashSet::new(),
+    };
+    let per_shard = qsweep_pipeline::run::shard_counts(&plan, &unique, &cached, a.array);
+    print_split(&plan.name, unique.len(), &per_shard, a.array);
+    if submission.rounds > 1 {
+        eprintln!(
+            "staged plan: up to {} stages (race rounds, fresh seeds), one job array each, each after the one \
+             before (afterany); the counts above are the first stage's (each later one is planned from the \
+             outcomes of the stages before)",
+            submission.rounds
+        );
+    }
+    Ok(qsweep_pipeline::error::exit::OK)
+}
+
+/// The submission of pipeline `name` as `a` asks, its report into `report.0` (its page
+/// `report.1`), in `rounds` chained arrays (the engine's and a program's pipelines alike).
+pub(super) fn submission(
+    a: &SlurmArgs,
+    name: &str,
+    report: (PathBuf, &str),
+    rounds: u32,
+) -> anyhow::Result<Submission> {
+    let (report_dir, report_page) = report;
     let workdir = std::env::current_dir()?;
     let abs = |p: &Path| -> anyhow::Result<PathBuf> { Ok(std::path::absolute(p)?) };
     let qsweep = match &a.qsweep {
@@ -70,8 +102,8 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
                 .to_string()
         }
     };
-    let submission = Submission {
-        pipeline_name: plan.name.clone(),
+    Ok(Submission {
+        pipeline_name: name.to_string(),
         generated_by: std::env::args_os()
             .map(|w| qsweep_pipeline::slurm::quote(&w.to_string_lossy()))
             .collect::<Vec<_>>()
@@ -82,29 +114,31 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
         variants: a.pipeline.variant.clone(),
         yes: a.pipeline.yes,
         cache: abs(&a.pipeline.cache.dir())?,
-        report_dir: abs(&a.out.clone().unwrap_or_else(|| qsweep_report::default_dir(&plan)))?,
+        report_dir: abs(&report_dir)?,
+        report_page: report_page.to_string(),
         tasks: a.array,
         max_running: a.max_running,
         cpus_per_task: a.cpus_per_task,
-        partition: a.partition,
-        time: a.time,
-        mem: a.mem,
-        account: a.account,
-        job_name: a.job_name.unwrap_or_else(|| format!("qsweep-{}", plan.name)),
+        partition: a.partition.clone(),
+        time: a.time.clone(),
+        mem: a.mem.clone(),
+        account: a.account.clone(),
+        job_name: a.job_name.clone().unwrap_or_else(|| format!("qsweep-{name}")),
         log_dir: abs(&a.log_dir)?,
-        sbatch_args: a.sbatch_arg,
-        rounds: plan.stages_max(),
+        sbatch_args: a.sbatch_arg.clone(),
+        rounds,
         workdir,
-    };
-    let script = submission.render()?;
-    print!("{script}");
+    })
+}
 
-    let unique = qsweep_pipeline::exec::jobs(&plan);
-    let cached: HashSet<_> = match a.pipeline.cache.existing_store()? {
-        Some(store) => store.keys()?.keys,
-        None => HashSet::new(),
-    };
-    let per_shard = qsweep_pipeline::run::shard_counts(&plan, &unique, &cached, a.array);
+/// The split's summary on stderr: `distinct` trials of pipeline `name` in `tasks` shards
+/// (`per_shard`), with warnings for idle tasks and Slurm's array limit.
+pub(super) fn print_split(
+    name: &str,
+    distinct: usize,
+    per_shard: &[qsweep_pipeline::run::ShardCount],
+    tasks: u32,
+) {
     let sizes = |f: fn(&qsweep_pipeline::run::ShardCount) -> usize| {
         let v: Vec<usize> = per_shard.iter().map(f).collect();
         (v.iter().min().copied().unwrap_or(0), v.iter().max().copied().unwrap_or(0))
@@ -112,33 +146,19 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<u8> {
     let ((lo, hi), (mlo, mhi)) = (sizes(|p| p.trials), sizes(|p| p.missing));
     let missing: usize = per_shard.iter().map(|p| p.missing).sum();
     eprintln!(
-        "pipeline '{}': {} distinct trials ({missing} not cached) in {} shards of {lo}-{hi} trials \
-         ({mlo}-{mhi} to run)",
-        plan.name,
-        unique.len(),
-        a.array
+        "pipeline '{name}': {distinct} distinct trials ({missing} not cached) in {tasks} shards of {lo}-{hi} trials \
+         ({mlo}-{mhi} to run)"
     );
-    if submission.rounds > 1 {
+    if tasks as usize > distinct {
         eprintln!(
-            "staged plan: up to {} stages (race rounds, fresh seeds), one job array each, each after the one \
-             before (afterany); the counts above are the first stage's (each later one is planned from the \
-             outcomes of the stages before)",
-            submission.rounds
+            "warning: {tasks} tasks for {distinct} trials: {} tasks will have nothing to run",
+            tasks as usize - distinct
         );
     }
-    if a.array as usize > unique.len() {
-        eprintln!(
-            "warning: {} tasks for {} trials: {} tasks will have nothing to run",
-            a.array,
-            unique.len(),
-            a.array as usize - unique.len()
-        );
-    }
-    if a.array > 1000 {
+    if tasks > 1000 {
         eprintln!(
             "warning: Slurm's default MaxArraySize (1001) allows at most 1000 tasks; \
              check `scontrol show config | grep MaxArraySize`"
         );
     }
-    Ok(qsweep_pipeline::error::exit::OK)
 }

@@ -1,5 +1,7 @@
-//! `qsweep verify`: read every cache segment in full, like `git fsck`; move damaged ones aside;
-//! with `--recompute N`, run N stored trials again and compare their outcomes with the rows.
+//! `qsweep verify`: read every cache segment in full, like `git fsck` (the engine's and the
+//! program folders'); move damaged ones aside; with `--recompute N`, run N stored trials again and
+//! compare their outcomes with the rows (a program pipeline's, given as `PIPELINE`, in fresh
+//! processes of its program).
 
 use super::pipeline_args::CacheArgs;
 use clap::Args;
@@ -12,6 +14,10 @@ use std::path::{Path, PathBuf};
 /// Arguments of `qsweep verify`.
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
+    /// A program pipeline whose stored trials `--recompute` reruns (its command and inputs are
+    /// needed); without one, `--recompute` reruns the engine's trials.
+    #[arg(value_name = "PIPELINE")]
+    pub pipeline: Option<PathBuf>,
     #[command(flatten)]
     pub cache: CacheArgs,
     /// Only report damage; leave damaged segments where they are.
@@ -34,8 +40,26 @@ pub struct VerifyArgs {
 /// Run `qsweep verify`: exit 0 when every segment is intact, 1 when damage was found, 2 when the
 /// cache does not exist.
 pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
+    let program = match &a.pipeline {
+        Some(p) if !p.is_file() => {
+            return Err(qsweep_pipeline::error::user_error(format!(
+                "pipeline {} does not exist; give the program pipeline whose trials --recompute reruns",
+                p.display()
+            )))
+        }
+        Some(p) if super::program::is_program_file(p) => Some(p.clone()),
+        Some(p) => {
+            return Err(qsweep_pipeline::error::user_error(format!(
+            "{} is not a program pipeline (it declares no `program:`): `qsweep verify --recompute N` draws \
+                 the engine's trials from the whole cache; leave the pipeline out",
+            p.display()
+        )))
+        }
+        None => None,
+    };
     let store = a.cache.required_store()?;
     let mut ok = check_segments(&store, a.no_quarantine)?;
+    ok &= check_program_folders(&store, a.no_quarantine)?;
     // The statistics' memos: a damaged one loses nothing (the next report recomputes it), but it
     // is damage all the same, like a damaged segment.
     ok &= check_stats_memos(&store);
@@ -44,8 +68,10 @@ pub fn run(a: VerifyArgs) -> anyhow::Result<u8> {
     if reports.is_dir() {
         ok &= check_report_memos(&reports);
     }
-    if let Some(n) = a.recompute {
-        ok &= recompute(&store, n, a.seed)?;
+    match (a.recompute, &program) {
+        (Some(n), Some(p)) => ok &= super::program::recompute(p, &a.cache, n, a.seed)?,
+        (Some(n), None) => ok &= recompute(&store, n, a.seed)?,
+        (None, _) => {}
     }
     Ok(if ok { exit::OK } else { exit::FAILURE })
 }
@@ -71,6 +97,38 @@ fn check_segments(store: &Store, no_quarantine: bool) -> anyhow::Result<bool> {
             String::new()
         } else {
             format!("; their trials run again on the next `qsweep run` (segments kept in {QUARANTINE}/)")
+        }
+    );
+    Ok(report.damaged.is_empty())
+}
+
+/// Read every segment of the program folders (`<cache>/_programs/*/`), print the damaged ones
+/// (moved aside into their folder's quarantine unless `no_quarantine`) and, when there are any
+/// folders, the totals; whether all are intact.
+fn check_program_folders(store: &Store, no_quarantine: bool) -> anyhow::Result<bool> {
+    let report = qsweep_pipeline::program::verify::check(store.dir())?;
+    if report.folders == 0 {
+        return Ok(true);
+    }
+    for d in &report.damaged {
+        println!("damaged: {d}");
+        if !no_quarantine {
+            let folder = d.path.parent().unwrap_or(store.dir());
+            let to = Store::open(folder)?.quarantine(&d.path)?;
+            println!("  moved to {}", to.display());
+        }
+    }
+    println!(
+        "program rows: {} folders, {} segments, {} rows ({} distinct trials) intact, {} damaged{}",
+        report.folders,
+        report.segments,
+        report.rows,
+        report.distinct,
+        report.damaged.len(),
+        if report.damaged.is_empty() || no_quarantine {
+            String::new()
+        } else {
+            format!("; their trials run again on the next `qsweep run` (segments kept in their folder's {QUARANTINE}/)")
         }
     );
     Ok(report.damaged.is_empty())
@@ -134,8 +192,14 @@ fn recompute(store: &Store, n: usize, seed: u64) -> anyhow::Result<bool> {
         // Nothing to check is not a pass: say why, and fail.
         println!(
             "recompute: no trial of engine {} to recompute ({} trials of other engine versions are stored; \
-             `qsweep run` a pipeline with this binary to compute them)",
-            ENGINE_VERSION, r.other_engine
+             `qsweep run` a pipeline with this binary to compute them{})",
+            ENGINE_VERSION,
+            r.other_engine,
+            if store.dir().join(qsweep_pipeline::program::rows::PROGRAMS_DIR).is_dir() {
+                "; a program pipeline's trials: `qsweep verify PIPELINE --recompute N`"
+            } else {
+                ""
+            }
         );
         return Ok(false);
     }

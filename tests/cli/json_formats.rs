@@ -106,3 +106,52 @@ fn bench_json_is_format_1() {
     assert!(!b.results.is_empty());
     assert!(b.results.iter().all(|r| r.config.starts_with("ball-beam/crisp/q0/") && r.steps >= 1000));
 }
+
+/// A program pipeline's `run --json` and `status --json` (docs/json.md): format 1, the
+/// documented fields, and the library's structs.
+#[test]
+fn program_run_and_status_json_are_format_1() {
+    use crate::programs::{doubler_yaml, DOUBLER};
+    use qsweep::json::ProgramStatusReport;
+    let sb = Sandbox::new();
+    sb.write("prog.sh", DOUBLER);
+    sb.write("d.yaml", &doubler_yaml("dj", "1, 2", 2));
+    let v: Value =
+        serde_json::from_str(&stdout(&mut sb.qsweep(&["run", "d.yaml", "--json", "--no-report"]))).unwrap();
+    assert_eq!(
+        keys(&v),
+        [
+            "cached",
+            "elsewhere",
+            "executed",
+            "failed",
+            "format_version",
+            "interrupted",
+            "pipeline",
+            "seconds",
+            "unfinished"
+        ]
+    );
+    let s: RunSummary = serde_json::from_value(v).unwrap();
+    assert_eq!((s.executed, s.cached, s.failed, s.unfinished), (4, 0, 0, Some(0)));
+    let v: Value = serde_json::from_str(&stdout(&mut sb.qsweep(&["status", "d.yaml", "--json"]))).unwrap();
+    assert_eq!(
+        keys(&v),
+        [
+            "cached",
+            "damaged_segments",
+            "experiments",
+            "failed",
+            "folder",
+            "format_version",
+            "missing",
+            "other_schemas",
+            "pipeline",
+            "running_elsewhere",
+            "trials"
+        ]
+    );
+    assert_eq!(keys(&v["experiments"][0]), ["cached", "cells", "experiment", "failed", "missing", "trials"]);
+    let s: ProgramStatusReport = serde_json::from_value(v).unwrap();
+    assert_eq!((s.format_version, s.trials, s.cached, s.missing), (1, 4, 4, 0));
+}

@@ -25,6 +25,8 @@ const PIPELINE_LAYERS: &[&[&str]] = &[
     &["race"],
     &["exec"],
     &["run"],
+    // Any program as a trial: its own vertical, on the cache, leases and shards below it.
+    &["program"],
     &["bench", "slurm", "status"],
     // Test fixtures (`test-support`), above everything they build.
     &["testing"],

@@ -201,3 +201,28 @@ fn qsweep_slurm(sb: &Sandbox, pipeline: &Path, cache: &Path, args: &[&str]) -> s
     c.current_dir(sb.dir.path()).args(["slurm", pipeline.to_str().unwrap(), "--cache"]).arg(cache).args(args);
     c.assert().success().get_output().clone()
 }
+
+/// Issue 61: a program pipeline's script runs each shard's trials once (the split by program
+/// keys), then its report job writes the program report.
+#[test]
+fn slurm_script_runs_a_program_pipelines_shards_once_then_its_report() {
+    use crate::programs::{doubler_yaml, lines, DOUBLER};
+    let sb = Sandbox::new();
+    sb.write("prog.sh", DOUBLER);
+    let p = sb.write("p.yaml", &doubler_yaml("prog", "1, 2, 3, 4", 2));
+    let cache = sb.cache();
+    let out = qsweep_slurm(&sb, &p, &cache, &["--array", "3"]);
+    let script = sb.write("submit.sh", &String::from_utf8(out.stdout).unwrap());
+    let summary = String::from_utf8(out.stderr).unwrap();
+    assert!(summary.contains("pipeline 'prog': 8 distinct trials (8 not cached) in 3 shards"), "{summary}");
+    let bin = fake_sbatch(&sb);
+    let run = submit(&sb, &script, &bin);
+    let said = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{said}{}", String::from_utf8_lossy(&run.stderr));
+    assert!(said.contains("/reports/prog/README.md"), "{said}");
+    assert!(!bin.join("failed-1").exists(), "a task failed");
+    assert_eq!(lines(&sb.path("trials.log")), 8, "each trial once, over the shards");
+    let report = std::fs::read_to_string(sb.path("slurm-logs/qsweep-prog-report-2.out")).unwrap();
+    assert!(report.contains("8 of 8 planned trials present, 0 failed"), "{report}");
+    assert!(sb.path("reports/prog/trials.parquet").is_file());
+}

@@ -77,8 +77,17 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
         "max_episodes=3",
         "--json",
     ];
+    // A program pipeline too: its run adds `unfinished`, its status has a table of its own.
+    std::fs::write(
+        d.join("prog.yaml"),
+        "name: prog\nprogram:\n  command: [sh, -c, 'cat >/dev/null; echo \"{\\\"x\\\": 1}\"']\n  \
+         metrics: { x: int }\nparams: { a: 1 }\nseeds: 1\n",
+    )
+    .unwrap();
+    let program_run = qsweep(d, &["run", "prog.yaml", "--json", "--quiet"]);
+    let engine_run = qsweep(d, &["run", "tiny.yaml", "--json", "--no-report", "--quiet"]);
     let cases: Vec<(&str, String)> = vec![
-        ("`qsweep run --json`", qsweep(d, &["run", "tiny.yaml", "--json", "--no-report", "--quiet"])),
+        ("`qsweep status --json` on a", qsweep(d, &["status", "prog.yaml", "--json"])),
         ("`qsweep report --json`", qsweep(d, &["report", "tiny.yaml", "--json", "--out", "r"])),
         // A raced pipeline, so the optional `race` list is printed too.
         ("`qsweep status --json`", qsweep(d, &["status", "race.yaml", "--json"])),
@@ -99,6 +108,13 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
             ),
         ),
     ];
+    let run_keys: BTreeSet<String> =
+        json_keys(&program_run).union(&json_keys(&engine_run)).cloned().collect();
+    assert_eq!(
+        table_after(&text, "`qsweep run --json`"),
+        run_keys,
+        "docs/json.md's table after `qsweep run --json` against the binary's output (engine and program)"
+    );
     for (marker, stdout) in cases {
         assert_eq!(
             table_after(&text, marker),

@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+import sys
 import traceback
 from pathlib import Path
 
@@ -61,6 +62,29 @@ def checkout(qsweep_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Path
         ],
         check=True,
     )
+    # A small program pipeline named as docs/programs.md's, for its snippet on reports/my-sweep.
+    (root / "fake_agent.py").write_text(
+        "import json, sys\n"
+        "c = json.load(sys.stdin)\n"
+        "episodes = 50 + 10 * c['bins'] + (c['seed'] * 7) % 13 - int(100 * c['alpha'])\n"
+        "print(json.dumps({'episodes': episodes, 'solved': episodes < 100}))\n"
+    )
+    (root / "my-sweep.yaml").write_text(
+        "name: my-sweep\n"
+        "seeds: 3\n"
+        "program:\n"
+        f"  command: [{sys.executable}, fake_agent.py]\n"
+        "  metrics: { episodes: int, solved: bool }\n"
+        "params: { bins: 6, alpha: 0.1 }\n"
+        "experiments:\n"
+        "  - { id: bins-alpha, vary: { bins: [2, 4, 6], alpha: [0.1, 0.2] } }\n"
+    )
+    subprocess.run(
+        [str(qsweep_bin), "run", "my-sweep.yaml", "--cache", "scratch-cache", "--quiet"],
+        cwd=root,
+        check=True,
+    )
+    assert (root / "reports/my-sweep/trials.parquet").is_file()
     return root
 
 

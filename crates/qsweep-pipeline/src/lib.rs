@@ -21,6 +21,7 @@ pub mod exec;
 pub mod fresh;
 pub mod parquet_io;
 pub mod plan;
+pub mod program;
 pub mod race;
 pub mod run;
 pub mod slurm;

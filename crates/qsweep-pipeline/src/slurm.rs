@@ -34,6 +34,9 @@ pub struct Submission {
     pub cache: PathBuf,
     /// The report directory.
     pub report_dir: PathBuf,
+    /// The report's page in it, named by the script's last line (`index.html`; a program
+    /// pipeline's report: `README.md`).
+    pub report_page: String,
     /// Number of array tasks, N.
     pub tasks: u32,
     /// At most this many tasks at once (`--array=1-N%M`).
@@ -225,7 +228,7 @@ impl Submission {
             )?;
         }
         writeln!(s, "echo \"watch: squeue -j $array_job,$report_job   logs: \"{logs}")?;
-        writeln!(s, "echo \"report: \"{}", path_word(&self.report_dir.join("index.html"))?)?;
+        writeln!(s, "echo \"report: \"{}", path_word(&self.report_dir.join(&self.report_page))?)?;
         Ok(())
     }
 }
@@ -339,6 +342,7 @@ mod tests {
             yes: false,
             cache: "/home/ada/study/cache".into(),
             report_dir: "/home/ada/study/reports/quick".into(),
+            report_page: "index.html".into(),
             tasks: 4,
             max_running: None,
             cpus_per_task: 8,

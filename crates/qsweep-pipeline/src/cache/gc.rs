@@ -115,7 +115,7 @@ impl Store {
     }
 
     /// Remove (or, with `dry_run`, count) temp files left by killed writers.
-    fn sweep_temps(&self, dry_run: bool) -> anyhow::Result<usize> {
+    pub(crate) fn sweep_temps(&self, dry_run: bool) -> anyhow::Result<usize> {
         let mut n = 0;
         for entry in std::fs::read_dir(self.dir())? {
             let entry = entry?;

@@ -29,6 +29,16 @@ pub struct LoadedSpec {
 /// Read, parse and type a pipeline file, then apply `--set` overrides.
 pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
     let shown = path.display();
+    let text = read_text(path)?;
+    let spec = load_str(&text, &shown.to_string(), overrides)?;
+    let variants = super::variant_load::resolve(&spec, &text, &shown.to_string(), overrides)?;
+    Ok(LoadedSpec { spec, path: path.to_path_buf(), variants })
+}
+
+/// A pipeline file's text: refused (as a user error naming the file) when it cannot be read, is a
+/// directory, is over 4 MiB or is not UTF-8.
+pub(crate) fn read_text(path: &Path) -> anyhow::Result<String> {
+    let shown = path.display();
     let meta = std::fs::metadata(path)
         .map_err(|e| user_error(format!("{shown}: cannot read pipeline file: {e}")))?;
     if meta.is_dir() {
@@ -44,14 +54,11 @@ pub fn load(path: &Path, overrides: &[Override]) -> anyhow::Result<LoadedSpec> {
     }
     let bytes =
         std::fs::read(path).map_err(|e| user_error(format!("{shown}: cannot read pipeline file: {e}")))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
+    String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
         user_error(format!("{shown}:{line}: the file is not valid UTF-8 (byte {at}); save it as UTF-8"))
-    })?;
-    let spec = load_str(&text, &shown.to_string(), overrides)?;
-    let variants = super::variant_load::resolve(&spec, &text, &shown.to_string(), overrides)?;
-    Ok(LoadedSpec { spec, path: path.to_path_buf(), variants })
+    })
 }
 
 /// Parse pipeline text; `origin` names it in messages.
@@ -61,40 +68,58 @@ pub fn load_str(text: &str, origin: &str, overrides: &[Override]) -> anyhow::Res
             "{origin}: the file is empty; a pipeline needs at least name, seeds and systems"
         )));
     }
-    let located = |mut e: Failure| {
-        if serde_yaml::from_str::<serde_yaml::Value>(text).err().map(|v| split_location(&v))
-            == Some((e.msg.clone(), e.yaml_at))
-        {
-            // A syntax error: serde_yaml's position is exact and the path means little.
-            e.path.clear();
-        }
-        let at = if e.path.is_empty() { None } else { locate_prefix(text, &e.path).map(|(_, p)| p) };
-        let mut msg = e.message();
-        match at.or(e.yaml_at) {
-            Some((line, col)) => {
-                let src = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
-                if src.contains('\t') && msg.contains("cannot start any token") {
-                    msg.push_str("; YAML does not allow tabs for indentation, use spaces");
-                }
-                user_error(format!("{origin}:{line}:{col}: {msg}"))
-            }
-            None => user_error(format!("{origin}: {msg}")),
-        }
-    };
+    let here = |e: Failure| located(text, origin, e);
+    one_kind(text, origin)?;
     // Typed parse of the text itself first, so every error has a position.
-    let spec: PipelineSpec = typed(serde_yaml::Deserializer::from_str(text)).map_err(located)?;
+    let spec: PipelineSpec = typed(serde_yaml::Deserializer::from_str(text)).map_err(here)?;
     if spec.systems.kinds().is_empty() {
         let msg = format!("the section is empty; add {}", qsweep_engine::env::SystemKind::listed());
-        return Err(located(Failure::at(&["systems"], &msg)));
+        return Err(here(Failure::at(&["systems"], &msg)));
     }
     if overrides.is_empty() {
         if let Err(p) = super::check::check_whole(&spec) {
-            return Err(located(p.into()));
+            return Err(here(p.into()));
         }
         return Ok(spec);
     }
-    let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| located(Failure::from(e)))?;
+    let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| here(Failure::from(e)))?;
     load_value(doc, origin, overrides)
+}
+
+/// Refuse a pipeline file that declares both `systems:` and `program:` (a program pipeline,
+/// `crate::program`), at the `program:` line.
+pub(crate) fn one_kind(text: &str, origin: &str) -> anyhow::Result<()> {
+    let top = |key: &str| super::locate::locate(text, &[key.to_string()]);
+    if let (Some(_), Some((line, col))) = (top("systems"), top("program")) {
+        return Err(user_error(format!(
+            "{origin}:{line}:{col}: program: a pipeline declares either `systems:` (the built-in engine) or \
+             `program:` (your own program), not both; put each in a pipeline file of its own"
+        )));
+    }
+    Ok(())
+}
+
+/// The user error of a typed-parse failure of `text` (the file `origin`): `FILE:LINE:COL: PATH:
+/// MESSAGE`, at the field's key (serde_yaml's own position for a syntax error).
+pub(crate) fn located(text: &str, origin: &str, mut e: Failure) -> anyhow::Error {
+    if serde_yaml::from_str::<serde_yaml::Value>(text).err().map(|v| split_location(&v))
+        == Some((e.msg.clone(), e.yaml_at))
+    {
+        // A syntax error: serde_yaml's position is exact and the path means little.
+        e.path.clear();
+    }
+    let at = if e.path.is_empty() { None } else { locate_prefix(text, &e.path).map(|(_, p)| p) };
+    let mut msg = e.message();
+    match at.or(e.yaml_at) {
+        Some((line, col)) => {
+            let src = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
+            if src.contains('\t') && msg.contains("cannot start any token") {
+                msg.push_str("; YAML does not allow tabs for indentation, use spaces");
+            }
+            user_error(format!("{origin}:{line}:{col}: {msg}"))
+        }
+        None => user_error(format!("{origin}: {msg}")),
+    }
 }
 
 /// Check a pipeline given as a YAML value (built in code, so it has no lines to point at) with
@@ -107,27 +132,30 @@ pub fn load_value(
     for o in overrides {
         o.apply(&mut doc).map_err(user_error)?;
     }
-    // The overridden values have no line in the file: name the field and the --set argument
-    // that put it there (all of them when the error is about a section they only touch).
-    let with_sets = |e: Failure| {
-        let from: Vec<&Override> =
-            overrides.iter().filter(|o| o.path.starts_with(&e.path) || e.path.starts_with(&o.path)).collect();
-        let from = if from.is_empty() { overrides.iter().collect() } else { from };
-        let sets: Vec<&str> = from.iter().map(|o| o.raw.as_str()).collect();
-        if sets.is_empty() {
-            user_error(format!("{origin}: {}", e.message()))
-        } else {
-            user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
-        }
-    };
-    let spec = typed(doc).map_err(with_sets)?;
-    super::check::check_whole(&spec).map_err(|p| with_sets(p.into()))?;
+    let named = |e: Failure| with_sets(origin, overrides, e);
+    let spec = typed(doc).map_err(named)?;
+    super::check::check_whole(&spec).map_err(|p| named(p.into()))?;
     Ok(spec)
+}
+
+/// The user error of a failure of a document that `overrides` changed: the overridden values
+/// have no line in the file, so it names the field and the `--set` arguments that put it there
+/// (all of them when the error is about a section they only touch).
+pub(crate) fn with_sets(origin: &str, overrides: &[Override], e: Failure) -> anyhow::Error {
+    let from: Vec<&Override> =
+        overrides.iter().filter(|o| o.path.starts_with(&e.path) || e.path.starts_with(&o.path)).collect();
+    let from = if from.is_empty() { overrides.iter().collect() } else { from };
+    let sets: Vec<&str> = from.iter().map(|o| o.raw.as_str()).collect();
+    if sets.is_empty() {
+        user_error(format!("{origin}: {}", e.message()))
+    } else {
+        user_error(format!("{origin} with --set {}: {}", sets.join(" --set "), e.message()))
+    }
 }
 
 /// A typed-parse failure: the dotted path of the field (keys, and sequence indices as decimal
 /// numbers), the message, and serde_yaml's own position (exact only for syntax and key errors).
-struct Failure {
+pub(crate) struct Failure {
     path: Vec<String>,
     /// How many segments of `path` the message shows: all, but the key itself where the message
     /// names it (an unknown or duplicate key: `systems.cart-pole: unknown field `mass``).
@@ -137,7 +165,8 @@ struct Failure {
 }
 
 impl Failure {
-    fn at(path: &[&str], msg: &str) -> Self {
+    /// A failure of the field at `path` (keys, and sequence indices as decimal numbers).
+    pub(crate) fn at(path: &[&str], msg: &str) -> Self {
         let path: Vec<String> = path.iter().map(|s| s.to_string()).collect();
         Self { shown: path.len(), path, msg: msg.to_string(), yaml_at: None }
     }
@@ -165,9 +194,11 @@ impl From<serde_yaml::Error> for Failure {
     }
 }
 
-/// Deserialise a pipeline, keeping the path of a failing field.
-fn typed<'de, D>(d: D) -> Result<PipelineSpec, Failure>
+/// Deserialise a pipeline file (the engine's, or a program pipeline), keeping the path of a
+/// failing field.
+pub(crate) fn typed<'de, T, D>(d: D) -> Result<T, Failure>
 where
+    T: serde::Deserialize<'de>,
     D: serde::Deserializer<'de, Error = serde_yaml::Error>,
 {
     serde_path_to_error::deserialize(d).map_err(|e| {

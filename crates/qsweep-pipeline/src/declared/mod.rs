@@ -48,6 +48,8 @@ pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference,
 pub use fields::{safe_folder_name, suggest, variable_index};
 pub use fresh::FreshSpec;
 pub use load::{load, load_str, load_value, LoadedSpec};
+// The program pipeline's loader (`crate::program::declared`) reads its file the same way.
+pub(crate) use load::{located, one_kind, read_text, typed, with_sets, Failure};
 pub use locate::locate;
 pub use overrides::Override;
 pub(crate) use pipeline::each_system;

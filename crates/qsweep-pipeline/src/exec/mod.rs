@@ -10,15 +10,19 @@
 //! Results never depend on the number of threads: each trial is a pure function of its config and
 //! seed, and batches are written in completion order, which only affects segment layout.
 
+mod collect;
 mod events;
 mod job;
 pub mod leased;
 mod ledger;
+mod options;
 pub mod shard;
 
+pub use collect::Finished;
+pub(crate) use collect::{finish, Collector};
 pub use events::{Event, Reporter};
+pub use options::{ExecOptions, ExecReport, INTERRUPTED};
 
-use crate::cache::leases::{lease::HEARTBEAT, Leases};
 use crate::cache::TrialRecord;
 pub use job::{jobs, Job};
 use leased::{Pick, Scheduler, POLL};
@@ -26,54 +30,8 @@ use ledger::Ledger;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{lanes, run_trial, TrialConfig};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
-use std::time::{Duration, Instant};
-
-/// Set by the Ctrl-C / SIGTERM handler: workers start no new trials, the run flushes and stops.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// How to run.
-#[derive(Debug, Clone)]
-pub struct ExecOptions {
-    /// Worker threads.
-    pub jobs: usize,
-    /// Flush after this many finished trials...
-    pub batch_trials: usize,
-    /// ...or after this long since the last flush, whichever comes first.
-    pub batch_interval: Duration,
-    /// Lease each trial in the cache before running it (in batches, [`leased::batch_len`]), so
-    /// that concurrent runs on the cache never compute one twice (`None`: run every job, as a
-    /// library user without a shared cache).
-    pub leases: Option<Arc<Leases>>,
-    /// Run crisp trials in lockstep, several as lanes of one loop ([`lanes::run_lockstep`]):
-    /// faster, the same rows. Default: on unless `QSWEEP_LOCKSTEP=off`.
-    pub lockstep: bool,
-}
-
-impl Default for ExecOptions {
-    fn default() -> Self {
-        Self {
-            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
-            batch_trials: 500,
-            batch_interval: Duration::from_secs(10),
-            leases: None,
-            lockstep: lanes::enabled(),
-        }
-    }
-}
-
-/// What an execution did.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct ExecReport {
-    /// Trials run and stored.
-    pub executed: usize,
-    /// Of those, trials whose simulation diverged (stored with a failure reason).
-    pub failed: usize,
-    /// Trials another run (sharing the cache) stored while this one ran: not run here.
-    pub elsewhere: usize,
-    /// Whether Ctrl-C stopped the run early.
-    pub interrupted: bool,
-}
+use std::sync::mpsc;
+use std::time::Instant;
 
 /// CPU seconds the calling thread has used so far (`CLOCK_THREAD_CPUTIME_ID`): what a trial costs,
 /// whatever else the machine is doing. `None` where the clock is not available.
@@ -254,143 +212,6 @@ pub fn execute(
     let report = finish(collector.report, jobs.len(), &sched, leases, reporter);
     collected?;
     Ok(report)
-}
-
-/// The calling thread's side of a run: finished records, gathered into batches, handed to the
-/// sink; leases kept alive; events reported.
-struct Collector<'l, S> {
-    /// Where batches go.
-    sink: S,
-    /// The cache's leases, when the run takes them.
-    leases: Option<&'l Leases>,
-    /// Records finished since the last flush.
-    batch: Vec<TrialRecord>,
-    /// What the run did so far.
-    report: ExecReport,
-    /// When the batch was last flushed.
-    last_flush: Instant,
-    /// When the leases were last renewed.
-    last_beat: Instant,
-    /// Trials running and stored elsewhere, as last reported.
-    elsewhere: (usize, usize),
-}
-
-impl<'l, S: FnMut(&[TrialRecord]) -> anyhow::Result<()>> Collector<'l, S> {
-    /// A collector with nothing collected yet.
-    fn new(sink: S, leases: Option<&'l Leases>) -> Self {
-        Self {
-            sink,
-            leases,
-            batch: Vec::new(),
-            report: ExecReport::default(),
-            last_flush: Instant::now(),
-            last_beat: Instant::now(),
-            elsewhere: (0, 0),
-        }
-    }
-
-    /// Collect records from `rx` until the workers are done or a flush fails; on a failure, stop
-    /// the workers and drain the channel so that none is left blocked.
-    fn collect(
-        &mut self,
-        rx: &mpsc::Receiver<TrialRecord>,
-        opts: &ExecOptions,
-        sched: &Scheduler<'_>,
-        stop: &AtomicBool,
-        reporter: &mut dyn Reporter,
-    ) -> anyhow::Result<()> {
-        let result = loop {
-            match rx.recv_timeout(Duration::from_millis(200)) {
-                Ok(rec) => {
-                    reporter.event(&Event::Finished { key: rec.key, failed: rec.outcome.failure.is_some() });
-                    self.batch.push(rec);
-                }
-                Err(mpsc::RecvTimeoutError::Timeout) => reporter.event(&Event::Tick),
-                Err(mpsc::RecvTimeoutError::Disconnected) => break self.flush(reporter),
-            }
-            self.tend_leases(sched, reporter);
-            if self.flush_due(opts, sched) {
-                if let Err(e) = self.flush(reporter) {
-                    break Err(e);
-                }
-                self.last_flush = Instant::now();
-            }
-        };
-        if result.is_err() {
-            stop.store(true, Ordering::Relaxed);
-            // Drain so workers are never blocked; their trials are lost, the stored ones are not.
-            while rx.recv().is_ok() {}
-        }
-        result
-    }
-
-    /// With leases: renew them every [`HEARTBEAT`], and report a change in the trials other runs
-    /// are computing or have stored.
-    fn tend_leases(&mut self, sched: &Scheduler<'_>, reporter: &mut dyn Reporter) {
-        let Some(c) = self.leases else { return };
-        if self.last_beat.elapsed() >= HEARTBEAT {
-            c.heartbeat();
-            self.last_beat = Instant::now();
-        }
-        let now =
-            (sched.running_elsewhere.load(Ordering::Relaxed), sched.stored_elsewhere.load(Ordering::Relaxed));
-        if now != self.elsewhere {
-            self.elsewhere = now;
-            reporter.event(&Event::Elsewhere { running: now.0, stored: now.1 });
-        }
-    }
-
-    /// Whether the batch is to be flushed now: full, old, or wanted at once.
-    fn flush_due(&self, opts: &ExecOptions, sched: &Scheduler<'_>) -> bool {
-        // On an interrupt (Ctrl-C, or SIGTERM from a scheduler's time limit, which sends
-        // SIGKILL soon after) store what is finished at once rather than at the next batch.
-        // So in the tail of a run that shares the cache: other runs may be waiting for
-        // exactly these trials, which their leases keep from them until they are stored.
-        self.batch.len() >= opts.batch_trials
-            || self.last_flush.elapsed() >= opts.batch_interval
-            || INTERRUPTED.load(Ordering::Relaxed)
-            || (!self.batch.is_empty()
-                && sched.exhausted()
-                && self.leases.is_some_and(|c| c.others_present()))
-    }
-
-    /// Hand the batch to the sink, release its leases and count it.
-    fn flush(&mut self, reporter: &mut dyn Reporter) -> anyhow::Result<()> {
-        let batch = &mut self.batch;
-        if !batch.is_empty() {
-            (self.sink)(batch)?;
-            if let Some(c) = self.leases {
-                c.release(&batch.iter().map(|r| r.key).collect::<Vec<_>>());
-            }
-            reporter.event(&Event::Flushed { trials: batch.len() });
-            self.report.executed += batch.len();
-            self.report.failed += batch.iter().filter(|r| r.outcome.failure.is_some()).count();
-            batch.clear();
-        }
-        Ok(())
-    }
-}
-
-/// The run's report once its workers are done: leases released, trials stored elsewhere counted,
-/// an interruption and the end reported.
-fn finish(
-    mut report: ExecReport,
-    jobs: usize,
-    sched: &Scheduler<'_>,
-    leases: Option<&Leases>,
-    reporter: &mut dyn Reporter,
-) -> ExecReport {
-    // Nothing is held between executions: leases of trials a failing sink did not store go now.
-    if let Some(c) = leases {
-        c.release_all();
-    }
-    report.elsewhere = sched.stored_elsewhere.load(Ordering::Relaxed);
-    report.interrupted = INTERRUPTED.load(Ordering::Relaxed) && report.executed + report.elsewhere < jobs;
-    if report.interrupted {
-        reporter.event(&Event::Interrupted);
-    }
-    reporter.event(&Event::Done { executed: report.executed, failed: report.failed });
-    report
 }
 
 #[cfg(test)]

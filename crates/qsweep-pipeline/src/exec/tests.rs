@@ -2,9 +2,11 @@
 //! without leases; the schedule's order; lockstep time shares; a failing sink stopping the run.
 
 use super::*;
+use crate::cache::leases::Leases;
 use crate::cache::Key;
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::Algorithm;
+use std::sync::Arc;
 
 fn jobs_for(configs: &[TrialConfig]) -> Vec<Job<'_>> {
     configs

@@ -26,6 +26,7 @@
 mod layout;
 pub mod manifest;
 mod outcome;
+pub mod program;
 pub mod stale;
 mod steps;
 mod target;
