@@ -194,7 +194,7 @@ pub fn report(a: ReportArgs) -> anyhow::Result<u8> {
             dir: dir.display().to_string(),
             cells_recomputed: plan.experiments.iter().map(|e| e.cells.len()).sum(),
             cells_reused: 0,
-            intervals_computed: 0,
+            intervals_computed: written.intervals,
             intervals_reused: 0,
             files_written: written.written,
             files_unchanged: written.files.len() - written.written,

@@ -28,6 +28,7 @@ mod pipeline;
 mod program_cache;
 mod program_failures;
 mod program_processes;
+mod program_report;
 mod programs;
 mod race;
 mod readings;

@@ -126,7 +126,7 @@ fn program_the_issues_example_runs_end_to_end_and_a_rerun_starts_no_process() {
         t.column_by_name("variant").unwrap().as_any().downcast_ref::<arrow::array::StringArray>().unwrap();
     assert!(variant.iter().all(|v| v == Some("mountain-car")));
     let readme = std::fs::read_to_string(sb.path("reports/my-sweep/README.md")).unwrap();
-    assert!(readme.contains("| 2 | 0.05 | 1 | 0 | 25.0000 |"), "{readme}");
+    assert!(readme.contains("| 2 (best) | 0.05 | 1 | 0 | 25 | \\[25, 25\\] |"), "{readme}");
 
     let status = stdout(&mut sb.qsweep(&["status", "x.yaml", "--set", "seeds=1"]));
     assert!(status.contains("total: 29 trials, 29 cached (0 failed), 0 missing"), "{status}");

@@ -271,3 +271,11 @@ fn the_trials_parquet_table_lists_exactly_the_columns_written() {
     let documented = table_after(&guide("reports.md"), "`trials.parquet`, one row per trial of each cell");
     assert_eq!(documented, written, "docs/reports.md's trials.parquet columns against a report's");
 }
+
+#[test]
+fn the_program_cells_parquet_table_lists_exactly_the_columns_written() {
+    let documented = table_after(&guide("reports.md"), "`cells.parquet` of a program pipeline");
+    let written: BTreeSet<String> =
+        qsweep_report::render::program::CELL_COLUMNS.iter().map(|c| c.to_string()).collect();
+    assert_eq!(documented, written, "docs/reports.md's program cells.parquet columns against CELL_COLUMNS");
+}

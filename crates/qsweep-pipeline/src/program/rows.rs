@@ -145,7 +145,8 @@ fn failure(r: &ProgramRow) -> Option<&Failure> {
     r.result.as_ref().err()
 }
 
-fn param_column<'a>(
+/// A column of `t` holding `values` (an int accepted where a float is declared); an error names the param.
+pub fn param_column<'a>(
     name: &str,
     t: ParamType,
     values: impl Iterator<Item = Option<&'a ParamValue>>,

@@ -56,6 +56,12 @@ fn markup(s: &str, apos: &str) -> String {
 ///
 /// `|` is left as it is: it only matters inside a table ([`markdown_cell`]).
 pub fn markdown(s: &str) -> String {
+    markdown_text(s, true)
+}
+
+/// [`markdown`], with the escapes of a line's start only when `line_start` (inside a table cell no
+/// block can start, so `0.1` needs no `0\.1` there).
+fn markdown_text(s: &str, line_start: bool) -> String {
     let chars: Vec<char> = s.chars().map(|c| if c == '\n' || c == '\r' { ' ' } else { c }).collect();
     let digits = chars.iter().take_while(|c| c.is_ascii_digit()).count();
     let mut out = String::with_capacity(s.len() + 8);
@@ -70,11 +76,11 @@ pub fn markdown(s: &str) -> String {
                 out.push(c);
             }
             '_' if !(word(i.checked_sub(1)) && word(Some(i + 1))) => out.push_str("\\_"),
-            '#' | '-' | '+' | '=' if i == 0 => {
+            '#' | '-' | '+' | '=' if i == 0 && line_start => {
                 out.push('\\');
                 out.push(c);
             }
-            '.' | ')' if i == digits && digits > 0 => {
+            '.' | ')' if i == digits && digits > 0 && line_start => {
                 out.push('\\');
                 out.push(c);
             }
@@ -88,6 +94,12 @@ pub fn markdown(s: &str) -> String {
 /// end the cell.
 pub fn markdown_cell(s: &str) -> String {
     markdown(s).replace('|', "\\|")
+}
+
+/// [`markdown_cell`] without the escapes of a line's start, which a table cell does not need
+/// (`0.1`, `-3` stay as they are); the program report's tables use it.
+pub fn markdown_in_cell(s: &str) -> String {
+    markdown_text(s, false).replace('|', "\\|")
 }
 
 /// qsweep's own text (which may use Markdown, such as a code span) in a Markdown table's caption,
@@ -241,6 +253,8 @@ mod tests {
         assert_eq!(markdown_cell("a | b"), "a \\| b");
         assert_eq!(markdown_cell("<b>|</b>"), "&lt;b&gt;\\|&lt;/b&gt;");
         assert_eq!(markdown_table_text("`fresh:` a|b\nc"), "`fresh:` a\\|b c");
+        assert_eq!(markdown_in_cell("0.1 | -3 [x]"), "0.1 \\| -3 \\[x\\]");
+        assert_eq!(markdown_cell("0.1"), "0\\.1");
     }
 
     #[test]

@@ -99,8 +99,8 @@ impl<'d> Folder<'d> {
     /// Write `name` (relative to the folder), unless it already holds these bytes (then it is
     /// left alone, its mtime kept); either way it is one of the folder's files. After Ctrl-C or
     /// SIGTERM it writes nothing and fails ([`Interrupted`]): the folder's memo and manifest come
-    /// after its files, so the next report sees it incomplete and writes it again.
-    pub fn put(&mut self, name: &str, bytes: &[u8]) -> anyhow::Result<()> {
+    /// after its files, so the next report sees it incomplete and writes it again. Whether it wrote.
+    pub fn put(&mut self, name: &str, bytes: &[u8]) -> anyhow::Result<bool> {
         if qsweep_pipeline::exec::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) {
             let at = self.dir.join(name);
             return Err(Interrupted(format!(
@@ -109,9 +109,9 @@ impl<'d> Folder<'d> {
             ))
             .into());
         }
-        write_if_changed(&self.dir.join(name), bytes)?;
+        let written = write_if_changed(&self.dir.join(name), bytes)?;
         self.files.push(PathBuf::from(name));
-        Ok(())
+        Ok(written)
     }
 }
 

@@ -2,7 +2,7 @@
 //! ([`table`]), the heatmaps (the paper's Figures 5–7) and learning curves as SVG or PNG
 //! ([`figures`], [`curves`]), the pages (`index.html`, `README.md`), the Parquet datasets, and one
 //! report folder written atomically ([`folder`]) with what a higher part adds to it
-//! ([`addition`]). Pure functions of what [`crate::derive`] computed: the same numbers give the
+//! ([`addition`]); a program pipeline's files ([`program`]). Pure functions of what [`crate::derive`] computed: the same numbers give the
 //! same bytes.
 
 pub mod addition;
@@ -15,6 +15,7 @@ pub mod folder;
 pub mod glyphs;
 pub mod html;
 pub mod markdown;
+pub mod program;
 pub mod svg;
 pub mod svg_grid;
 pub mod svg_text;

@@ -1,18 +1,21 @@
-//! The report of a program pipeline (`qsweep_pipeline::program`), as far as it goes today: its
-//! trials as typed rows (`trials.parquet`: the cache's columns, after the experiment and variant
-//! each trial belongs to) and a page of counts per experiment and cell (`README.md`). Written
-//! atomically, each file only when its bytes change; an incomplete report never replaces a kept
+//! The report of a program pipeline (`qsweep_pipeline::program`): its trials as typed rows
+//! (`trials.parquet`: the cache's columns, after the experiment and variant each trial belongs
+//! to), its cells' numbers (`cells.parquet`, [`crate::derive::program`]), the figures and the pages
+//! (`README.md`, `index.html`, [`crate::render::program`]). Written atomically, each file only when its bytes change; an incomplete report never replaces a kept
 //! one of more trials (unless forced), a complete one always does.
 
-use crate::render::escape;
-use crate::render::folder::existing_trials;
+use crate::derive;
+use crate::render::folder::{existing_trials, Folder};
+use crate::render::program::{
+    self, figures,
+    pages::{self, Counts},
+};
 use arrow::array::{ArrayRef, StringArray};
 use arrow::datatypes::{DataType, Field, Schema};
 use arrow::record_batch::RecordBatch;
-use qsweep_pipeline::atomic::write_if_changed;
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::error::user_error;
-use qsweep_pipeline::program::model::{MetricValue, ParamValue, ProgramPlan, ProgramRow};
+use qsweep_pipeline::program::model::{ProgramPlan, ProgramRow};
 use qsweep_pipeline::program::rows::{to_batch, RowSchema};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -31,6 +34,8 @@ pub struct ProgramReport {
     pub present: usize,
     /// Of those, failed.
     pub failed: usize,
+    /// Bootstrap intervals computed (one per cell and scalar metric).
+    pub intervals: usize,
 }
 
 /// Write the report of `plan` into `dir` from `rows` (the cache's row of each key present).
@@ -81,6 +86,7 @@ pub fn write(
         failed: present.iter().filter(|p| p.2.result.is_err()).count(),
         files: Vec::new(),
         written: 0,
+        intervals: 0,
     };
     let trials: Vec<ProgramRow> = present.iter().map(|p| p.2.clone()).collect();
     let batch = to_batch(schema, &trials)?;
@@ -99,73 +105,25 @@ pub fn write(
         Arc::new(Schema::new_with_metadata(fields, batch.schema().metadata().clone())),
         columns,
     )?;
-    let parquet = qsweep_pipeline::parquet_io::to_parquet(&all)?;
-    out.written += usize::from(write_if_changed(&dir.join("trials.parquet"), &parquet)?);
-    out.files.push("trials.parquet".into());
-    out.written += usize::from(write_if_changed(&dir.join("README.md"), page(plan, rows, &out).as_bytes())?);
-    out.files.push("README.md".into());
+    let stats = derive::program::derive(plan, rows);
+    out.intervals = stats.experiments.iter().map(|e| e.cells.len()).sum::<usize>() * stats.scalars.len();
+    let counts = Counts { planned: out.planned, present: out.present, failed: out.failed };
+    let mut files: Vec<(String, Vec<u8>)> = vec![
+        ("trials.parquet".into(), qsweep_pipeline::parquet_io::to_parquet(&all)?),
+        ("cells.parquet".into(), program::cells_parquet(plan, &stats)?),
+    ];
+    for e in &stats.experiments {
+        for f in figures::listed(&stats, e) {
+            let svg = figures::draw(&stats, e, &f);
+            files.push((f.path, svg.into_bytes()));
+        }
+    }
+    files.push(("README.md".into(), pages::markdown(plan, &stats, counts).into_bytes()));
+    files.push(("index.html".into(), pages::html(plan, &stats, counts).into_bytes()));
+    let mut folder = Folder::create(dir)?;
+    for (name, bytes) in files {
+        out.written += usize::from(folder.put(&name, &bytes)?);
+    }
+    out.files = folder.files;
     Ok(out)
-}
-
-/// `README.md`: the pipeline, its counts, and per experiment each cell's trials and the mean of
-/// its objective (or first numeric metric) over the trials that succeeded.
-fn page(plan: &ProgramPlan, rows: &HashMap<Key, ProgramRow>, out: &ProgramReport) -> String {
-    let metric = plan
-        .program
-        .objective
-        .as_ref()
-        .and_then(|o| plan.program.metrics.iter().position(|(n, _)| *n == o.metric))
-        .or_else(|| plan.program.metrics.iter().position(|(_, t)| t.is_scalar_number()));
-    let mut m = format!("# qsweep report: {}\n\n", escape::markdown(&plan.name));
-    if let Some(d) = &plan.description {
-        m.push_str(&format!("{}\n\n", escape::markdown(d.trim())));
-    }
-    m.push_str(&format!(
-        "Trials present: {} of {} planned; {} failed. Every trial's row: [trials.parquet](trials.parquet).\n",
-        out.present, out.planned, out.failed
-    ));
-    for e in &plan.experiments {
-        let variant =
-            e.variant.as_deref().map(|v| format!(" (variant {})", escape::markdown(v))).unwrap_or_default();
-        let title = e.title.as_deref().map(|t| format!(": {}", escape::markdown(t))).unwrap_or_default();
-        m.push_str(&format!("\n## Experiment {}{title}{variant}\n\n", escape::markdown(&e.id)));
-        let mut header: Vec<String> = e.axes.iter().map(|a| escape::markdown_cell(a)).collect();
-        header.extend(["n".to_string(), "failed".to_string()]);
-        if let Some(j) = metric {
-            header.push(format!("mean {}", escape::markdown_cell(&plan.program.metrics[j].0)));
-        }
-        m.push_str(&format!("| {} |\n|{}\n", header.join(" | "), "---|".repeat(header.len())));
-        for c in &e.cells {
-            let got: Vec<&ProgramRow> = c.trials.iter().filter_map(|t| rows.get(&t.key)).collect();
-            let ok: Vec<&Vec<MetricValue>> = got.iter().filter_map(|r| r.result.as_ref().ok()).collect();
-            // Numbers and booleans are qsweep's text; only a string value is the author's.
-            let mut cells: Vec<String> = c
-                .coords
-                .iter()
-                .map(|v| match v {
-                    ParamValue::Str(s) => escape::markdown_cell(s),
-                    other => other.to_string(),
-                })
-                .collect();
-            cells.push(got.len().to_string());
-            cells.push((got.len() - ok.len()).to_string());
-            if let Some(j) = metric {
-                let values: Vec<f64> = ok
-                    .iter()
-                    .filter_map(|m| match m.get(j) {
-                        Some(MetricValue::Int(i)) => Some(*i as f64),
-                        Some(MetricValue::Float(x)) => Some(*x),
-                        _ => None,
-                    })
-                    .collect();
-                cells.push(if values.is_empty() {
-                    "—".to_string()
-                } else {
-                    format!("{:.4}", qsweep_pipeline::analysis::mean(&values))
-                });
-            }
-            m.push_str(&format!("| {} |\n", cells.join(" | ")));
-        }
-    }
-    m
 }

@@ -54,7 +54,7 @@ pub fn write_comparison(
     memo: &StatsMemo,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut out = crate::render::folder::Folder::create(dir)?;
-    let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes);
+    let mut put = |name: &str, bytes: &[u8]| out.put(name, bytes).map(drop);
     let t = Computed::of(plan, variants);
     t.write(formats, &mut put)?;
     let (svg, png) = (formats.has(Format::Svg), formats.has(Format::Png));
