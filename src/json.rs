@@ -1,5 +1,5 @@
-//! The `--json` outputs of `run`, `report`, `status` (an engine's or a program's pipeline), `trial`, `bench` and
-//! `feasible`: one struct per format, each with a `format_version`.
+//! The `--json` outputs of `run`, `report`, `status` (an engine's or a program's pipeline), `trial`, `bench`,
+//! `feasible` and `compare`: one struct per format, each with a `format_version`.
 //!
 //! Like cargo-nextest's machine-readable formats, a format's version is bumped only on an
 //! incompatible change (a field removed, renamed or given another type or meaning); new fields may
@@ -344,4 +344,154 @@ pub struct FeasibleReport {
 impl FeasibleReport {
     /// Current version of the `feasible --json` format.
     pub const FORMAT_VERSION: u32 = 1;
+}
+
+/// `qsweep compare --json`: two program pipelines compared cell by cell (docs/json.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CompareJson {
+    /// Version of this format ([`CompareJson::FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// Pipeline A as given (`PATH` or `PATH@VARIANT`).
+    pub a: String,
+    /// Pipeline B as given.
+    pub b: String,
+    /// The metric compared: A's name, B's name.
+    pub metric: [String; 2],
+    /// The shared params, each A's name and B's name.
+    pub shared: Vec<[String; 2]>,
+    /// The equivalence margin on B ÷ A.
+    pub margin: [f64; 2],
+    /// Cells with a Welch p (m).
+    pub tested: usize,
+    /// Of those, with p < 0.05 (k).
+    pub significant: usize,
+    /// 0.05 m: what chance alone gives.
+    pub expected: f64,
+    /// P(X ≥ k | Binomial(m, 0.05)).
+    pub binomial_p: f64,
+    /// `beyond chance` (binomial_p < 0.05) or `within chance`.
+    pub statement: String,
+    /// Cells per verdict.
+    pub verdicts: CompareVerdicts,
+    /// The compared cells, in A's plan order.
+    pub cells: Vec<CompareCell>,
+    /// Matched cells without trials on a side.
+    pub missing: Vec<CompareMissing>,
+    /// Cells only A plans (labels `name=value …`).
+    pub only_a: Vec<String>,
+    /// Cells only B plans.
+    pub only_b: Vec<String>,
+}
+
+impl CompareJson {
+    /// The current version of the `compare --json` format.
+    pub const FORMAT_VERSION: u32 = 1;
+
+    /// The JSON of `c`.
+    pub fn of(c: &qsweep_report::comparison::Comparison) -> Self {
+        let o = &c.overall;
+        Self {
+            format_version: Self::FORMAT_VERSION,
+            a: c.labels.0.clone(),
+            b: c.labels.1.clone(),
+            metric: [c.metric.0.clone(), c.metric.1.clone()],
+            shared: c.shared.iter().map(|(x, y)| [x.clone(), y.clone()]).collect(),
+            margin: [c.margin.0, c.margin.1],
+            tested: o.tested,
+            significant: o.significant,
+            expected: o.expected,
+            binomial_p: o.binomial_p,
+            statement: o.statement().to_string(),
+            verdicts: CompareVerdicts {
+                equivalent: o.verdicts.0,
+                differs: o.verdicts.1,
+                undecided: o.verdicts.2,
+            },
+            cells: c
+                .cells
+                .iter()
+                .map(|x| CompareCell {
+                    params: c
+                        .shared
+                        .iter()
+                        .zip(&x.values)
+                        .map(|((n, _), v)| (n.clone(), v.to_json()))
+                        .collect(),
+                    n_a: x.n.0,
+                    n_b: x.n.1,
+                    mean_a: x.mean.0,
+                    mean_b: x.mean.1,
+                    std_a: x.std.0,
+                    std_b: x.std.1,
+                    ratio: x.ratio,
+                    ratio_lo: x.ratio_ci.map(|r| r.0).filter(|v| v.is_finite()),
+                    ratio_hi: x.ratio_ci.map(|r| r.1).filter(|v| v.is_finite()),
+                    p: x.p,
+                    tost_p: x.tost.map(|t| t.p),
+                    verdict: x.verdict.word().to_string(),
+                    note: x.note.clone(),
+                })
+                .collect(),
+            missing: c
+                .missing
+                .iter()
+                .map(|m| CompareMissing { cell: m.label.clone(), side: m.side.to_string() })
+                .collect(),
+            only_a: c.only.0.clone(),
+            only_b: c.only.1.clone(),
+        }
+    }
+}
+
+/// Cells per verdict in `compare --json`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CompareVerdicts {
+    /// TOST shows B ÷ A within the margin.
+    pub equivalent: usize,
+    /// Welch p < 0.05 and not equivalent.
+    pub differs: usize,
+    /// Neither, or no test (fewer than 2 trials on a side).
+    pub undecided: usize,
+}
+
+/// One compared cell in `compare --json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CompareCell {
+    /// The shared params' values, by A's names.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Succeeded trials of A.
+    pub n_a: usize,
+    /// Succeeded trials of B.
+    pub n_b: usize,
+    /// Mean of A.
+    pub mean_a: f64,
+    /// Mean of B.
+    pub mean_b: f64,
+    /// Sample std of A (null below 2 trials).
+    pub std_a: Option<f64>,
+    /// Sample std of B.
+    pub std_b: Option<f64>,
+    /// mean B ÷ mean A (null when mean A is not positive).
+    pub ratio: Option<f64>,
+    /// Its 95 % bootstrap interval's lower end.
+    pub ratio_lo: Option<f64>,
+    /// Its upper end (null when unbounded).
+    pub ratio_hi: Option<f64>,
+    /// Welch's two-sided p (null below 2 trials on a side).
+    pub p: Option<f64>,
+    /// TOST's p at the margin (null when it cannot be computed).
+    pub tost_p: Option<f64>,
+    /// `equivalent`, `differs` or `undecided`.
+    pub verdict: String,
+    /// Why no test could be computed, if none could.
+    pub note: Option<String>,
+}
+
+/// A matched cell without trials on a side, in `compare --json`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CompareMissing {
+    /// The cell, `name=value …`.
+    pub cell: String,
+    /// Which side lacks trials: `A`, `B` or `both`.
+    pub side: String,
 }

@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod compare;
 mod feasible;
 mod gc;
 mod pipeline_args;
@@ -60,6 +61,15 @@ pub enum Command {
     Gc(gc::GcArgs),
     /// Print a script that submits a pipeline to Slurm: a job array of shards, then a report job.
     Slurm(slurm::SlurmArgs),
+    /// Compare two program pipelines cell by cell: did a change move the results beyond chance?
+    ///
+    /// A and B are program pipeline files (PATH@VARIANT for a variant's cells). Cells match on
+    /// the params both declare (--map renames); each matched cell's trials in the cache are
+    /// compared on one metric: B ÷ A with a 95 % interval, Welch's p, equivalence (TOST) at the
+    /// margin, a verdict; then whether the share of cells with p < 0.05 is beyond the 5 % chance
+    /// gives. Exits 0 when compared, 1 when the cache holds no trial of any matched cell, 2 on
+    /// bad input.
+    Compare(compare::CompareArgs),
     /// Run a program as qsweep's child, its process group dying with qsweep (qsweep's own).
     #[command(name = "__supervise", hide = true)]
     Supervise(supervise::SuperviseArgs),
@@ -78,6 +88,7 @@ pub const GUIDE: &[(&str, &str)] = &[
     ("verify", "docs/reproducibility.md"),
     ("gc", "docs/commands.md"),
     ("slurm", "docs/cluster.md"),
+    ("compare", "docs/programs.md#did-my-change-move-the-results"),
 ];
 
 /// The guide's table of contents, named at the end of `qsweep --help`.
@@ -124,6 +135,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         Command::Verify(a) => verify::run(a),
         Command::Gc(a) => gc::run(a),
         Command::Slurm(a) => slurm::run(a),
+        Command::Compare(a) => compare::run(a),
         Command::Supervise(a) => supervise::run(a),
     }
 }

@@ -150,10 +150,8 @@ fn write_report(
     dir: &Path,
     force: bool,
 ) -> anyhow::Result<qsweep_report::stage::program::ProgramReport> {
-    let scan = store.map(|s| s.keys()).transpose()?.unwrap_or_default();
     let schema = qsweep_pipeline::program::run::schema(plan);
-    let wanted = qsweep_pipeline::program::exec::jobs(plan).iter().map(|j| j.key).collect();
-    let rows = qsweep_pipeline::program::stored::rows(&scan, &schema, &wanted)?;
+    let rows = qsweep_pipeline::program::stored::plan_rows(plan, store)?;
     qsweep_report::stage::program::write(plan, &schema, &rows, dir, force)
 }
 
@@ -169,7 +167,7 @@ fn print_report(dir: &Path, r: &qsweep_report::stage::program::ProgramReport) {
 }
 
 /// The store folder of `plan`'s rows in the cache of `cache`, if it exists (nothing is created).
-fn existing_folder(
+pub fn existing_folder(
     cache: &CacheArgs,
     plan: &ProgramPlan,
 ) -> anyhow::Result<Option<qsweep_pipeline::cache::Store>> {

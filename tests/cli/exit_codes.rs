@@ -118,6 +118,19 @@ fn every_subcommand_exits_with_the_documented_codes() {
     case("slurm", ok, Test::new().pipeline("tiny.yaml").args(["slurm", "tiny.yaml", "--array", "2"]));
     case("slurm", usage, Test::new().pipeline("tiny.yaml").args(["slurm", "tiny.yaml", "--array", "0"]));
 
+    // Two program pipelines compared: a one-cell sweep of a shell program, run first.
+    let prog =
+        "name: p\nseeds: 2\nprogram:\n  command: [sh, -c, 'cat >/dev/null; echo \"{\\\"x\\\": 1}\"']\n  \
+                metrics: { x: int }\nparams: { a: 1 }\n";
+    let ran = Test::new().file("p.yaml", prog).args(["run", "p.yaml", "--quiet", "--no-report"]).run();
+    case("compare", ok, ran.then().args(["compare", "p.yaml", "p.yaml", "--metric", "x"]));
+    case("compare", usage, Test::new().pipeline("tiny.yaml").args(["compare", "tiny.yaml", "tiny.yaml"]));
+    case(
+        "compare",
+        failure,
+        Test::new().file("p.yaml", prog).args(["compare", "p.yaml", "p.yaml", "--metric", "x"]),
+    );
+
     // Every subcommand has a success and a bad-input case.
     let help = String::from_utf8(crate::helpers::qsweep().arg("--help").output().unwrap().stdout).unwrap();
     let subcommands: Vec<&str> = help

@@ -4,6 +4,7 @@ mod bad_pipelines;
 mod bench;
 mod cache;
 mod causes;
+mod compare;
 mod concurrent_reports;
 mod error_locations;
 mod exit_codes;

@@ -86,12 +86,22 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
     .unwrap();
     let program_run = qsweep(d, &["run", "prog.yaml", "--json", "--quiet"]);
     let engine_run = qsweep(d, &["run", "tiny.yaml", "--json", "--no-report", "--quiet"]);
+    // The program pipeline against itself: one cell, one trial a side (no test, but every field).
+    let compare = qsweep(d, &["compare", "prog.yaml", "prog.yaml", "--metric", "x", "--json"]);
+    let cell: serde_json::Value =
+        serde_json::from_str::<serde_json::Value>(&compare).unwrap()["cells"][0].clone();
+    assert_eq!(
+        table_after(&text, "Each of `cells`:"),
+        cell.as_object().expect("a compared cell").keys().cloned().collect::<BTreeSet<String>>(),
+        "docs/json.md's table of a compared cell against `qsweep compare --json`'s cells"
+    );
     let cases: Vec<(&str, String)> = vec![
         ("`qsweep status --json` on a", qsweep(d, &["status", "prog.yaml", "--json"])),
         ("`qsweep report --json`", qsweep(d, &["report", "tiny.yaml", "--json", "--out", "r"])),
         // A raced pipeline, so the optional `race` list is printed too.
         ("`qsweep status --json`", qsweep(d, &["status", "race.yaml", "--json"])),
         ("`qsweep trial --json`", qsweep(d, &trial)),
+        ("`qsweep compare --json`", compare),
         (
             "`qsweep bench --json`",
             qsweep(d, &["bench", "--steps", "1000", "--filter", "cart-pole/crisp/q0/2^4", "--json"]),

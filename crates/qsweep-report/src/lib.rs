@@ -27,6 +27,8 @@
 //!   each variant to the paper, its verdicts, claims and causes), computed or taken from the memo;
 //! - [`render`]: pure functions of derived numbers into files (CSV, Markdown, LaTeX, HTML tables;
 //!   SVG/PNG figures; pages; Parquet datasets);
+//! - [`comparison`]: `qsweep compare A B`, two program pipelines matched cell by cell and
+//!   tested (generic, beside the replication, never importing it);
 //! - [`stage`]: the report stage itself: which folders to write, guarded against writing less
 //!   than they hold, reusing what the memo says is unchanged.
 //!
@@ -37,6 +39,7 @@
 // which denies the lint) must do without them.
 #![allow(clippy::disallowed_methods)]
 
+pub mod comparison;
 pub mod derive;
 pub mod formats;
 pub mod memo;

@@ -173,6 +173,35 @@ pub fn bootstrap_diff_ci(a: &[f64], b: &[f64], resamples: usize, seed: u64) -> (
     interval_95(&mut diffs)
 }
 
+/// Percentile-bootstrap 95% interval of the ratio of means `mean(b) / mean(a)`: each resample
+/// draws `a` and `b` independently with replacement (as [`bootstrap_diff_ci`], `a` first), then
+/// the 2.5% and 97.5% quantiles of the ratios. `None` when `mean(a)` is not positive (a ratio
+/// to it is no scale) or a sample is empty. A resample whose `a` mean is 0 (every draw a zero)
+/// has an infinite ratio, so the upper end can be infinite: the data cannot bound the ratio.
+pub fn bootstrap_ratio_ci(a: &[f64], b: &[f64], resamples: usize, seed: u64) -> Option<(f64, f64)> {
+    if a.is_empty() || b.is_empty() || mean(a) <= 0.0 {
+        return None;
+    }
+    let r = mean(b) / mean(a);
+    if resamples == 0 {
+        return Some((r, r));
+    }
+    let mut ratios = over_resamples(&mut TrialRng::new(seed), a.len() + b.len(), resamples, |d| {
+        let (ra, rb) = d.split_at(a.len());
+        let ma = resample_mean(a, ra);
+        let mb = resample_mean(b, rb);
+        if ma > 0.0 {
+            mb / ma
+        } else if mb == 0.0 {
+            // 0 / 0: no evidence either way; the point estimate stands in.
+            r
+        } else {
+            f64::INFINITY.copysign(mb)
+        }
+    });
+    Some(interval_95(&mut ratios))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,6 +269,27 @@ mod tests {
         assert!(a.0 < m && m < a.1, "{a:?} should bracket {m}");
         // A constant sample has a degenerate interval.
         assert_eq!(bootstrap_ci(&[3.0; 5], 100, 9), (3.0, 3.0));
+    }
+
+    #[test]
+    fn ratio_bootstrap_is_seeded_and_brackets_the_ratio() {
+        let a = [10.0, 12.0, 9.0, 11.0, 8.0, 10.0];
+        let b = [12.0, 13.0, 11.0, 12.5, 14.0, 11.5];
+        let ci = bootstrap_ratio_ci(&a, &b, 2000, 7).unwrap();
+        assert_eq!(Some(ci), bootstrap_ratio_ci(&a, &b, 2000, 7), "same seed, same interval");
+        assert_ne!(Some(ci), bootstrap_ratio_ci(&a, &b, 2000, 8));
+        let r = mean(&b) / mean(&a);
+        assert!(ci.0 < r && r < ci.1 && ci.0 > 1.0, "{ci:?} around {r}");
+        // Each resample's ratio is the difference bootstrap's draw seen as a ratio: with `a`
+        // constant the ratio interval is the difference interval over that constant, plus 1.
+        let flat = [10.0; 6];
+        let (rlo, rhi) = bootstrap_ratio_ci(&flat, &b, 2000, 3).unwrap();
+        let (dlo, dhi) = bootstrap_diff_ci(&flat, &b, 2000, 3);
+        assert!(close(rlo, 1.0 + dlo / 10.0) && close(rhi, 1.0 + dhi / 10.0), "{rlo} {rhi} {dlo} {dhi}");
+        // Identical constant samples: the ratio is exactly 1.
+        assert_eq!(bootstrap_ratio_ci(&[4.0; 3], &[4.0; 5], 500, 1), Some((1.0, 1.0)));
+        assert_eq!(bootstrap_ratio_ci(&[0.0, 0.0], &b, 500, 1), None, "no positive scale");
+        assert_eq!(bootstrap_ratio_ci(&[], &b, 500, 1), None);
     }
 
     #[test]

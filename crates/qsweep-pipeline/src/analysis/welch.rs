@@ -26,6 +26,29 @@ pub fn welch_p_greater(worse: &[f64], best: &[f64]) -> f64 {
     student_t_sf(t, df)
 }
 
+/// Two-sided p-value of Welch's t-test for H₀: μ_a = μ_b, or `None` when a sample has fewer than
+/// two values (no variance to test with).
+///
+/// Without spread in either sample the means are known exactly: p = 1 when they are equal (the
+/// same values on both sides are no evidence of a difference), else 0.
+pub fn welch_p_two_sided(a: &[f64], b: &[f64]) -> Option<f64> {
+    if a.len() < 2 || b.len() < 2 {
+        return None;
+    }
+    let (n1, n2) = (a.len() as f64, b.len() as f64);
+    let (m1, m2) = (mean(a), mean(b));
+    let v1 = sample_std(a).map_or(0.0, |s| s * s) / n1;
+    let v2 = sample_std(b).map_or(0.0, |s| s * s) / n2;
+    let se2 = v1 + v2;
+    if se2 == 0.0 {
+        return Some(if m1 == m2 { 1.0 } else { 0.0 });
+    }
+    let t = (m1 - m2) / se2.sqrt();
+    let term = |v: f64, n: f64| if v == 0.0 { 0.0 } else { v * v / (n - 1.0) };
+    let df = se2 * se2 / (term(v1, n1) + term(v2, n2));
+    Some((2.0 * student_t_sf(t.abs(), df)).min(1.0))
+}
+
 /// Holm's step-down procedure at family-wise level `level`: which of the hypotheses with these
 /// p-values are rejected. The family-wise error rate stays ≤ `level` under any dependence between
 /// the tests.
@@ -216,6 +239,20 @@ mod tests {
             let got = welch_p_greater(a, b);
             assert!(close(got, *want, 1e-9), "{a:?} vs {b:?}: {got} vs {want}");
         }
+    }
+
+    #[test]
+    fn two_sided_welch_doubles_the_smaller_one_sided_tail() {
+        // Two-sided p = 2·min(p_greater, 1 − p_greater): the SciPy values above, doubled.
+        for (a, b, one) in GOLDEN_WELCH {
+            let want = 2.0 * one.min(1.0 - one);
+            let got = welch_p_two_sided(a, b).unwrap();
+            assert!(close(got, want, 1e-9), "{a:?} vs {b:?}: {got} vs {want}");
+            assert!(close(welch_p_two_sided(b, a).unwrap(), want, 1e-9), "symmetric");
+        }
+        assert_eq!(welch_p_two_sided(&[5.0; 4], &[5.0; 3]), Some(1.0), "identical, no spread");
+        assert_eq!(welch_p_two_sided(&[5.0; 4], &[6.0; 3]), Some(0.0));
+        assert_eq!(welch_p_two_sided(&[5.0], &[6.0, 7.0]), None, "one value: no test");
     }
 
     #[test]

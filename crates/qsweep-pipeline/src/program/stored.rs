@@ -3,11 +3,12 @@
 //! `--force` run, a trial two runs computed at once) is served by one rule: a row that succeeded
 //! wins over a failed one, and among rows of the same status the one in the most recently written
 //! segment wins (segments are written once, so a segment's modification time is when its rows
-//! were stored).
+//! were stored). [`plan_rows`] is what a plan's readers (the report, `qsweep compare`) take: the
+//! rows of every trial the plan plans.
 
-use super::model::ProgramRow;
+use super::model::{ProgramPlan, ProgramRow};
 use super::rows::{read_segment, RowSchema};
-use crate::cache::store::KeySet;
+use crate::cache::store::{KeySet, Store};
 use crate::cache::Key;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
@@ -39,6 +40,18 @@ pub fn rows(
         }
     }
     Ok(best.into_iter().map(|(k, (_, _, r))| (k, r)).collect())
+}
+
+/// The rows of every trial `plan` plans (every experiment, every variant it was planned with), one
+/// per key by the module's rule, from `store`, the folder of the plan's schema (`None`: no rows
+/// yet, so none). A planned trial without a row is simply absent from the map.
+pub fn plan_rows(plan: &ProgramPlan, store: Option<&Store>) -> anyhow::Result<HashMap<Key, ProgramRow>> {
+    let Some(store) = store else { return Ok(HashMap::new()) };
+    let scan = store.keys()?;
+    let schema = RowSchema { params: plan.params.clone(), metrics: plan.program.metrics.clone() };
+    let wanted: HashSet<Key> =
+        plan.experiments.iter().flat_map(|e| &e.cells).flat_map(|c| &c.trials).map(|t| t.key).collect();
+    rows(&scan, &schema, &wanted)
 }
 
 /// When the segment at `path` was written (the epoch when its file system cannot say).

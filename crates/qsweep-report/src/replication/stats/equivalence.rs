@@ -2,9 +2,10 @@
 //! of ours − paper against a margin on the ratio of the means, declared in
 //! `docs/preregistration.md` before it was computed. The paper never states how many runs its
 //! means average, so the test takes that number as an argument and the report shows both
-//! assumptions ([`PAPER_N`]).
+//! assumptions ([`PAPER_N`]). The test itself is the statistics layer's
+//! ([`qsweep_pipeline::analysis::tost_ratio`]); this file holds the paper's margins and level.
 
-use qsweep_pipeline::analysis::welch::student_t_sf;
+use qsweep_pipeline::analysis::tost_ratio;
 
 /// The equivalence margin on ours / paper: the conventional average-bioequivalence limits
 /// (FDA 2001), symmetric on the log scale.
@@ -24,25 +25,9 @@ pub const EQUIVALENCE_RULE: &str = "Equivalent: ours/paper within [0.80, 1.25] b
 Welch t-tests (TOST, α = 0.05, p the larger), the paper's std over an assumed n = 10 or 100 runs \
 (unstated in the paper; docs/preregistration.md).";
 
-/// A summary a test needs: mean, sample std (`None` below two values) and sample size.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Moments {
-    /// Mean.
-    pub mean: f64,
-    /// Sample standard deviation (ddof = 1).
-    pub std: Option<f64>,
-    /// Sample size.
-    pub n: usize,
-}
-
-/// The outcome of one TOST.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Tost {
-    /// The larger of the two one-sided p-values (equivalence is shown when it is ≤ α).
-    pub p: f64,
-    /// Whether both one-sided tests reject at [`ALPHA`].
-    pub equivalent: bool,
-}
+/// A summary a test needs, and the outcome of one TOST: the generic test's own types
+/// ([`qsweep_pipeline::analysis::equivalence`]).
+pub use qsweep_pipeline::analysis::{Moments, Tost};
 
 /// TOST of `ours` against the published `paper` mean and std over `paper_n` runs, with the margin
 /// [`MARGIN`] on ours / paper. `None` when it cannot be decided: ours has a single trial (no
@@ -53,30 +38,8 @@ pub fn tost(ours: Moments, paper: Moments) -> Option<Tost> {
 
 /// [`tost`] with another margin `(lo, hi)` on ours / paper (e.g. [`MARGIN_2X`]).
 pub fn tost_within(ours: Moments, paper: Moments, margin: (f64, f64)) -> Option<Tost> {
-    let s_ours = ours.std?;
-    let s_paper = paper.std?;
-    if paper.mean <= 0.0 || ours.n < 2 || paper.n < 2 {
-        return None;
-    }
-    let lo = (margin.0 - 1.0) * paper.mean;
-    let hi = (margin.1 - 1.0) * paper.mean;
-    let d = ours.mean - paper.mean;
-    let v1 = s_ours * s_ours / ours.n as f64;
-    let v2 = s_paper * s_paper / paper.n as f64;
-    let se2 = v1 + v2;
-    if se2 == 0.0 {
-        // Both means known exactly: the point estimate decides.
-        let inside = lo < d && d < hi;
-        return Some(Tost { p: if inside { 0.0 } else { 1.0 }, equivalent: inside });
-    }
-    let se = se2.sqrt();
-    let term = |v: f64, n: usize| if v == 0.0 { 0.0 } else { v * v / (n as f64 - 1.0) };
-    let df = se2 * se2 / (term(v1, ours.n) + term(v2, paper.n));
-    // H₀¹: d ≤ lo against d > lo; H₀²: d ≥ hi against d < hi.
-    let p_lower = student_t_sf((d - lo) / se, df);
-    let p_upper = student_t_sf((hi - d) / se, df);
-    let p = p_lower.max(p_upper);
-    Some(Tost { p, equivalent: p <= ALPHA })
+    // The generic test on the ratio (the statistics layer's, shared with `qsweep compare`).
+    tost_ratio(ours, paper, margin, ALPHA)
 }
 
 /// A Table III row's TOST under each assumed number of paper runs in [`PAPER_N`]: our best
