@@ -108,7 +108,19 @@ pub struct Leases {
     /// Each leased key's file; the keys of one batch share one file (one lock, one heartbeat),
     /// closed, and so unlocked, once the last of them is released.
     held: Mutex<HashMap<Key, Arc<File>>>,
+    /// Keys whose leases are being made (linked, not yet in `held`): [`Self::others_present`]
+    /// counts their files as this run's.
+    taking: std::sync::atomic::AtomicUsize,
     seen: Mutex<Seen>,
+}
+
+/// Counts keys as being taken for as long as it lives.
+struct Taking<'l>(&'l std::sync::atomic::AtomicUsize, usize);
+
+impl Drop for Taking<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_sub(self.1, std::sync::atomic::Ordering::SeqCst);
+    }
 }
 
 impl Leases {
@@ -121,6 +133,7 @@ impl Leases {
             me: Holder::me(),
             mark: runs::RunMark::register(store)?,
             held: Mutex::new(HashMap::new()),
+            taking: std::sync::atomic::AtomicUsize::new(0),
             seen: Mutex::new(Seen::from_scan(store.dir(), &KeySet::default(), false)),
         }))
     }
@@ -154,6 +167,8 @@ impl Leases {
     /// under each key's name (`batch.rs`), and what is stored is looked at once, after every link.
     /// An error on one key (its lease could not be made) leaves the others leased.
     pub fn try_take_batch(&self, keys: &[Key]) -> Vec<std::io::Result<Take>> {
+        self.taking.fetch_add(keys.len(), std::sync::atomic::Ordering::SeqCst);
+        let _taking = Taking(&self.taking, keys.len());
         let mut file = Batch::new(&self.dir, &self.me);
         let linked: Vec<std::io::Result<Option<Arc<File>>>> =
             keys.iter().map(|k| self.link(&self.path(k), &mut file)).collect();
@@ -247,13 +262,19 @@ impl Leases {
 
     /// Whether another run holds leases in this cache now (live or not): someone may be waiting
     /// for this run's trials.
+    ///
+    /// The folder is listed under the lock of the leases held, so no lease of this run is
+    /// released between the listing and the count; the files of leases being made count as this
+    /// run's (`taking`). Without both, the tail of a lone run mistook its own leases for another
+    /// run's now and then and flushed an early batch: two segments where one was due.
     pub fn others_present(&self) -> bool {
+        let held = lock_ok(&self.held);
         let Ok(entries) = std::fs::read_dir(&self.dir) else { return false };
-        let theirs = entries
+        let files = entries
             .flatten()
             .filter(|e| !e.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX))
             .count();
-        theirs > self.held()
+        files > held.len() + self.taking.load(std::sync::atomic::Ordering::SeqCst)
     }
 
     /// How many leases this run holds.
