@@ -277,6 +277,20 @@ impl Leases {
         files > held.len() + self.taking.load(std::sync::atomic::Ordering::SeqCst)
     }
 
+    /// Remove every lease in the folder whose holder is dead (debris: see [`judge`]); a live
+    /// holder's lease, and a file being made, are left alone.
+    fn sweep_dead(&self) {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else { return };
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX) {
+                continue;
+            }
+            if let Ok((file, Liveness::Dead)) = inspect(&e.path(), &self.me) {
+                remove_own(&file, &e.path());
+            }
+        }
+    }
+
     /// How many leases this run holds.
     pub fn held(&self) -> usize {
         lock_ok(&self.held).len()
@@ -286,6 +300,9 @@ impl Leases {
 impl Drop for Leases {
     fn drop(&mut self) {
         self.release_all();
+        // A run killed between storing a segment and releasing its leases leaves leases of stored
+        // keys that no later run needs to take over; the last run to see them dead removes them.
+        self.sweep_dead();
         // The cache looks as before once no run is on it; a run that just made the folder and
         // meets it gone makes it again (see `try_take`). Fails harmlessly while others use it.
         let _ = std::fs::remove_dir(&self.dir);
