@@ -78,7 +78,7 @@ enum Loaded {
     Program {
         label: String,
         variant: Option<String>,
-        plan: qsweep_pipeline::program::model::ProgramPlan,
+        plan: Box<qsweep_pipeline::program::model::ProgramPlan>,
         rows: std::collections::HashMap<
             qsweep_pipeline::cache::Key,
             qsweep_pipeline::program::model::ProgramRow,
@@ -129,7 +129,7 @@ fn load(spec: &str, cache: &CacheArgs) -> anyhow::Result<Loaded> {
     let plan = super::program::plan(&args)?;
     let store = super::program::existing_folder(cache, &plan)?;
     let rows = qsweep_pipeline::program::stored::plan_rows(&plan, store.as_ref())?;
-    Ok(Loaded::Program { label: spec.to_string(), variant, plan, rows })
+    Ok(Loaded::Program { label: spec.to_string(), variant, plan: Box::new(plan), rows })
 }
 
 /// Run `qsweep compare`.

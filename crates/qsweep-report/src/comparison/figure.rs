@@ -155,6 +155,7 @@ impl Picture for Figure<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::comparison::cells::Sample;
     use crate::comparison::matching::{CellSamples, Matched};
     use crate::comparison::stats::compare_matched;
     use qsweep_pipeline::program::model::ParamValue;
@@ -164,8 +165,8 @@ mod tests {
         let cells = (0..3)
             .map(|k| CellSamples {
                 values: vec![ParamValue::Str(format!("<k{k}> & \"q\""))],
-                a: a.clone(),
-                b: a.iter().map(|v| v * (1.0 + 0.1 * f64::from(k))).collect(),
+                a: Sample::Values(a.clone()),
+                b: Sample::Values(a.iter().map(|v| v * (1.0 + 0.1 * f64::from(k))).collect()),
             })
             .collect();
         compare_matched(

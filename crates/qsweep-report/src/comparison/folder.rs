@@ -126,7 +126,7 @@ pub fn read(dir: &Path, variant: Option<&str>) -> anyhow::Result<CellSet> {
             if variant.is_some() && row_variant.as_deref() != variant {
                 continue;
             }
-            let s = |c: &StringArray| c.is_valid(i).then(|| c.value(i).to_string()).unwrap_or_default();
+            let s = |c: &StringArray| if c.is_valid(i) { c.value(i).to_string() } else { String::new() };
             let count = |c: &Option<Int64Array>| {
                 c.as_ref().filter(|c| c.is_valid(i)).map(|c| u32::try_from(c.value(i)).unwrap_or(u32::MAX))
             };
