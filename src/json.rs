@@ -351,7 +351,7 @@ impl FeasibleReport {
 pub struct CompareJson {
     /// Version of this format ([`CompareJson::FORMAT_VERSION`]).
     pub format_version: u32,
-    /// Pipeline A as given (`PATH` or `PATH@VARIANT`).
+    /// Side A as given (`PATH`, `PATH@VARIANT` or a report folder).
     pub a: String,
     /// Pipeline B as given.
     pub b: String,
@@ -426,6 +426,7 @@ impl CompareJson {
                     ratio: x.ratio,
                     ratio_lo: x.ratio_ci.map(|r| r.0).filter(|v| v.is_finite()),
                     ratio_hi: x.ratio_ci.map(|r| r.1).filter(|v| v.is_finite()),
+                    ratio_interval: x.interval.word().to_string(),
                     p: x.p,
                     tost_p: x.tost.map(|t| t.p),
                     verdict: x.verdict.word().to_string(),
@@ -473,10 +474,12 @@ pub struct CompareCell {
     pub std_b: Option<f64>,
     /// mean B ÷ mean A (null when mean A is not positive).
     pub ratio: Option<f64>,
-    /// Its 95 % bootstrap interval's lower end.
+    /// Its 95 % interval's lower end.
     pub ratio_lo: Option<f64>,
     /// Its upper end (null when unbounded).
     pub ratio_hi: Option<f64>,
+    /// How the interval was computed: `bootstrap` (from trials) or `delta-log` (from moments).
+    pub ratio_interval: String,
     /// Welch's two-sided p (null below 2 trials on a side).
     pub p: Option<f64>,
     /// TOST's p at the margin (null when it cannot be computed).

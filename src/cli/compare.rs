@@ -1,27 +1,30 @@
-//! `qsweep compare A B`: did a change move a program pipeline's results beyond chance? Parses
-//! the two pipelines (`path@variant`), plans each, reads the cache's rows of each plan, and calls
-//! the library (`qsweep_report::comparison`), then prints its summary or JSON and, with `--out`,
-//! has it write its files.
+//! `qsweep compare A B`: did a change move a pipeline's results beyond chance? Resolves each
+//! side (a program pipeline, an engine pipeline, either as `path@variant`, or an engine report
+//! folder), has the library gather its cells (`qsweep_report::comparison`: a program's rows, an
+//! engine plan's cells as the report reads them, a folder's `cells.parquet`), compares them,
+//! then prints its summary or JSON and, with `--out`, has it write its files.
 
 use super::pipeline_args::CacheArgs;
 use clap::Args;
 use qsweep_pipeline::error::{exit, user_error};
-use qsweep_report::comparison::{self, Comparison, Request, Side, Verdict};
+use qsweep_report::comparison::{self, CellSet, Comparison, Request, Side, Source, Verdict};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `qsweep compare`.
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// The pipeline before (a program pipeline file; `PATH@VARIANT` for one of its variants).
+    /// The side before: a program or engine pipeline file (`PATH@VARIANT` for one of its
+    /// variants), or an engine report folder holding cells.parquet (`DIR@VARIANT` for one
+    /// variant's rows of a pipeline's root folder).
     pub a: String,
-    /// The pipeline after, compared with A (`PATH@VARIANT` as for A).
+    /// The side after, compared with A (as for A).
     pub b: String,
     /// A's param NAME is B's param OTHER (repeatable); params named alike in both are shared
     /// without it.
     #[arg(long = "map", value_name = "NAME=OTHER")]
     pub map: Vec<String>,
     /// The metric: `NAME` in both, or `NAME=OTHER` (A's NAME against B's OTHER)
-    /// [default: A's objective].
+    /// [default: A's objective; an engine side's `episodes`].
     #[arg(long, value_name = "NAME[=OTHER]")]
     pub metric: Option<String>,
     /// The equivalence margin on B ÷ A, `LO,HI`.
@@ -58,9 +61,9 @@ fn margin(s: &str) -> anyhow::Result<(f64, f64)> {
     Ok((lo, hi))
 }
 
-/// `PATH@VARIANT` split (an existing file whose name holds `@` is a path as a whole).
+/// `PATH@VARIANT` split (an existing file or folder whose name holds `@` is a path as a whole).
 fn split_spec(s: &str) -> (PathBuf, Option<String>) {
-    if Path::new(s).is_file() {
+    if Path::new(s).exists() {
         return (PathBuf::from(s), None);
     }
     match s.rsplit_once('@') {
@@ -69,37 +72,64 @@ fn split_spec(s: &str) -> (PathBuf, Option<String>) {
     }
 }
 
-/// One side planned, with the cache's rows of its plan.
-struct Loaded {
-    label: String,
-    variant: Option<String>,
-    plan: qsweep_pipeline::program::model::ProgramPlan,
-    rows: std::collections::HashMap<qsweep_pipeline::cache::Key, qsweep_pipeline::program::model::ProgramRow>,
+/// One side resolved: a program pipeline planned, with the cache's rows of its plan, or the cells
+/// of an engine pipeline or a report folder.
+enum Loaded {
+    Program {
+        label: String,
+        variant: Option<String>,
+        plan: Box<qsweep_pipeline::program::model::ProgramPlan>,
+        rows: std::collections::HashMap<
+            qsweep_pipeline::cache::Key,
+            qsweep_pipeline::program::model::ProgramRow,
+        >,
+    },
+    Cells {
+        label: String,
+        set: CellSet,
+    },
 }
 
 impl Loaded {
     fn side(&self) -> Side<'_> {
-        Side { label: &self.label, plan: &self.plan, variant: self.variant.as_deref(), rows: &self.rows }
+        match self {
+            Self::Program { label, variant, plan, rows } => {
+                Side { label, source: Source::Program { plan, variant: variant.as_deref(), rows } }
+            }
+            Self::Cells { label, set } => Side { label, source: Source::Cells(set) },
+        }
     }
 }
 
 fn load(spec: &str, cache: &CacheArgs) -> anyhow::Result<Loaded> {
     let (path, variant) = split_spec(spec);
-    if !path.is_file() {
-        return Err(user_error(format!("{}: no such pipeline file", path.display())));
+    if path.is_dir() {
+        let set = comparison::folder::read(&path, variant.as_deref())?;
+        return Ok(Loaded::Cells { label: spec.to_string(), set });
     }
-    if !super::program::is_program_file(&path) {
-        return Err(user_error(format!(
-            "{}: not a program pipeline (no `program:`): compare takes program pipelines for now (docs/programs.md)",
-            path.display()
-        )));
+    if !path.is_file() {
+        return Err(user_error(format!("{}: no such pipeline file or report folder", path.display())));
     }
     let mut args = super::program::bare(&path, cache);
     args.variant = variant.iter().cloned().collect();
+    if !super::program::is_program_file(&path) {
+        // An engine pipeline: one variant's cells (or the pipeline's, without variants).
+        let plan = args.plan()?;
+        if variant.is_none() && !plan.variants.is_empty() {
+            let ids: Vec<&str> = plan.variants.iter().map(|v| v.id.as_str()).collect();
+            return Err(user_error(format!(
+                "{spec} declares variants ({}): compare one of them with {spec}@ID",
+                ids.join(", ")
+            )));
+        }
+        let store = cache.existing_store()?;
+        let set = comparison::engine::read(plan, store.as_ref())?;
+        return Ok(Loaded::Cells { label: spec.to_string(), set });
+    }
     let plan = super::program::plan(&args)?;
     let store = super::program::existing_folder(cache, &plan)?;
     let rows = qsweep_pipeline::program::stored::plan_rows(&plan, store.as_ref())?;
-    Ok(Loaded { label: spec.to_string(), variant, plan, rows })
+    Ok(Loaded::Program { label: spec.to_string(), variant, plan: Box::new(plan), rows })
 }
 
 /// Run `qsweep compare`.
@@ -112,12 +142,20 @@ pub fn run(a: CompareArgs) -> anyhow::Result<u8> {
     let (la, lb) = (load(&a.a, &a.cache)?, load(&a.b, &a.cache)?);
     let c = comparison::compare(&la.side(), &lb.side(), &request)?;
     if c.cells.is_empty() {
+        let run = |spec: &str| {
+            let (path, _) = split_spec(spec);
+            if path.is_dir() {
+                format!("{spec} has no trials of them")
+            } else {
+                format!("qsweep run {}", path.display())
+            }
+        };
         eprintln!(
-            "compare: the cache {} holds no trials of any of the {} matched cells (run both pipelines first: qsweep run {}; qsweep run {})",
+            "compare: the cache {} holds no trials of any of the {} matched cells (run both pipelines first: {}; {})",
             a.cache.dir().display(),
             c.missing.len(),
-            split_spec(&a.a).0.display(),
-            split_spec(&a.b).0.display()
+            run(&a.a),
+            run(&a.b)
         );
         return Ok(exit::FAILURE);
     }
@@ -153,13 +191,23 @@ fn print_summary(c: &Comparison) {
     let o = &c.overall;
     println!("{}", o.line());
     println!("verdicts: {} equivalent, {} differs, {} undecided", o.verdicts.0, o.verdicts.1, o.verdicts.2);
-    for x in c.cells.iter().filter(|x| x.verdict == Verdict::Differs) {
+    // The cells that differ most (smallest p), at most LISTED of them: an engine plan has thousands.
+    const LISTED: usize = 20;
+    let mut differ: Vec<_> = c.cells.iter().filter(|x| x.verdict == Verdict::Differs).collect();
+    differ.sort_by(|x, y| x.p.unwrap_or(1.0).total_cmp(&y.p.unwrap_or(1.0)));
+    for x in differ.iter().take(LISTED) {
         let ci = x.ratio_ci.map_or(String::new(), |(lo, hi)| format!(" [{lo:.3}, {hi:.3}]"));
         println!(
             "differs: {}: B/A {}{ci}, p = {}",
             x.label,
             x.ratio.map_or("-".to_string(), |r| format!("{r:.3}")),
             x.p.map_or("-".to_string(), comparison::stats::p_text)
+        );
+    }
+    if differ.len() > LISTED {
+        println!(
+            "… and {} more cells that differ (all of them: --json, or --out DIR's compare.csv)",
+            differ.len() - LISTED
         );
     }
     let untested = c.cells.iter().filter(|x| x.p.is_none()).count();

@@ -3,7 +3,9 @@
 //! within chance; the same program scaled by 1.2 is beyond chance with most cells `differs`;
 //! `--map` matches differently named params; bad inputs exit 2 naming the fix; a cache without
 //! any matched cell exits 1; `--out`'s files are byte-identical on a rerun and `--json` has the
-//! fields docs/json.md lists.
+//! fields docs/json.md lists. Engine sides: an engine pipeline with itself (p = 1 everywhere),
+//! on other seeds (within chance), a report folder with itself and with its pipeline (the same
+//! moments), a program matched onto engine cells with `--map`, and their bad inputs.
 
 use crate::helpers::{fails_with, stdout, Sandbox};
 
@@ -145,7 +147,9 @@ fn compare_bad_inputs_exit_2_with_a_clear_message() {
         (&["a.yaml", "a.yaml", "--metric", "label"], "compare takes an int, float or bool metric"),
         (&["noobj.yaml", "a.yaml"], "declares no objective: name the metric to compare with --metric"),
         (&["a.yaml", "a.yaml", "--margin", "1.2,0.8"], "expected LO,HI"),
-        (&["a.yaml", "engine.yaml"], "compare takes program pipelines for now"),
+        (&["a.yaml", "engine.yaml"], "engine.yaml (engine pipeline) has no metric `value` (its metrics: episodes, converged, total_steps)"),
+        // The engine's cells have a param `x` too, but many cells share each x: ambiguous.
+        (&["a.yaml", "engine.yaml", "--metric", "value=episodes"], "differ only in params the other side does not have"),
         (&["a.yaml", "missing.yaml"], "missing.yaml: no such pipeline file"),
         (&["a.yaml@v1", "a.yaml"], "v1"),
     ];
@@ -206,5 +210,173 @@ fn compare_out_files_are_byte_identical_on_a_rerun_and_json_has_the_documented_f
             section.contains(&format!("`{key}`")),
             "docs/json.md's compare table lacks the cell field `{key}`"
         );
+    }
+}
+
+/// `tiny.yaml` with its seed list replaced by `seeds`.
+fn tiny(seeds: &str) -> String {
+    std::fs::read_to_string(crate::helpers::repo().join("tests/fixtures/pipelines/tiny.yaml"))
+        .unwrap()
+        .replace("seeds: 2\n", &format!("seeds: {seeds}\n"))
+}
+
+#[test]
+fn compare_an_engine_pipeline_with_itself_gives_p_1_in_every_cell() {
+    let sb = Sandbox::new();
+    sb.write("tiny.yaml", &tiny("[1, 2, 3]"));
+    stdout(&mut sb.qsweep(&["run", "tiny.yaml", "--quiet", "--no-report", "--jobs", "2"]));
+    let out = stdout(&mut sb.qsweep(&["compare", "tiny.yaml", "tiny.yaml"]));
+    assert!(
+        out.contains("compared 28 cells of tiny.yaml and tiny.yaml on metric episodes (shared params: system, repr, algorithm, experiment, x, x_dot, theta, theta_dot, actions, resolution;"),
+        "{out}"
+    );
+    assert!(out.contains("0 of 28 cells with p < 0.05") && out.contains("within chance"), "{out}");
+    let v = json(&sb, &["tiny.yaml", "tiny.yaml"]);
+    for c in v["cells"].as_array().unwrap() {
+        assert_eq!(
+            (c["p"].as_f64(), c["ratio"].as_f64(), c["n_a"].as_u64()),
+            (Some(1.0), Some(1.0), Some(3)),
+            "{c}"
+        );
+        assert_eq!(c["ratio_interval"], "bootstrap");
+        assert_ne!(c["verdict"], "differs");
+    }
+    // A cell's params, as a reader writes them: ball-beam has no theta (`-`).
+    let first = &v["cells"][0]["params"];
+    assert_eq!(
+        (
+            first["system"].as_str(),
+            first["repr"].as_str(),
+            first["algorithm"].as_str(),
+            first["experiment"].as_i64()
+        ),
+        (Some("ball-beam"), Some("crisp"), Some("q0"), Some(1))
+    );
+    assert_eq!(
+        (first["x"].as_i64(), first["theta"].as_str(), first["actions"].as_i64()),
+        (Some(2), Some("-"), Some(3))
+    );
+    // The other metrics: the share converged and the steps run.
+    let steps = json(&sb, &["tiny.yaml", "tiny.yaml", "--metric", "total_steps"]);
+    assert_eq!(steps["metric"], serde_json::json!(["total_steps", "total_steps"]));
+    assert!(steps["cells"][0]["mean_a"].as_f64().unwrap() > 30.0, "{}", steps["cells"][0]);
+    let err = fails_with(&mut sb.qsweep(&["compare", "tiny.yaml", "tiny.yaml", "--metric", "score"]), 2);
+    assert!(err.contains("has no metric `score` (its metrics: episodes, converged, total_steps)"), "{err}");
+}
+
+#[test]
+fn compare_an_engine_pipeline_on_other_seeds_is_within_chance() {
+    let sb = Sandbox::new();
+    sb.write("a.yaml", &tiny("[1, 2, 3, 4, 5]"));
+    sb.write("b.yaml", &tiny("[11, 12, 13, 14, 15]"));
+    for p in ["a.yaml", "b.yaml"] {
+        stdout(&mut sb.qsweep(&["run", p, "--quiet", "--no-report", "--jobs", "2"]));
+    }
+    let v = json(&sb, &["a.yaml", "b.yaml"]);
+    assert_eq!(v["statement"], "within chance", "{v}");
+    assert_eq!(v["cells"].as_array().unwrap().len(), 28);
+    assert!(v["binomial_p"].as_f64().unwrap() >= 0.05);
+    for c in v["cells"].as_array().unwrap() {
+        assert_eq!((c["n_a"].as_u64(), c["n_b"].as_u64()), (Some(5), Some(5)), "{c}");
+    }
+}
+
+#[test]
+fn compare_a_report_folder_with_itself_and_with_its_pipeline() {
+    let sb = Sandbox::new();
+    sb.write("tiny.yaml", &tiny("[1, 2, 3]"));
+    stdout(&mut sb.qsweep(&["run", "tiny.yaml", "--quiet", "--no-report", "--jobs", "2"]));
+    stdout(&mut sb.qsweep(&["report", "tiny.yaml", "--quiet", "--out", "rep", "--formats", "cells"]));
+    let v = json(&sb, &["rep", "rep"]);
+    assert_eq!((v["tested"].as_u64(), v["statement"].as_str()), (Some(28), Some("within chance")));
+    for c in v["cells"].as_array().unwrap() {
+        assert_eq!((c["p"].as_f64(), c["ratio"].as_f64()), (Some(1.0), Some(1.0)), "{c}");
+        assert_eq!(c["ratio_interval"], "delta-log", "{c}");
+        let (lo, hi) = (c["ratio_lo"].as_f64(), c["ratio_hi"].as_f64());
+        // From moments: 1 · exp(±1.96 se), symmetric on a log scale (none without spread? 1, 1).
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            assert!(lo <= 1.0 && 1.0 <= hi && (lo * hi - 1.0).abs() < 1e-9, "{c}");
+        }
+    }
+    // The folder's moments are its pipeline's cells': the same means and stds, cell by cell.
+    let w = json(&sb, &["rep", "tiny.yaml"]);
+    assert_eq!(w["tested"].as_u64(), Some(28));
+    for c in w["cells"].as_array().unwrap() {
+        assert_eq!(c["mean_a"], c["mean_b"], "{c}");
+        let (sa, sb_) = (c["std_a"].as_f64().unwrap(), c["std_b"].as_f64().unwrap());
+        assert!((sa - sb_).abs() < 1e-9, "{c}");
+        assert_eq!(c["p"].as_f64(), Some(1.0), "{c}");
+    }
+}
+
+#[test]
+fn compare_a_program_onto_engine_cells_with_map() {
+    let sb = Sandbox::new();
+    sb.write("tiny.yaml", &tiny("[1, 2, 3]"));
+    stdout(&mut sb.qsweep(&["run", "tiny.yaml", "--quiet", "--no-report", "--jobs", "2"]));
+    // A stand-in for another implementation of ball-beam's crisp Q(0) with 3 actions: it fixes the
+    // engine cell's other params as its own and names the bins of x `bins` (`experiment` is a
+    // reserved name in a program's params; the engine's cells of one configuration in two
+    // experiments are one cell).
+    sb.write(
+        "other.py",
+        "import json, sys\nfor line in sys.stdin:\n    c = json.loads(line)\n    \
+         print(json.dumps({\"episodes\": 20 + c[\"seed\"] + c[\"bins\"]}), flush=True)\n",
+    );
+    sb.write(
+        "other.yaml",
+        "name: other\nseeds: 3\nprogram:\n  command: [python3, other.py]\n  inputs: [other.py]\n  protocol: worker\n  \
+         metrics: { episodes: int }\n  objective: { metric: episodes, goal: minimize }\n\
+         params: { system: ball-beam, repr: crisp, algorithm: q0, actions: 3, bins: 2, x_dot: 2 }\n\
+         experiments:\n  - { id: grid, vary: { bins: [2, 3], x_dot: [2, 3] } }\n",
+    );
+    stdout(&mut sb.qsweep(&["run", "other.yaml", "--quiet", "--no-report"]));
+    let v = json(&sb, &["other.yaml", "tiny.yaml", "--map", "bins=x"]);
+    assert_eq!(
+        v["shared"],
+        serde_json::json!([
+            ["actions", "actions"],
+            ["algorithm", "algorithm"],
+            ["bins", "x"],
+            ["repr", "repr"],
+            ["system", "system"],
+            ["x_dot", "x_dot"]
+        ])
+    );
+    assert_eq!(v["metric"], serde_json::json!(["episodes", "episodes"]));
+    let cells: Vec<(i64, i64)> = v["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c["params"]["bins"].as_i64().unwrap(), c["params"]["x_dot"].as_i64().unwrap()))
+        .collect();
+    assert_eq!(cells, [(2, 2), (2, 3), (3, 2), (3, 3)]);
+    // The program's episodes are 20 + seed + bins: for bins 2 over seeds 0–2, a mean of 23.
+    assert_eq!(v["cells"][0]["mean_a"].as_f64(), Some(23.0));
+    assert_eq!(v["only_a"].as_array().unwrap().len(), 0);
+    assert_eq!(v["only_b"].as_array().unwrap().len(), 24, "the engine's other cells");
+}
+
+#[test]
+fn compare_engine_sides_bad_inputs_exit_2_with_a_clear_message() {
+    let sb = Sandbox::new();
+    sb.write("tiny.yaml", &tiny("[1, 2]"));
+    sb.fixture("variants.yaml");
+    std::fs::create_dir_all(sb.path("empty")).unwrap();
+    stdout(&mut sb.qsweep(&["run", "tiny.yaml", "--quiet", "--no-report", "--jobs", "2"]));
+    stdout(&mut sb.qsweep(&["report", "tiny.yaml", "--quiet", "--out", "rep", "--formats", "cells"]));
+    let cases: &[(&[&str], &str)] = &[
+        (&["empty", "tiny.yaml"], "empty: no cells.parquet in this folder"),
+        (&["tiny.yaml@nope", "tiny.yaml"], "nope"),
+        (&["variants.yaml", "tiny.yaml"], "declares variants (as-written, fast-crisp, short-episodes): compare one of them with variants.yaml@ID"),
+        (&["variants.yaml@nope", "tiny.yaml"], "nope"),
+        (&["rep@as-written", "rep"], "has no variant column"),
+        (&["rep", "rep", "--metric", "converged"], "(report folder) has no metric `converged` (its metrics: episodes)"),
+    ];
+    for (args, want) in cases {
+        let mut all = vec!["compare"];
+        all.extend_from_slice(args);
+        let err = fails_with(&mut sb.qsweep(&all), 2);
+        assert!(err.contains(want), "qsweep {}: {err}", all.join(" "));
     }
 }

@@ -3,17 +3,26 @@
 //! the paper's published value with it (`qsweep_report::replication::stats::equivalence`), and
 //! `qsweep compare` one pipeline's cell against another's.
 
+pub use super::summary::Moments;
 use super::welch::student_t_sf;
 
-/// A summary a test needs: mean, sample std (`None` below two values) and sample size.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Moments {
-    /// Mean.
-    pub mean: f64,
-    /// Sample standard deviation (ddof = 1).
-    pub std: Option<f64>,
-    /// Sample size.
-    pub n: usize,
+/// The 97.5 % quantile of the standard normal distribution.
+const Z_975: f64 = 1.959_963_984_540_054;
+
+/// A 95 % interval of the ratio of means `b.mean / a.mean` from the moments alone (what a report's
+/// `cells.parquet` keeps of a cell): the delta method on the log ratio, whose standard error is
+/// √(s_a² / (n_a m_a²) + s_b² / (n_b m_b²)), so the interval is `ratio · exp(±1.96 · se)`
+/// (normal quantile), asymmetric like the ratio itself. `None` when a mean is not positive (no log)
+/// or a side has no std (fewer than two values).
+pub fn ratio_ci_delta(a: Moments, b: Moments) -> Option<(f64, f64)> {
+    let (sa, sb) = (a.std?, b.std?);
+    if a.mean <= 0.0 || b.mean <= 0.0 || a.n < 2 || b.n < 2 {
+        return None;
+    }
+    let r = b.mean / a.mean;
+    let var = sa * sa / (a.n as f64 * a.mean * a.mean) + sb * sb / (b.n as f64 * b.mean * b.mean);
+    let half = Z_975 * var.sqrt();
+    Some((r * (-half).exp(), r * half.exp()))
 }
 
 /// The outcome of one TOST.
@@ -73,6 +82,18 @@ mod tests {
         assert!((t.p - 0.048_590_093_7).abs() < 1e-9 && t.equivalent, "{t:?}");
         // The same at a stricter level is not shown.
         assert!(!tost_ratio(m(95.0, 20.0, 10), m(90.5, 25.8, 10), (0.8, 1.25), 0.01).unwrap().equivalent);
+    }
+
+    #[test]
+    fn ratio_ci_delta_is_the_log_normal_interval() {
+        // se² = 10²/(10·100²) + 20²/(10·200²) = 0.002; ratio 2, interval 2·exp(±1.96·√0.002).
+        let (lo, hi) = ratio_ci_delta(m(100.0, 10.0, 10), m(200.0, 20.0, 10)).unwrap();
+        let half = Z_975 * 0.002f64.sqrt();
+        assert!((lo - 2.0 * (-half).exp()).abs() < 1e-12 && (hi - 2.0 * half.exp()).abs() < 1e-12);
+        assert!((lo * hi - 4.0).abs() < 1e-12, "symmetric on a log scale");
+        assert_eq!(ratio_ci_delta(m(5.0, 0.0, 3), m(5.0, 0.0, 3)), Some((1.0, 1.0)));
+        assert_eq!(ratio_ci_delta(m(0.0, 1.0, 3), m(5.0, 1.0, 3)), None);
+        assert_eq!(ratio_ci_delta(Moments { mean: 1.0, std: None, n: 1 }, m(5.0, 1.0, 3)), None);
     }
 
     #[test]

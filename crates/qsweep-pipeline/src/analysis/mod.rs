@@ -2,7 +2,8 @@
 //! quantiles, bootstrap intervals), Table III's rules (episodes counted, the best cell) and the
 //! race's test (Welch, Holm), and what `qsweep compare` adds: the two-sided Welch test, the
 //! equivalence test on a ratio of means (TOST, shared with the replication), the bootstrap
-//! interval of a ratio of means and the binomial tail. Everything is a pure, seeded function of its inputs, so reports stay
+//! interval of a ratio of means (and, from moments alone, its delta-method interval and Welch's test)
+//! and the binomial tail. Everything is a pure, seeded function of its inputs, so reports stay
 //! byte-identical; the race only decides rounds with these, the report renders them. Statistics
 //! only the report uses live in the report crate (`qsweep_report::derive::rank`, and the
 //! replication's own in `qsweep_report::replication::stats`).
@@ -15,8 +16,8 @@ pub mod welch;
 
 pub use best::{best_cell, episodes_counted, Best, Candidate, BEST_RULE, CENSORING, RACE_RULE};
 pub use binomial::binomial_sf;
-pub use equivalence::{tost_ratio, Moments, Tost};
+pub use equivalence::{ratio_ci_delta, tost_ratio, Tost};
 pub use summary::{
     bootstrap_ci, bootstrap_diff_ci, bootstrap_ratio_ci, interval_95, iqm_sorted, mean, quantile_sorted,
-    resample_mean, sample_std, Summary, BOOTSTRAP_RESAMPLES,
+    resample_mean, sample_std, Moments, Summary, BOOTSTRAP_RESAMPLES,
 };

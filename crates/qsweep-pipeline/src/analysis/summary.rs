@@ -4,6 +4,24 @@
 
 use qsweep_engine::rng::{below_from, TrialRng};
 
+/// A summary a test needs: mean, sample std (`None` below two values) and sample size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Moments {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation (ddof = 1).
+    pub std: Option<f64>,
+    /// Sample size.
+    pub n: usize,
+}
+
+impl Moments {
+    /// The moments of a sample.
+    pub fn of(values: &[f64]) -> Self {
+        Self { mean: mean(values), std: sample_std(values), n: values.len() }
+    }
+}
+
 /// Bootstrap resamples per cell.
 pub const BOOTSTRAP_RESAMPLES: usize = 2000;
 

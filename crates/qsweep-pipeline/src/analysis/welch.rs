@@ -4,7 +4,7 @@
 //! beta function (a continued fraction), so no statistics crate is needed; the values are checked
 //! against SciPy's in the tests.
 
-use super::summary::{mean, sample_std};
+use super::summary::{mean, sample_std, Moments};
 
 /// One-sided p-value of Welch's t-test for H₀: μ_worse ≤ μ_best against H₁: μ_worse > μ_best.
 ///
@@ -32,13 +32,19 @@ pub fn welch_p_greater(worse: &[f64], best: &[f64]) -> f64 {
 /// Without spread in either sample the means are known exactly: p = 1 when they are equal (the
 /// same values on both sides are no evidence of a difference), else 0.
 pub fn welch_p_two_sided(a: &[f64], b: &[f64]) -> Option<f64> {
-    if a.len() < 2 || b.len() < 2 {
+    welch_p_two_sided_moments(Moments::of(a), Moments::of(b))
+}
+
+/// [`welch_p_two_sided`] from each sample's moments (mean, sample std, n) alone, as a report's
+/// `cells.parquet` keeps them: the same test, the same numbers.
+pub fn welch_p_two_sided_moments(a: Moments, b: Moments) -> Option<f64> {
+    if a.n < 2 || b.n < 2 {
         return None;
     }
-    let (n1, n2) = (a.len() as f64, b.len() as f64);
-    let (m1, m2) = (mean(a), mean(b));
-    let v1 = sample_std(a).map_or(0.0, |s| s * s) / n1;
-    let v2 = sample_std(b).map_or(0.0, |s| s * s) / n2;
+    let (n1, n2) = (a.n as f64, b.n as f64);
+    let (m1, m2) = (a.mean, b.mean);
+    let v1 = a.std.map_or(0.0, |s| s * s) / n1;
+    let v2 = b.std.map_or(0.0, |s| s * s) / n2;
     let se2 = v1 + v2;
     if se2 == 0.0 {
         return Some(if m1 == m2 { 1.0 } else { 0.0 });

@@ -1,4 +1,4 @@
-//! `compare.svg`: each compared cell's B ÷ A with its 95 % bootstrap interval on a log axis, the
+//! `compare.svg`: each compared cell's B ÷ A with its 95 % interval on a log axis, the
 //! equivalence margin shaded and 1 marked, the dot coloured by the cell's verdict. Drawn with the
 //! report's figure helpers (`crate::render::canvas`), so its text is escaped by the one rule for
 //! SVG and its bytes are the same on every run.
@@ -110,10 +110,8 @@ impl Picture for Figure<'_> {
         let (ax, c) = (self.axis, self.c);
         let n = c.cells.len().max(1);
         let (top, bottom) = (TOP as i32, (TOP + n as u32 * ROW_H) as i32);
-        let title = format!(
-            "{} ÷ {} per cell, metric {}, 95 % bootstrap intervals",
-            c.labels.1, c.labels.0, c.metric.0
-        );
+        let title =
+            format!("{} ÷ {} per cell, metric {}, 95 % intervals", c.labels.1, c.labels.0, c.metric.0);
         cv.text_within(&title, (WIDTH as i32 / 2, TOP as i32 / 2), WIDTH as i32 - 20, 16.0, INK);
         cv.rect((ax.x(c.margin.0), top), (ax.x(c.margin.1), bottom), MARGIN_SHADE.filled())?;
         cv.line((ax.x(1.0), top), (ax.x(1.0), bottom), INK.stroke_width(1))?;
@@ -157,6 +155,7 @@ impl Picture for Figure<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::comparison::cells::Sample;
     use crate::comparison::matching::{CellSamples, Matched};
     use crate::comparison::stats::compare_matched;
     use qsweep_pipeline::program::model::ParamValue;
@@ -166,8 +165,8 @@ mod tests {
         let cells = (0..3)
             .map(|k| CellSamples {
                 values: vec![ParamValue::Str(format!("<k{k}> & \"q\""))],
-                a: a.clone(),
-                b: a.iter().map(|v| v * (1.0 + 0.1 * f64::from(k))).collect(),
+                a: Sample::Values(a.clone()),
+                b: Sample::Values(a.iter().map(|v| v * (1.0 + 0.1 * f64::from(k))).collect()),
             })
             .collect();
         compare_matched(

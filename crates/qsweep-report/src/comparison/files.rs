@@ -22,6 +22,7 @@ pub fn table(c: &Comparison) -> Table {
     }
     columns.push(Column::new("B ÷ A", "ratio", Align::Right));
     columns.push(Column::new("95 % interval", "ratio_lo", Align::Right).fields(&["ratio_lo", "ratio_hi"]));
+    columns.push(Column::new("interval", "ratio_interval", Align::Left));
     columns.push(Column::new("Welch p", "p", Align::Right));
     columns.push(Column::new("TOST p", "tost_p", Align::Right));
     columns.push(Column::new("verdict", "verdict", Align::Left));
@@ -48,6 +49,7 @@ pub fn table(c: &Comparison) -> Table {
                 Some((lo, hi)) => Value::Text(format!("[{lo}, {hi}]")),
                 None => Value::Missing,
             });
+            values.push(Value::Text(x.interval.word().to_string()));
             values.push(num(x.p, 4));
             values.push(num(x.tost.map(|t| t.p), 4));
             values.push(Value::Text(x.verdict.word().to_string()));
@@ -56,7 +58,8 @@ pub fn table(c: &Comparison) -> Table {
         })
         .collect();
     let caption = format!(
-        "B ÷ A of metric {} per matched cell, with a 95 % bootstrap interval; Welch's two-sided p; \
+        "B ÷ A of metric {} per matched cell, with a 95 % interval (`bootstrap`: the seeded percentile \
+         bootstrap of both sides' trials; `delta-log`: from the moments alone, the delta method on the log ratio); Welch's two-sided p; \
          TOST on B ÷ A at the margin {:.2}–{:.2}; equivalent: TOST shows it, differs: p < 0.05 and not \
          equivalent, undecided: neither.",
         c.metric.0, c.margin.0, c.margin.1

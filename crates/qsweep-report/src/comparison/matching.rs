@@ -1,26 +1,42 @@
 //! The two sides of a comparison matched cell by cell. A side is a program pipeline's plan (its
-//! experiments of one variant, or of the pipeline as written) and the cache's rows of it. Its
-//! cells are keyed by the values of the shared params (named in both pipelines, after `--map`);
-//! the same values in two experiments are one cell, and two cells of one side with the same
-//! shared values but other unshared ones are ambiguous (an error naming those params). Every
-//! error here is the user's input (exit 2) and says what to change.
+//! experiments of one variant, or of the pipeline as written) and the cache's rows of it, or a
+//! [`CellSet`]: an engine pipeline's cells ([`super::engine`]) or a report folder's
+//! ([`super::folder`]). Its cells are keyed by the values of the shared params (named in both
+//! sides, after `--map`); the same configuration in two experiments is one cell, and two cells of
+//! one side with the same shared values but other unshared ones are ambiguous (an error naming
+//! those params). Every error here is the user's input (exit 2) and says what to change.
 
+use super::cells::{CellSet, Sample, ABSENT};
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::error::user_error;
-use qsweep_pipeline::program::model::{MetricType, MetricValue, ParamValue, ProgramPlan, ProgramRow};
+use qsweep_pipeline::program::model::{
+    MetricType, MetricValue, ParamType, ParamValue, ProgramPlan, ProgramRow,
+};
 use std::collections::HashMap;
 
 /// One side of a comparison.
 #[derive(Debug, Clone, Copy)]
 pub struct Side<'a> {
-    /// How messages name it (the pipeline's path as given, with `@variant`).
+    /// How messages name it (the path as given, with `@variant`).
     pub label: &'a str,
-    /// Its plan.
-    pub plan: &'a ProgramPlan,
-    /// The variant compared (`None`: the pipeline as written, experiments of no variant).
-    pub variant: Option<&'a str>,
-    /// The cache's rows of its plan, one per key (`qsweep_pipeline::program::stored::plan_rows`).
-    pub rows: &'a HashMap<Key, ProgramRow>,
+    /// Its cells.
+    pub source: Source<'a>,
+}
+
+/// Where a side's cells come from.
+#[derive(Debug, Clone, Copy)]
+pub enum Source<'a> {
+    /// A program pipeline.
+    Program {
+        /// Its plan.
+        plan: &'a ProgramPlan,
+        /// The variant compared (`None`: the pipeline as written, experiments of no variant).
+        variant: Option<&'a str>,
+        /// The cache's rows of its plan, one per key (`qsweep_pipeline::program::stored::plan_rows`).
+        rows: &'a HashMap<Key, ProgramRow>,
+    },
+    /// Cells already gathered: an engine pipeline's or a report folder's.
+    Cells(&'a CellSet),
 }
 
 /// What to compare: how A's params are named in B, which metric, and the equivalence margin.
@@ -37,16 +53,16 @@ pub struct Request {
 /// The default equivalence margin on B ÷ A: the conventional 0.80–1.25, symmetric on a log scale.
 pub const DEFAULT_MARGIN: (f64, f64) = (0.80, 1.25);
 
-/// One cell of the comparison: its shared values and each side's metric values (succeeded trials
-/// only; empty when the cache has none).
+/// One cell of the comparison: its shared values and each side's sample of the metric (succeeded
+/// trials only; of none when the cache has none).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellSamples {
     /// The shared params' values, in [`Matched::shared`] order (A's values).
     pub values: Vec<ParamValue>,
-    /// A's values of the metric.
-    pub a: Vec<f64>,
-    /// B's values of the metric.
-    pub b: Vec<f64>,
+    /// A's sample of the metric.
+    pub a: Sample,
+    /// B's sample of the metric.
+    pub b: Sample,
 }
 
 /// The two sides matched.
@@ -66,9 +82,16 @@ pub struct Matched {
     pub only_b: Vec<Vec<ParamValue>>,
 }
 
-/// `name=value …` of a cell's shared values, by A's names.
+/// `name=value …` of a cell's shared values, by A's names (a param the cell has no value of,
+/// [`ABSENT`], left out).
 pub fn cell_label(shared: &[(String, String)], values: &[ParamValue]) -> String {
-    shared.iter().zip(values).map(|(p, v)| format!("{}={v}", p.0)).collect::<Vec<_>>().join(" ")
+    shared
+        .iter()
+        .zip(values)
+        .filter(|(_, v)| !matches!(v, ParamValue::Str(s) if s == ABSENT))
+        .map(|(p, v)| format!("{}={v}", p.0))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// A value as a matching key: an integral float matches the integer (`3.0` in one pipeline,
@@ -87,13 +110,11 @@ fn value_key(v: &ParamValue) -> String {
 pub fn match_cells(a: &Side, b: &Side, request: &Request) -> anyhow::Result<Matched> {
     let shared = shared_params(a, b, &request.map)?;
     let metric = metric(a, b, request.metric.as_ref())?;
-    let idx_a: Vec<usize> = shared.iter().map(|(n, _)| param_index(a.plan, n)).collect();
-    let idx_b: Vec<usize> = shared.iter().map(|(_, n)| param_index(b.plan, n)).collect();
-    let cells_a = cells_of(a, &idx_a)?;
-    let cells_b = cells_of(b, &idx_b)?;
+    let names_a: Vec<&str> = shared.iter().map(|(n, _)| n.as_str()).collect();
+    let names_b: Vec<&str> = shared.iter().map(|(_, n)| n.as_str()).collect();
+    let cells_a = cells_of(a, &names_a, &metric.0)?;
+    let cells_b = cells_of(b, &names_b, &metric.1)?;
     let by_key_b: HashMap<&Vec<String>, &SideCell> = cells_b.iter().map(|c| (&c.key, c)).collect();
-    let m_a = metric_index(a.plan, &metric.0);
-    let m_b = metric_index(b.plan, &metric.1);
     let mut out = Matched {
         labels: (a.label.to_string(), b.label.to_string()),
         shared: shared.clone(),
@@ -106,8 +127,8 @@ pub fn match_cells(a: &Side, b: &Side, request: &Request) -> anyhow::Result<Matc
         match by_key_b.get(&c.key) {
             Some(cb) => out.cells.push(CellSamples {
                 values: c.values.clone(),
-                a: samples(a, &c.keys, m_a),
-                b: samples(b, &cb.keys, m_b),
+                a: c.sample.clone(),
+                b: cb.sample.clone(),
             }),
             None => out.only_a.push(c.values.clone()),
         }
@@ -117,10 +138,35 @@ pub fn match_cells(a: &Side, b: &Side, request: &Request) -> anyhow::Result<Matc
     Ok(out)
 }
 
+/// A side's params' names, in order.
+fn param_names(s: &Side) -> Vec<String> {
+    match s.source {
+        Source::Program { plan, .. } => plan.params.iter().map(|(n, _)| n.clone()).collect(),
+        Source::Cells(set) => set.params.clone(),
+    }
+}
+
+/// A param's declared type (`None`: a [`CellSet`]'s, whose values are of any type).
+fn param_type(s: &Side, name: &str) -> Option<ParamType> {
+    match s.source {
+        Source::Program { plan, .. } => plan.params.iter().find(|(p, _)| p == name).map(|(_, t)| *t),
+        Source::Cells(_) => None,
+    }
+}
+
+/// A side's metrics, for messages.
+fn metric_names(s: &Side) -> String {
+    match s.source {
+        Source::Program { plan, .. } => {
+            plan.program.metrics.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+        }
+        Source::Cells(set) => set.metrics.join(", "),
+    }
+}
+
 /// The shared params, (A's name, B's name) in A's order, after checking every `--map` entry.
 fn shared_params(a: &Side, b: &Side, map: &[(String, String)]) -> anyhow::Result<Vec<(String, String)>> {
-    let names = |s: &Side| s.plan.params.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
-    let (na, nb) = (names(a), names(b));
+    let (na, nb) = (param_names(a), param_names(b));
     let listed = |v: &[String]| if v.is_empty() { "none".to_string() } else { v.join(", ") };
     for (x, y) in map {
         if !na.contains(x) {
@@ -161,20 +207,12 @@ fn shared_params(a: &Side, b: &Side, map: &[(String, String)]) -> anyhow::Result
             listed(&nb)
         )));
     }
-    // Params of the same type on both sides are what a cell's values can match on.
+    // Params of the same type on both sides are what a cell's values can match on (a cell set's
+    // values are of any type: its cells match where the values do).
     for (x, y) in &shared {
-        let t = |s: &Side, n: &str| s.plan.params.iter().find(|(p, _)| p == n).map(|(_, t)| *t);
-        let (ta, tb) = (t(a, x), t(b, y));
-        let numeric = |t: Option<qsweep_pipeline::program::model::ParamType>| {
-            matches!(
-                t,
-                Some(
-                    qsweep_pipeline::program::model::ParamType::Int
-                        | qsweep_pipeline::program::model::ParamType::Float
-                )
-            )
-        };
-        if ta != tb && !(numeric(ta) && numeric(tb)) {
+        let (ta, tb) = (param_type(a, x), param_type(b, y));
+        let numeric = |t: Option<ParamType>| matches!(t, Some(ParamType::Int | ParamType::Float));
+        if ta.is_some() && tb.is_some() && ta != tb && !(numeric(ta) && numeric(tb)) {
             return Err(user_error(format!(
                 "param `{x}` of {} is {} but `{y}` of {} is {}: their values never match; map `{x}` to another param with --map",
                 a.label,
@@ -187,72 +225,131 @@ fn shared_params(a: &Side, b: &Side, map: &[(String, String)]) -> anyhow::Result
     Ok(shared)
 }
 
-/// The metric, (A's name, B's name): `--metric`, else A's objective on both sides; each must be a
-/// declared `int`, `float` or `bool` metric.
+/// The metric, (A's name, B's name): `--metric`, else A's default on both sides (a program's
+/// objective, an engine side's `episodes`); each must be a declared `int`, `float` or `bool`
+/// metric of a program, or one of a cell set's metrics.
 fn metric(a: &Side, b: &Side, given: Option<&(String, String)>) -> anyhow::Result<(String, String)> {
-    let declared =
-        |s: &Side| s.plan.program.metrics.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ");
     let (x, y) = match given {
         Some(m) => m.clone(),
-        None => match &a.plan.program.objective {
-            Some(o) => (o.metric.clone(), o.metric.clone()),
-            None => {
-                return Err(user_error(format!(
-                    "{} declares no objective: name the metric to compare with --metric NAME (or --metric A_NAME=B_NAME); its metrics: {}",
-                    a.label,
-                    declared(a)
-                )))
-            }
+        None => match a.source {
+            Source::Program { plan, .. } => match &plan.program.objective {
+                Some(o) => (o.metric.clone(), o.metric.clone()),
+                None => {
+                    return Err(user_error(format!(
+                        "{} declares no objective: name the metric to compare with --metric NAME (or --metric A_NAME=B_NAME); its metrics: {}",
+                        a.label,
+                        metric_names(a)
+                    )))
+                }
+            },
+            Source::Cells(set) => (set.metrics[0].clone(), set.metrics[0].clone()),
         },
     };
     for (s, n, is_a) in [(a, &x, true), (b, &y, false)] {
-        let Some((_, t)) = s.plan.program.metrics.iter().find(|(m, _)| m == n) else {
-            let how = if is_a {
+        let how = || {
+            if is_a {
                 "name one of them with --metric NAME (or --metric NAME=B_NAME)".to_string()
             } else {
                 format!("name B's with --metric {x}=B_NAME")
-            };
-            return Err(user_error(format!(
-                "{} has no metric `{n}` (its metrics: {}): {how}",
-                s.label,
-                declared(s)
-            )));
+            }
         };
-        if !matches!(t, MetricType::Int | MetricType::Float | MetricType::Bool) {
-            return Err(user_error(format!(
-                "metric `{n}` of {} is a {}: compare takes an int, float or bool metric (its metrics: {})",
-                s.label,
-                t.name(),
-                declared(s)
-            )));
+        match s.source {
+            Source::Program { plan, .. } => {
+                let Some((_, t)) = plan.program.metrics.iter().find(|(m, _)| m == n) else {
+                    return Err(user_error(format!(
+                        "{} has no metric `{n}` (its metrics: {}): {}",
+                        s.label,
+                        metric_names(s),
+                        how()
+                    )));
+                };
+                if !matches!(t, MetricType::Int | MetricType::Float | MetricType::Bool) {
+                    return Err(user_error(format!(
+                        "metric `{n}` of {} is a {}: compare takes an int, float or bool metric (its metrics: {})",
+                        s.label,
+                        t.name(),
+                        metric_names(s)
+                    )));
+                }
+            }
+            Source::Cells(set) => {
+                if !set.metrics.contains(n) {
+                    return Err(user_error(format!(
+                        "{} ({}) has no metric `{n}` (its metrics: {}): {}",
+                        s.label,
+                        set.what,
+                        metric_names(s),
+                        how()
+                    )));
+                }
+            }
         }
     }
     Ok((x, y))
 }
 
-fn param_index(plan: &ProgramPlan, name: &str) -> usize {
-    plan.params.iter().position(|(n, _)| n == name).expect("a shared param is declared")
-}
-
-fn metric_index(plan: &ProgramPlan, name: &str) -> usize {
-    plan.program.metrics.iter().position(|(n, _)| n == name).expect("the metric is declared")
-}
-
-/// One side's cell: its matching key, shared values, full params and trial keys.
+/// One side's cell: its matching key, shared values and its sample of the metric.
 struct SideCell {
     key: Vec<String>,
     values: Vec<ParamValue>,
-    params: Vec<ParamValue>,
-    keys: Vec<Key>,
+    sample: Sample,
 }
 
-/// The cells of `side`'s experiments (of its variant), one per shared-value tuple, in plan order.
-fn cells_of(side: &Side, shared: &[usize]) -> anyhow::Result<Vec<SideCell>> {
-    let exps: Vec<_> =
-        side.plan.experiments.iter().filter(|e| e.variant.as_deref() == side.variant).collect();
+/// The cells of `side` (of its variant), one per shared-value tuple (`shared`: their names on this
+/// side), in plan order, each with its sample of `metric`.
+fn cells_of(side: &Side, shared: &[&str], metric: &str) -> anyhow::Result<Vec<SideCell>> {
+    match side.source {
+        Source::Program { plan, variant, rows } => program_cells(side, plan, variant, rows, shared, metric),
+        Source::Cells(set) => set_cells(side, set, shared, metric),
+    }
+}
+
+/// A [`CellSet`]'s cells: two with the same shared values are one when they are one configuration
+/// (their identity, e.g. in two experiments), else ambiguous.
+fn set_cells(side: &Side, set: &CellSet, shared: &[&str], metric: &str) -> anyhow::Result<Vec<SideCell>> {
+    let idx: Vec<usize> = shared
+        .iter()
+        .map(|n| set.params.iter().position(|p| p == n).expect("a shared param is named"))
+        .collect();
+    let m = set.metrics.iter().position(|x| x == metric).expect("the metric is checked");
+    let mut out: Vec<SideCell> = Vec::new();
+    let mut first_of: HashMap<Vec<String>, usize> = HashMap::new();
+    for (ci, c) in set.cells.iter().enumerate() {
+        let values: Vec<ParamValue> = idx.iter().map(|&i| c.params[i].clone()).collect();
+        let key: Vec<String> = values.iter().map(value_key).collect();
+        match first_of.get(&key) {
+            Some(&first) if set.cells[first].identity == c.identity => {}
+            Some(&first) => {
+                return Err(ambiguous(side, &set.params, &set.cells[first].params, &c.params, &values, &idx))
+            }
+            None => {
+                first_of.insert(key.clone(), ci);
+                out.push(SideCell { key, values, sample: c.samples[m].clone() });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A program pipeline's cells: the same params in two experiments are one cell (their trials
+/// together).
+fn program_cells(
+    side: &Side,
+    plan: &ProgramPlan,
+    variant: Option<&str>,
+    rows: &HashMap<Key, ProgramRow>,
+    shared: &[&str],
+    metric: &str,
+) -> anyhow::Result<Vec<SideCell>> {
+    let idx: Vec<usize> = shared
+        .iter()
+        .map(|n| plan.params.iter().position(|(p, _)| p == n).expect("a shared param"))
+        .collect();
+    let m = plan.program.metrics.iter().position(|(n, _)| n == metric).expect("the metric is declared");
+    let exps: Vec<_> = plan.experiments.iter().filter(|e| e.variant.as_deref() == variant).collect();
     if exps.is_empty() {
-        let ids: Vec<&str> = side.plan.variants.iter().map(|v| v.id.as_str()).collect();
-        return Err(user_error(match side.variant {
+        let ids: Vec<&str> = plan.variants.iter().map(|v| v.id.as_str()).collect();
+        return Err(user_error(match variant {
             None if !ids.is_empty() => format!(
                 "{} declares variants ({}), so it plans no cell as written: compare one with {}@ID",
                 side.label,
@@ -262,42 +359,48 @@ fn cells_of(side: &Side, shared: &[usize]) -> anyhow::Result<Vec<SideCell>> {
             _ => format!("{} plans no cell", side.label),
         }));
     }
-    let mut out: Vec<SideCell> = Vec::new();
+    let names: Vec<String> = plan.params.iter().map(|(n, _)| n.clone()).collect();
+    // (key, values, params, trial keys), merged over experiments.
+    type Merged<'p> = (Vec<String>, Vec<ParamValue>, &'p Vec<ParamValue>, Vec<Key>);
+    let mut cells: Vec<Merged> = Vec::new();
     let mut at: HashMap<Vec<String>, usize> = HashMap::new();
     for e in exps {
         for c in &e.cells {
-            let values: Vec<ParamValue> = shared.iter().map(|&i| c.params[i].clone()).collect();
+            let values: Vec<ParamValue> = idx.iter().map(|&i| c.params[i].clone()).collect();
             let key: Vec<String> = values.iter().map(value_key).collect();
             match at.get(&key) {
                 Some(&i) => {
-                    let first = &mut out[i];
-                    if first.params != c.params {
-                        return Err(ambiguous(side, &first.params, &c.params, &values, shared));
+                    let first = &mut cells[i];
+                    if *first.2 != c.params {
+                        return Err(ambiguous(side, &names, first.2, &c.params, &values, &idx));
                     }
                     for t in &c.trials {
-                        if !first.keys.contains(&t.key) {
-                            first.keys.push(t.key);
+                        if !first.3.contains(&t.key) {
+                            first.3.push(t.key);
                         }
                     }
                 }
                 None => {
-                    at.insert(key.clone(), out.len());
-                    out.push(SideCell {
-                        key,
-                        values,
-                        params: c.params.clone(),
-                        keys: c.trials.iter().map(|t| t.key).collect(),
-                    });
+                    at.insert(key.clone(), cells.len());
+                    cells.push((key, values, &c.params, c.trials.iter().map(|t| t.key).collect()));
                 }
             }
         }
     }
-    Ok(out)
+    Ok(cells
+        .into_iter()
+        .map(|(key, values, _, keys)| SideCell {
+            key,
+            values,
+            sample: Sample::Values(samples(rows, &keys, m)),
+        })
+        .collect())
 }
 
 /// The error of two cells with the same shared values and other unshared ones.
 fn ambiguous(
     side: &Side,
+    names: &[String],
     first: &[ParamValue],
     other: &[ParamValue],
     values: &[ParamValue],
@@ -305,13 +408,13 @@ fn ambiguous(
 ) -> anyhow::Error {
     let differ: Vec<String> = (0..first.len())
         .filter(|i| first[*i] != other[*i])
-        .map(|i| format!("`{}` ({} vs {})", side.plan.params[i].0, first[i], other[i]))
+        .map(|i| format!("`{}` ({} vs {})", names[i], first[i], other[i]))
         .collect();
-    let at: Vec<String> =
-        shared.iter().zip(values).map(|(&i, v)| format!("{}={v}", side.plan.params[i].0)).collect();
+    let at: Vec<String> = shared.iter().zip(values).map(|(&i, v)| format!("{}={v}", names[i])).collect();
     user_error(format!(
-        "{}: two cells at {} differ only in params the other pipeline does not have: {}; \
-         name them in the other pipeline with --map A_NAME=B_NAME, or compare pipelines that fix them",
+        "{}: two cells at {} differ only in params the other side does not have: {}; \
+         name them in the other side with --map A_NAME=B_NAME (a program pipeline can declare an \
+         engine cell's params, e.g. `system: cart-pole`), or compare sides that fix them",
         side.label,
         at.join(" "),
         differ.join(", ")
@@ -319,9 +422,9 @@ fn ambiguous(
 }
 
 /// The metric's values (index `m`) of the succeeded rows of `keys`; a bool counts as 0 or 1.
-fn samples(side: &Side, keys: &[Key], m: usize) -> Vec<f64> {
+fn samples(rows: &HashMap<Key, ProgramRow>, keys: &[Key], m: usize) -> Vec<f64> {
     keys.iter()
-        .filter_map(|k| side.rows.get(k))
+        .filter_map(|k| rows.get(k))
         .filter_map(|r| r.result.as_ref().ok())
         .filter_map(|metrics| match metrics.get(m)? {
             MetricValue::Int(i) => Some(*i as f64),

@@ -2,6 +2,11 @@
 //! pure function of the cells' values (the bootstrap is seeded from the cell's shared values), so
 //! a rerun gives the same bytes.
 //!
+//! B ÷ A's 95 % interval is the seeded percentile bootstrap when both sides have every trial's
+//! value (pipelines), and the delta method on the log ratio when a side has only its moments (a
+//! report folder's `cells.parquet`): [`RatioInterval`] says which. Welch's test and TOST need the
+//! moments alone, so they are the same tests either way.
+//!
 //! A cell's verdict, in the project's vocabulary: `equivalent` when TOST shows B ÷ A within the
 //! margin; `differs` when Welch's two-sided p < 0.05 and it is not equivalent; `undecided`
 //! otherwise, including a cell where a test cannot be computed (fewer than two values on a side,
@@ -9,10 +14,11 @@
 //! cells with a Welch p have p < 0.05; chance alone gives 5 %, so P(X ≥ k | Binomial(m, 0.05))
 //! < 0.05 is "beyond chance".
 
+use super::cells::Sample;
 use super::matching::{cell_label, CellSamples, Matched};
-use qsweep_pipeline::analysis::welch::welch_p_two_sided;
+use qsweep_pipeline::analysis::welch::welch_p_two_sided_moments;
 use qsweep_pipeline::analysis::{
-    binomial_sf, bootstrap_ratio_ci, mean, sample_std, tost_ratio, Moments, Tost, BOOTSTRAP_RESAMPLES,
+    binomial_sf, bootstrap_ratio_ci, ratio_ci_delta, tost_ratio, Tost, BOOTSTRAP_RESAMPLES,
 };
 use qsweep_pipeline::program::model::ParamValue;
 
@@ -41,6 +47,26 @@ impl Verdict {
     }
 }
 
+/// How a cell's interval of B ÷ A was computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RatioInterval {
+    /// The seeded percentile bootstrap (2,000 resamples) of both sides' trials.
+    Bootstrap,
+    /// From the moments alone: the delta method on the log ratio, `ratio · exp(±1.96 · se)`
+    /// ([`qsweep_pipeline::analysis::ratio_ci_delta`]).
+    DeltaLog,
+}
+
+impl RatioInterval {
+    /// The word in every output.
+    pub fn word(self) -> &'static str {
+        match self {
+            Self::Bootstrap => "bootstrap",
+            Self::DeltaLog => "delta-log",
+        }
+    }
+}
+
 /// One matched cell with trials on both sides, tested.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellComparison {
@@ -56,8 +82,10 @@ pub struct CellComparison {
     pub std: (Option<f64>, Option<f64>),
     /// mean B ÷ mean A (`None` when mean A is not positive).
     pub ratio: Option<f64>,
-    /// Its seeded percentile-bootstrap 95 % interval.
+    /// Its 95 % interval.
     pub ratio_ci: Option<(f64, f64)>,
+    /// How that interval was computed.
+    pub interval: RatioInterval,
     /// Welch's two-sided p (`None` with fewer than two values on a side).
     pub p: Option<f64>,
     /// TOST of B against A at the margin (`None` when it cannot be computed).
@@ -153,7 +181,7 @@ pub fn compare_matched(m: Matched, margin: (f64, f64)) -> Comparison {
     let mut missing = Vec::new();
     for c in &m.cells {
         let label = cell_label(&m.shared, &c.values);
-        match (c.a.is_empty(), c.b.is_empty()) {
+        match (c.a.n() == 0, c.b.n() == 0) {
             (false, false) => cells.push(cell(c, label, margin)),
             (a, b) => missing.push(MissingCell {
                 label,
@@ -188,25 +216,24 @@ fn seed_of(label: &str) -> u64 {
 
 /// One cell tested.
 fn cell(c: &CellSamples, label: String, margin: (f64, f64)) -> CellComparison {
-    let (ma, mb) = (mean(&c.a), mean(&c.b));
-    let (sa, sb) = (sample_std(&c.a), sample_std(&c.b));
-    let ratio = (ma > 0.0).then(|| mb / ma);
-    let ratio_ci = bootstrap_ratio_ci(&c.a, &c.b, BOOTSTRAP_RESAMPLES, seed_of(&label));
-    let p = welch_p_two_sided(&c.a, &c.b);
-    let tost = tost_ratio(
-        Moments { mean: mb, std: sb, n: c.b.len() },
-        Moments { mean: ma, std: sa, n: c.a.len() },
-        margin,
-        ALPHA,
-    );
+    let (a, b) = (c.a.moments(), c.b.moments());
+    let ratio = (a.mean > 0.0).then(|| b.mean / a.mean);
+    let (ratio_ci, interval) = match (&c.a, &c.b) {
+        (Sample::Values(va), Sample::Values(vb)) => {
+            (bootstrap_ratio_ci(va, vb, BOOTSTRAP_RESAMPLES, seed_of(&label)), RatioInterval::Bootstrap)
+        }
+        _ => (ratio.and_then(|_| ratio_ci_delta(a, b)), RatioInterval::DeltaLog),
+    };
+    let p = welch_p_two_sided_moments(a, b);
+    let tost = tost_ratio(b, a, margin, ALPHA);
     let verdict = match (tost, p) {
         (Some(t), _) if t.equivalent => Verdict::Equivalent,
         (_, Some(p)) if p < ALPHA => Verdict::Differs,
         _ => Verdict::Undecided,
     };
-    let note = if c.a.len() < 2 || c.b.len() < 2 {
-        Some(format!("no test: {} and {} trials (each side needs 2)", c.a.len(), c.b.len()))
-    } else if ma <= 0.0 {
+    let note = if a.n < 2 || b.n < 2 {
+        Some(format!("no test: {} and {} trials (each side needs 2)", a.n, b.n))
+    } else if a.mean <= 0.0 {
         Some("no ratio or equivalence test: the mean of A is not positive".to_string())
     } else {
         None
@@ -214,11 +241,12 @@ fn cell(c: &CellSamples, label: String, margin: (f64, f64)) -> CellComparison {
     CellComparison {
         values: c.values.clone(),
         label,
-        n: (c.a.len(), c.b.len()),
-        mean: (ma, mb),
-        std: (sa, sb),
+        n: (a.n, b.n),
+        mean: (a.mean, b.mean),
+        std: (a.std, b.std),
         ratio,
         ratio_ci,
+        interval,
         p,
         tost,
         verdict,
@@ -245,6 +273,7 @@ fn overall(cells: &[CellComparison]) -> Overall {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use qsweep_pipeline::analysis::Moments;
 
     fn matched(cells: Vec<(Vec<f64>, Vec<f64>)>) -> Matched {
         Matched {
@@ -254,7 +283,11 @@ mod tests {
             cells: cells
                 .into_iter()
                 .enumerate()
-                .map(|(i, (a, b))| CellSamples { values: vec![ParamValue::Int(i as i64)], a, b })
+                .map(|(i, (a, b))| CellSamples {
+                    values: vec![ParamValue::Int(i as i64)],
+                    a: Sample::Values(a),
+                    b: Sample::Values(b),
+                })
                 .collect(),
             only_a: vec![],
             only_b: vec![],
@@ -311,6 +344,22 @@ mod tests {
         let two = compare_matched(matched(vec![(a.clone(), b.clone()), (b.clone(), a.clone())]), (0.8, 1.25));
         assert_eq!(one.cells[0], two.cells[0], "another cell beside it changes nothing");
         assert_eq!(one, compare_matched(matched(vec![(a, b)]), (0.8, 1.25)), "a rerun is identical");
+    }
+
+    #[test]
+    fn moments_give_the_same_tests_and_a_delta_interval() {
+        let a = vec![100.0, 101.0, 99.0, 100.5, 99.5];
+        let b = vec![150.0, 151.0, 149.0, 150.5, 149.5];
+        let values = compare_matched(matched(vec![(a.clone(), b.clone())]), (0.8, 1.25));
+        let mut m = matched(vec![(a.clone(), b.clone())]);
+        m.cells[0].a = Sample::Moments(Moments::of(&a));
+        let moments = compare_matched(m, (0.8, 1.25));
+        let (v, x) = (&values.cells[0], &moments.cells[0]);
+        assert_eq!((v.p, v.tost, v.ratio, v.verdict), (x.p, x.tost, x.ratio, x.verdict), "the same tests");
+        assert_eq!((v.interval, x.interval), (RatioInterval::Bootstrap, RatioInterval::DeltaLog));
+        assert_eq!(x.ratio_ci, ratio_ci_delta(Moments::of(&a), Moments::of(&b)));
+        let ((lo, hi), r) = (x.ratio_ci.unwrap(), x.ratio.unwrap());
+        assert!(lo < r && r < hi && lo > 1.48 && hi < 1.52, "{r} [{lo}, {hi}]");
     }
 
     #[test]
