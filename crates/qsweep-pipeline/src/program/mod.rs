@@ -33,6 +33,7 @@ pub mod key;
 pub mod model;
 pub mod plan;
 pub mod provenance;
+pub mod race;
 pub mod result;
 pub mod rows;
 pub mod run;
