@@ -152,7 +152,10 @@ fn write_report(
 }
 
 /// `plan` replayed against the rows of `store` (its race's rounds, its fresh seeds).
-fn replayed(plan: ProgramPlan, store: Option<&qsweep_pipeline::cache::Store>) -> anyhow::Result<ProgramReplayed> {
+fn replayed(
+    plan: ProgramPlan,
+    store: Option<&qsweep_pipeline::cache::Store>,
+) -> anyhow::Result<ProgramReplayed> {
     qsweep_pipeline::program::race::replay_store(plan, store)
 }
 

@@ -18,7 +18,8 @@ print(json.dumps({"y": c["x"] + (7 * c["seed"]) % 5}))
 
 /// Cells x = 0, 1, 5, 9 from 3 seeds, raced in batches of 3 to 9 seeds, the best cell then on 4
 /// fresh seeds.
-const RACED: &str = "name: raced\nseeds: 3\nprogram:\n  command: [python3, agent.py]\n  inputs: [agent.py]\n  \
+const RACED: &str =
+    "name: raced\nseeds: 3\nprogram:\n  command: [python3, agent.py]\n  inputs: [agent.py]\n  \
 metrics: { y: float }\n  objective: { metric: y, goal: minimize }\nparams: { x: 0 }\n\
 race: { confidence: 0.95, batch: 3, max_seeds: 9 }\nfresh: { first_seed: 100, seeds: 4 }\n\
 experiments:\n  - { id: e, vary: { x: [0, 1, 5, 9] } }\n";
@@ -74,10 +75,16 @@ fn program_race_spends_fewer_trials_than_the_grid_keeps_the_best_and_a_rerun_run
     let dir = sb.path("reports/raced");
     let readme = std::fs::read_to_string(dir.join("README.md")).unwrap();
     assert!(readme.contains("Trials present: 28 of 28 planned"), "{readme}");
-    assert!(readme.contains("the race spent 24 trials where the full grid at max_seeds would take 36"), "{readme}");
+    assert!(
+        readme.contains("the race spent 24 trials where the full grid at max_seeds would take 36"),
+        "{readme}"
+    );
     // Selection: y over seeds 0..8 of x = 0 is 0 2 4 1 3 0 2 4 1 (mean 17/9); fresh seeds 100..103
     // give 0 2 4 1 (mean 1.75).
-    assert!(readme.contains("Best cell by y (lowest mean among the race's contenders): x = 0, 1.8889 ± "), "{readme}");
+    assert!(
+        readme.contains("Best cell by y (lowest mean among the race's contenders): x = 0, 1.8889 ± "),
+        "{readme}"
+    );
     assert!(readme.contains("over n = 9 (selection estimate: on the seeds that chose it). On 4 fresh seeds, which took no part in choosing it: 1.75 ± 1.7078 \\[0.5, 3.25\\] (95 % interval) over n = 4."), "{readme}");
     let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
     assert!(html.contains("On 4 fresh seeds"), "the pages say the same");
@@ -102,7 +109,8 @@ fn program_race_spends_fewer_trials_than_the_grid_keeps_the_best_and_a_rerun_run
     let fresh = trials.column_by_name("fresh").unwrap().as_any().downcast_ref::<BooleanArray>().unwrap();
     assert_eq!(trials.num_rows(), 28);
     assert_eq!((0..28).filter(|&i| fresh.value(i)).count(), 4);
-    let experiment = trials.column_by_name("experiment").unwrap().as_any().downcast_ref::<StringArray>().unwrap();
+    let experiment =
+        trials.column_by_name("experiment").unwrap().as_any().downcast_ref::<StringArray>().unwrap();
     assert!((0..28).all(|i| experiment.value(i) == "e"));
 
     // `report --rebuild` gives the same bytes.
@@ -113,7 +121,11 @@ fn program_race_spends_fewer_trials_than_the_grid_keeps_the_best_and_a_rerun_run
 
 #[test]
 fn program_race_without_an_objective_is_file_line_col_and_exit_2() {
-    let sb = sandbox(&RACED.replace("  objective: { metric: y, goal: minimize }\n", "").replace("fresh: { first_seed: 100, seeds: 4 }\n", ""));
+    let sb = sandbox(
+        &RACED
+            .replace("  objective: { metric: y, goal: minimize }\n", "")
+            .replace("fresh: { first_seed: 100, seeds: 4 }\n", ""),
+    );
     let err = fails_with(&mut sb.qsweep(&["run", "x.yaml"]), 2);
     assert!(err.contains("x.yaml:8:1: race:"), "{err}");
     assert!(err.contains("`program.objective` is not declared"), "{err}");
@@ -121,8 +133,14 @@ fn program_race_without_an_objective_is_file_line_col_and_exit_2() {
     // Per experiment, at its own block.
     let per = RACED
         .replace("  objective: { metric: y, goal: minimize }\n", "")
-        .replace("race: { confidence: 0.95, batch: 3, max_seeds: 9 }\nfresh: { first_seed: 100, seeds: 4 }\n", "")
-        .replace("vary: { x: [0, 1, 5, 9] } }", "vary: { x: [0, 1, 5, 9] }, race: { confidence: 0.95, batch: 3, max_seeds: 9 } }");
+        .replace(
+            "race: { confidence: 0.95, batch: 3, max_seeds: 9 }\nfresh: { first_seed: 100, seeds: 4 }\n",
+            "",
+        )
+        .replace(
+            "vary: { x: [0, 1, 5, 9] } }",
+            "vary: { x: [0, 1, 5, 9] }, race: { confidence: 0.95, batch: 3, max_seeds: 9 } }",
+        );
     let sb = sandbox(&per);
     let err = fails_with(&mut sb.qsweep(&["status", "x.yaml"]), 2);
     assert!(err.contains("x.yaml:9:") && err.contains("experiments.0.race"), "{err}");

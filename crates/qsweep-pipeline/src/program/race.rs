@@ -163,14 +163,16 @@ pub fn replay(
             h.rounds_done += 1;
             advanced = true;
             let n_max = race.max_seeds as usize;
-            let left: Vec<usize> = (0..e.cells.len()).filter(|&i| e.cells[i].contender == Some(true)).collect();
+            let left: Vec<usize> =
+                (0..e.cells.len()).filter(|&i| e.cells[i].contender == Some(true)).collect();
             if left.len() <= 1 || left.iter().all(|&i| e.cells[i].trials.len() >= n_max) {
                 h.finished = true;
                 continue;
             }
             for i in left {
                 let cell = &mut e.cells[i];
-                let seeds = crate::race::round_seeds(next_seed, first, cell.trials.len(), race.batch as usize, n_max);
+                let seeds =
+                    crate::race::round_seeds(next_seed, first, cell.trials.len(), race.batch as usize, n_max);
                 for seed in seeds {
                     let key = identity.key(&plan.params, &cell.params, seed);
                     cell.trials.push(ProgramTrial { seed, key });
@@ -207,8 +209,11 @@ pub fn replay(
         });
         let Some(best) = best_by_goal(means, goal) else { continue };
         let cell = &mut e.cells[best];
-        cell.fresh =
-            e.fresh.iter().map(|&seed| ProgramTrial { seed, key: identity.key(&plan.params, &cell.params, seed) }).collect();
+        cell.fresh = e
+            .fresh
+            .iter()
+            .map(|&seed| ProgramTrial { seed, key: identity.key(&plan.params, &cell.params, seed) })
+            .collect();
     }
     let races = heats
         .into_iter()
@@ -248,7 +253,11 @@ fn candidates(e: &ProgramExperiment) -> impl Iterator<Item = &super::model::Prog
 /// Each contender's sample of `e` (the objective over its succeeded trials, negated under
 /// `maximize` so that higher is worse; `None` for a cell out of the race), or nothing while one of
 /// its trials is not stored.
-fn samples(e: &ProgramExperiment, known: &HashMap<Key, Option<f64>>, goal: Goal) -> Option<Vec<Option<Vec<f64>>>> {
+fn samples(
+    e: &ProgramExperiment,
+    known: &HashMap<Key, Option<f64>>,
+    goal: Goal,
+) -> Option<Vec<Option<Vec<f64>>>> {
     let sign = match goal {
         Goal::Minimize => 1.0,
         Goal::Maximize => -1.0,

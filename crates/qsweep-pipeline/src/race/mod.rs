@@ -128,7 +128,13 @@ pub fn rounds_max(first: u32, batch: u32, max_seeds: u32) -> u32 {
 /// `n_max` in all, numbered on from `next_seed` (the largest first-round seed + 1) past the
 /// `have − first` extra seeds it already has. One rule for every race, so a cell's extra seeds
 /// are the same whichever kind of pipeline races it.
-pub fn round_seeds(next_seed: u64, first: usize, have: usize, batch: usize, n_max: usize) -> std::ops::Range<u64> {
+pub fn round_seeds(
+    next_seed: u64,
+    first: usize,
+    have: usize,
+    batch: usize,
+    n_max: usize,
+) -> std::ops::Range<u64> {
     let add = n_max.saturating_sub(have).min(batch) as u64;
     let start = next_seed + (have - first) as u64;
     start..start + add
@@ -439,7 +445,8 @@ pub fn decide(samples: &[Option<Sample>], level: f64) -> Vec<bool> {
         })
     });
     let Some(best) = best_cell(candidates) else { return samples.iter().map(Option::is_some).collect() };
-    let values: Vec<Option<&[f64]>> = samples.iter().map(|s| s.as_ref().map(|s| s.values.as_slice())).collect();
+    let values: Vec<Option<&[f64]>> =
+        samples.iter().map(|s| s.as_ref().map(|s| s.values.as_slice())).collect();
     eliminate(&values, best.cell, level)
 }
 
@@ -455,9 +462,8 @@ pub fn eliminate(samples: &[Option<&[f64]>], best: usize, level: f64) -> Vec<boo
     if best_values.len() < 2 {
         return keep;
     }
-    let tested: Vec<usize> = (0..samples.len())
-        .filter(|&i| i != best && samples[i].is_some_and(|s| s.len() >= 2))
-        .collect();
+    let tested: Vec<usize> =
+        (0..samples.len()).filter(|&i| i != best && samples[i].is_some_and(|s| s.len() >= 2)).collect();
     let p: Vec<f64> = tested
         .iter()
         .map(|&i| welch::welch_p_greater(samples[i].expect("a contender"), best_values))

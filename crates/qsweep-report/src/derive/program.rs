@@ -208,7 +208,11 @@ fn summaries(ok: &[&Vec<MetricValue>], scalar_at: &[usize], keys: &[Key]) -> Vec
 /// ([`qsweep_pipeline::program::race::best_by_goal`]), so the report names the cell the race and
 /// the fresh seeds chose.
 pub fn best_cell(cells: &[CellStats], i: usize, goal: Goal) -> Option<usize> {
-    let means = cells.iter().enumerate().filter(|(_, c)| c.contender != Some(false)).map(|(c, cell)| (c, cell.scalars[i].mean));
+    let means = cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.contender != Some(false))
+        .map(|(c, cell)| (c, cell.scalars[i].mean));
     best_by_goal(means, goal)
 }
 

@@ -75,14 +75,20 @@ pub fn check(
 /// against the first round's seeds and given to the experiments it covers (an experiment's own
 /// block wins over the pipeline's); the fresh seeds disjoint from the grid's and the races'. Both
 /// choose a best cell, so both need an `objective`. The fresh seeds, or none.
-fn stages(raw: &ProgramFile, has_objective: bool, experiments: &mut [ExperimentDecl]) -> Result<Vec<u64>, Problem> {
+fn stages(
+    raw: &ProgramFile,
+    has_objective: bool,
+    experiments: &mut [ExperimentDecl],
+) -> Result<Vec<u64>, Problem> {
     let seeds = &raw.seeds.0;
-    let need_objective = |path: Vec<String>, what: &str| Problem {
+    let need_objective = |path: Vec<String>, what: &str| {
+        Problem {
         path,
         message: format!(
             "{what} picks each experiment's best cell by the objective, but `program.objective` is not declared; \
              add e.g. `objective: {{ metric: loss, goal: minimize }}` under `program:`"
         ),
+    }
     };
     if let Some(r) = &raw.race {
         if !has_objective {

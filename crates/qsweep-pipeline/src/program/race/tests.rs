@@ -15,12 +15,8 @@ fn plan_of(extra: &str) -> ProgramPlan {
          experiments:\n  - {{ id: e, vary: {{ x: 0..5 }} }}\n{extra}"
     );
     let decl = load_str(&text, "r.yaml", &[]).unwrap();
-    let loaded = crate::program::declared::LoadedProgram {
-        decl,
-        path: "r.yaml".into(),
-        text,
-        overrides: vec![],
-    };
+    let loaded =
+        crate::program::declared::LoadedProgram { decl, path: "r.yaml".into(), text, overrides: vec![] };
     let dir = tempfile::tempdir().unwrap();
     crate::program::plan::plan(&loaded, dir.path(), None, &[]).unwrap()
 }
@@ -119,7 +115,8 @@ fn tied_cells_get_batches_up_to_max_seeds_and_maximize_flips_the_test() {
 #[test]
 fn failed_trials_are_left_out_of_a_cells_sample() {
     // x = 0's trials all fail: it has no value, so it can neither be best nor be tested; x = 1 is best.
-    let plan = plan_of("race: { confidence: 0.95, batch: 2, max_seeds: 6 }\nfresh: { first_seed: 100, seeds: 3 }\n");
+    let plan =
+        plan_of("race: { confidence: 0.95, batch: 2, max_seeds: 6 }\nfresh: { first_seed: 100, seeds: 3 }\n");
     let (done, _) = run_to_the_end(&plan, &|x, _| x == 0);
     let e = &done.plan.experiments[0];
     let contenders: Vec<bool> = e.cells.iter().map(|c| c.contender == Some(true)).collect();
@@ -142,8 +139,7 @@ fn fresh_seeds_without_a_race_wait_for_the_whole_grid() {
     assert!(r.plan.experiments[0].cells.iter().all(|c| c.fresh.is_empty()));
     let (done, passes) = run_to_the_end(&plan, &|_, _| false);
     assert_eq!(passes, 2, "the grid, then the fresh seeds");
-    let with: Vec<usize> =
-        (0..6).filter(|&i| !done.plan.experiments[0].cells[i].fresh.is_empty()).collect();
+    let with: Vec<usize> = (0..6).filter(|&i| !done.plan.experiments[0].cells[i].fresh.is_empty()).collect();
     assert_eq!(with, [0]);
     assert!(done.races.is_empty());
 }

@@ -122,10 +122,8 @@ fn heatmap(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
         );
         if c.contender == Some(false) {
             // Faded and hatched: the cell left the race.
-            let _ = writeln!(
-                s,
-                "<rect x=\"{x}\" y=\"{y}\" width=\"{cw}\" height=\"{ch}\" fill=\"url(#out)\"/>"
-            );
+            let _ =
+                writeln!(s, "<rect x=\"{x}\" y=\"{y}\" width=\"{cw}\" height=\"{ch}\" fill=\"url(#out)\"/>");
         }
         if e.best == Some(i) {
             let _ = writeln!(
@@ -168,7 +166,8 @@ fn heatmap(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
 }
 
 /// A white wash with grey diagonal hatching, laid over a cell that left the race.
-const OUT_PATTERN: &str = "<defs><pattern id=\"out\" width=\"6\" height=\"6\" patternUnits=\"userSpaceOnUse\" \
+const OUT_PATTERN: &str =
+    "<defs><pattern id=\"out\" width=\"6\" height=\"6\" patternUnits=\"userSpaceOnUse\" \
 patternTransform=\"rotate(45)\"><rect width=\"6\" height=\"6\" fill=\"white\" fill-opacity=\"0.6\"/>\
 <line x1=\"0\" y1=\"0\" x2=\"0\" y2=\"6\" stroke=\"#666666\" stroke-width=\"1.5\"/></pattern></defs>\n";
 
@@ -280,7 +279,8 @@ fn line(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
     for &(i, mean, lo, hi) in &points {
         let colour = if e.best == Some(i) { BEST } else { LINES[0] };
         // A cell that left the race: faded, its point hollow.
-        let (opacity, fill) = if e.cells[i].contender == Some(false) { ("0.35", "white") } else { ("1", colour) };
+        let (opacity, fill) =
+            if e.cells[i].contender == Some(false) { ("0.35", "white") } else { ("1", colour) };
         let _ = writeln!(
             s,
             "<line x1=\"{0:.1}\" y1=\"{1:.1}\" x2=\"{0:.1}\" y2=\"{2:.1}\" stroke=\"{colour}\" stroke-width=\"2\" opacity=\"{opacity}\"/>\n\
