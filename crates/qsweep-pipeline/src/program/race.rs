@@ -65,6 +65,9 @@ pub struct ProgramReplayed {
     pub races: Vec<RaceStanding>,
 }
 
+/// How a replay reads stored rows: those of the keys asked for (a key left out is not stored).
+pub type ReadRows<'a> = dyn FnMut(&HashSet<Key>) -> anyhow::Result<HashMap<Key, ProgramRow>> + 'a;
+
 /// The rows `store` holds of the keys asked for: how a replay reads a cache (`None`: no rows yet).
 pub fn read_store<'a>(
     store: Option<&'a Store>,
@@ -95,10 +98,7 @@ pub fn replay_store(plan: ProgramPlan, store: Option<&Store>) -> anyhow::Result<
 /// Replay every stage of `plan`: its races' rounds as far as their trials are stored (`read`
 /// gives the stored rows of the keys asked for; a key it leaves out is not stored), the next
 /// round's trials planned, then the fresh trials of every experiment whose best cell is decided.
-pub fn replay(
-    mut plan: ProgramPlan,
-    read: &mut dyn FnMut(&HashSet<Key>) -> anyhow::Result<HashMap<Key, ProgramRow>>,
-) -> anyhow::Result<ProgramReplayed> {
+pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<ProgramReplayed> {
     if !plan.has_stages() {
         return Ok(ProgramReplayed { plan, races: Vec::new() });
     }

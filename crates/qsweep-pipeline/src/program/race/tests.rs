@@ -59,8 +59,8 @@ fn run_to_the_end(plan: &ProgramPlan, fail: &dyn Fn(i64, u64) -> bool) -> (Progr
                 _ => unreachable!(),
             };
             for t in c.trials.iter().chain(&c.fresh) {
-                if !store.contains_key(&t.key) {
-                    store.insert(t.key, row(t.key, x, t.seed, fail(x, t.seed)));
+                if let std::collections::hash_map::Entry::Vacant(v) = store.entry(t.key) {
+                    v.insert(row(t.key, x, t.seed, fail(x, t.seed)));
                     new += 1;
                 }
             }
