@@ -176,7 +176,11 @@ pub fn check_fresh(spec: &PipelineSpec) -> Result<(), Problem> {
 /// Check a `fresh:` block against the grid's `seeds` and the extra seeds of the pipeline's
 /// `races`: a fresh seed that also chose the best cell would not be fresh. Shared with program
 /// pipelines.
-pub fn check_fresh_seeds(f: &super::FreshSpec, seeds: &[u64], races: &[RaceSpec]) -> Result<(), Problem> {
+pub fn check_fresh_seeds(
+    f: &super::fresh::FreshSpec,
+    seeds: &[u64],
+    races: &[RaceSpec],
+) -> Result<(), Problem> {
     let at = |field: &str| vec!["fresh".to_string(), field.to_string()];
     let Some(fresh) = f.seed_list() else {
         return Err(Problem {

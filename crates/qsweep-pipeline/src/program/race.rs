@@ -74,7 +74,8 @@ pub fn read_store<'a>(
     scan: &'a KeySet,
     plan: &ProgramPlan,
 ) -> impl FnMut(&HashSet<Key>) -> anyhow::Result<HashMap<Key, ProgramRow>> + 'a {
-    let schema = super::run::schema(plan);
+    let schema =
+        super::rows::RowSchema { params: plan.params.clone(), metrics: plan.program.metrics.clone() };
     move |wanted| match store {
         Some(_) => rows(scan, &schema, wanted),
         None => Ok(HashMap::new()),
