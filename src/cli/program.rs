@@ -13,6 +13,7 @@ use qsweep_pipeline::declared::Override;
 use qsweep_pipeline::error::{exit, user_error};
 use qsweep_pipeline::exec::{ExecOptions, Reporter, INTERRUPTED};
 use qsweep_pipeline::program::model::ProgramPlan;
+use qsweep_pipeline::program::race::{ProgramReplayed, RaceStanding};
 use qsweep_pipeline::program::rows::RowSchema;
 use qsweep_pipeline::program::runner::RunnerOptions;
 use qsweep_pipeline::program::status::ProgramStatus;
@@ -71,7 +72,6 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let cache = a.pipeline.cache.dir();
     let store = qsweep_pipeline::program::run::store(&cache, &plan).map_err(|e| unwritable(&cache, &e))?;
     super::run::install_ctrlc("ending the running programs (they run next time)");
-    let scan = store.keys()?;
     let opts = ExecOptions {
         jobs: a.jobs.unwrap_or_else(|| ExecOptions::default().jobs).max(1),
         batch_trials: a.batch_trials.max(1),
@@ -86,15 +86,9 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     };
     let mut bar = super::progress::ProgressReporter::default();
     let reporter: &mut dyn Reporter = if a.quiet || a.json { &mut () } else { &mut bar };
-    let done = qsweep_pipeline::program::run::run_trials(
-        &plan,
-        &store,
-        &scan,
-        sel,
-        &opts,
-        &runner_options(),
-        reporter,
-    )?;
+    let staged =
+        qsweep_pipeline::program::run::run_stages(&plan, &store, sel, &opts, &runner_options(), reporter)?;
+    let done = &staged.summary;
     let report = &done.exec.exec;
     let unfinished = done.exec.unfinished.len();
     let seconds = start.elapsed().as_secs_f64();
@@ -130,7 +124,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     }
     if !a.no_report {
         let dir = report_dir(&plan, a.report.out.as_deref());
-        let written = write_report(&plan, Some(&store), &dir, false)?;
+        let written = write_report(&staged.replayed, Some(&store), &dir, false)?;
         if !(a.quiet || a.json) {
             print_report(&dir, &written);
         }
@@ -143,16 +137,26 @@ fn report_dir(plan: &ProgramPlan, out: Option<&Path>) -> PathBuf {
     out.map_or_else(|| Path::new("reports").join(&plan.name), Path::to_path_buf)
 }
 
-/// Write the report of `plan` into `dir` from its schema folder's `store` (`None`: no rows yet).
+/// Write the report of the `replayed` plan into `dir` from its schema folder's `store` (`None`:
+/// no rows yet).
 fn write_report(
-    plan: &ProgramPlan,
+    replayed: &ProgramReplayed,
     store: Option<&qsweep_pipeline::cache::Store>,
     dir: &Path,
     force: bool,
 ) -> anyhow::Result<qsweep_report::stage::program::ProgramReport> {
+    let plan = &replayed.plan;
     let schema = qsweep_pipeline::program::run::schema(plan);
     let rows = qsweep_pipeline::program::stored::plan_rows(plan, store)?;
-    qsweep_report::stage::program::write(plan, &schema, &rows, dir, force)
+    qsweep_report::stage::program::write(replayed, &schema, &rows, dir, force)
+}
+
+/// `plan` replayed against the rows of `store` (its race's rounds, its fresh seeds).
+fn replayed(
+    plan: ProgramPlan,
+    store: Option<&qsweep_pipeline::cache::Store>,
+) -> anyhow::Result<ProgramReplayed> {
+    qsweep_pipeline::program::race::replay_store(plan, store)
 }
 
 /// The report's closing line.
@@ -184,7 +188,10 @@ pub fn report(a: ReportArgs) -> anyhow::Result<u8> {
     let plan = plan(&a.pipeline)?;
     a.pipeline.cache.required_store()?;
     let dir = report_dir(&plan, a.report.out.as_deref());
-    let written = write_report(&plan, existing_folder(&a.pipeline.cache, &plan)?.as_ref(), &dir, a.force)?;
+    let store = existing_folder(&a.pipeline.cache, &plan)?;
+    let replayed = replayed(plan, store.as_ref())?;
+    let plan = &replayed.plan;
+    let written = write_report(&replayed, store.as_ref(), &dir, a.force)?;
     if a.json {
         let v = crate::json::ReportJson {
             format_version: crate::json::ReportJson::FORMAT_VERSION,
@@ -210,14 +217,18 @@ pub fn report(a: ReportArgs) -> anyhow::Result<u8> {
 pub fn status(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = plan(&a.pipeline)?;
     let cache = a.pipeline.cache.dir();
-    let s = qsweep_pipeline::program::status::status(&plan, &cache, a.explain)?;
+    let store = existing_folder(&a.pipeline.cache, &plan)?;
+    let replayed = replayed(plan, store.as_ref())?;
+    let plan = &replayed.plan;
+    let s = qsweep_pipeline::program::status::status(plan, &cache, a.explain)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&status_json(&plan, &s))?);
+        println!("{}", serde_json::to_string_pretty(&status_json(plan, &s))?);
     } else {
-        print_status(&plan, &s, &cache);
+        print_status(plan, &s, &cache);
+        print_races(plan, &replayed.races);
     }
     if let Some(cells) = &s.explanation {
-        print_explanation(&plan, cells);
+        print_explanation(plan, cells);
     }
     Ok(exit::OK)
 }
@@ -313,6 +324,25 @@ fn print_status(plan: &ProgramPlan, s: &ProgramStatus, cache: &Path) {
     }
 }
 
+/// One line per raced experiment: its rounds, contenders and trials so far against the full grid.
+fn print_races(plan: &ProgramPlan, races: &[RaceStanding]) {
+    for r in races {
+        let e = &plan.experiments[r.experiment];
+        println!(
+            "race {}exp {}: {} of at most {} rounds decided{}, {} of {} cells contenders, {} trials so far of {} for the full grid",
+            e.variant.as_deref().map(|v| format!("[{v}] ")).unwrap_or_default(),
+            e.id,
+            r.rounds_done,
+            r.rounds_max,
+            if r.finished { " (over)" } else { "" },
+            r.contenders,
+            r.cells,
+            r.trials,
+            r.without_race
+        );
+    }
+}
+
 /// One line per missing cell, then how many cells each reason explains when there are several.
 fn print_explanation(plan: &ProgramPlan, cells: &[qsweep_pipeline::program::explain::MissingCell]) {
     let mut reasons: std::collections::BTreeMap<String, usize> = std::collections::BTreeMap::new();
@@ -345,7 +375,9 @@ fn print_explanation(plan: &ProgramPlan, cells: &[qsweep_pipeline::program::expl
 pub fn recompute(pipeline: &Path, cache: &CacheArgs, n: usize, seed: u64) -> anyhow::Result<bool> {
     let started = Instant::now();
     let plan = plan(&bare(pipeline, cache))?;
-    let scan = existing_folder(cache, &plan)?.map(|s| s.keys()).transpose()?.unwrap_or_default();
+    let store = existing_folder(cache, &plan)?;
+    let plan = replayed(plan, store.as_ref())?.plan;
+    let scan = store.map(|s| s.keys()).transpose()?.unwrap_or_default();
     let threads = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
     let r = qsweep_pipeline::program::verify::recompute(&plan, &scan, n, seed, threads, &runner_options())?;
     if n > 0 && r.checked == 0 {
@@ -389,6 +421,9 @@ pub fn referenced_keys(
     let mut out: HashMap<String, std::collections::HashSet<_>> = HashMap::new();
     for p in pipelines {
         let plan = plan(&bare(p, cache))?;
+        // A race's rounds and the fresh seeds are referenced too: replayed from the cache.
+        let store = existing_folder(cache, &plan)?;
+        let plan = replayed(plan, store.as_ref())?.plan;
         let schema: RowSchema = qsweep_pipeline::program::run::schema(&plan);
         out.entry(schema.id())
             .or_default()
@@ -402,9 +437,12 @@ pub fn referenced_keys(
 pub fn slurm(a: SlurmArgs) -> anyhow::Result<u8> {
     let plan = plan(&a.pipeline)?;
     let report_dir = report_dir(&plan, a.out.as_deref());
-    let submission = super::slurm::submission(&a, &plan.name, (report_dir, "README.md"), 1)?;
+    // One job array per possible stage (a race's rounds, the fresh seeds), as for the engine.
+    let submission = super::slurm::submission(&a, &plan.name, (report_dir, "README.md"), plan.stages_max())?;
     print!("{}", submission.render()?);
-    let cached = match existing_folder(&a.pipeline.cache, &plan)? {
+    let store = existing_folder(&a.pipeline.cache, &plan)?;
+    let plan = replayed(plan, store.as_ref())?.plan;
+    let cached = match store {
         Some(store) => store.keys()?.keys,
         None => std::collections::HashSet::new(),
     };

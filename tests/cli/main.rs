@@ -29,6 +29,7 @@ mod pipeline;
 mod program_cache;
 mod program_failures;
 mod program_processes;
+mod program_race;
 mod program_report;
 mod programs;
 mod race;

@@ -64,7 +64,9 @@ pub(super) fn check_system<M: SystemMarker>(spec: &PipelineSpec, sys: &SystemSpe
     Ok(())
 }
 
-pub(super) fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<(), Problem> {
+/// Check one `race:` block (at path `at`) against the first round's `seeds`: at least two of them,
+/// no more than `max_seeds`, and room for the extra seeds' numbers. Shared with program pipelines.
+pub fn check_one(r: &RaceSpec, seeds: &[u64], at: &[String]) -> Result<(), Problem> {
     let path = |field: &str| at.iter().cloned().chain([field.to_string()]).collect::<Vec<_>>();
     let n = seeds.len();
     if n < 2 {
@@ -168,6 +170,17 @@ pub fn check_exploratory(spec: &PipelineSpec) -> Result<(), Problem> {
 /// chose the best cell would not be fresh.
 pub fn check_fresh(spec: &PipelineSpec) -> Result<(), Problem> {
     let Some(f) = &spec.fresh else { return Ok(()) };
+    check_fresh_seeds(f, &spec.seeds.0, &race_blocks(spec))
+}
+
+/// Check a `fresh:` block against the grid's `seeds` and the extra seeds of the pipeline's
+/// `races`: a fresh seed that also chose the best cell would not be fresh. Shared with program
+/// pipelines.
+pub fn check_fresh_seeds(
+    f: &super::fresh::FreshSpec,
+    seeds: &[u64],
+    races: &[RaceSpec],
+) -> Result<(), Problem> {
     let at = |field: &str| vec!["fresh".to_string(), field.to_string()];
     let Some(fresh) = f.seed_list() else {
         return Err(Problem {
@@ -179,7 +192,6 @@ pub fn check_fresh(spec: &PipelineSpec) -> Result<(), Problem> {
         });
     };
     let (lo, hi) = (fresh[0], fresh[fresh.len() - 1]);
-    let seeds = &spec.seeds.0;
     if let Some(s) = seeds.iter().find(|s| (lo..=hi).contains(*s)) {
         return Err(Problem {
             path: at("first_seed"),
@@ -191,7 +203,6 @@ pub fn check_fresh(spec: &PipelineSpec) -> Result<(), Problem> {
         });
     }
     // A race numbers its extra seeds on from the largest first-round seed.
-    let races = race_blocks(spec);
     if let Some(max_seeds) = races.iter().map(|r| u64::from(r.max_seeds)).max() {
         let first = seeds.iter().max().map_or(0, |m| m + 1);
         let last = first.saturating_add(max_seeds.saturating_sub(seeds.len() as u64 + 1));

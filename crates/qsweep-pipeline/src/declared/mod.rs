@@ -43,7 +43,7 @@ mod values;
 mod variant_load;
 mod variants;
 
-pub use check::Problem;
+pub use check::{check_fresh_seeds, check_one as check_race, Problem};
 pub use experiment::{format_value, target_name, Axis, ExperimentSpec, Reference, Target, AXIS_SETTINGS};
 pub use fields::{safe_folder_name, suggest, variable_index};
 pub use fresh::FreshSpec;

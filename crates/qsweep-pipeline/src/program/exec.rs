@@ -24,14 +24,14 @@ pub struct ProgramJob<'p> {
     pub key: Key,
 }
 
-/// The distinct trials of `plan`, in plan order (a trial shared by two cells, or two variants,
-/// once).
+/// The distinct trials of `plan`, in plan order, each cell's own then its fresh ones (a trial
+/// shared by two cells, or two variants, once).
 pub fn jobs(plan: &ProgramPlan) -> Vec<ProgramJob<'_>> {
     let mut seen = HashSet::new();
     let mut out = Vec::new();
     for e in &plan.experiments {
         for c in &e.cells {
-            for t in &c.trials {
+            for t in c.trials.iter().chain(&c.fresh) {
                 if seen.insert(t.key) {
                     out.push(ProgramJob { params: &c.params, seed: t.seed, key: t.key });
                 }

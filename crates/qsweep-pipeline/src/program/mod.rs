@@ -16,8 +16,10 @@
 //! - [`rows`]: a pipeline's rows as typed Parquet in its schema's store folder of the cache;
 //! - [`stored`]: what the cache holds of a pipeline, one row per key;
 //! - [`folders`]: the program folders of a cache, and a segment's schema read back from its columns;
+//! - [`race`]: the stages (`race:` rounds, `fresh:` seeds) replayed from the stored rows by the
+//!   objective, with the engine's round (`crate::race::eliminate`);
 //! - [`exec`]: running the missing trials on worker threads under leases, storing them in batches;
-//! - [`run`]: one run of a pipeline: its store, the selection, the runners, the rows;
+//! - [`run`]: one run of a pipeline: its store, the selection, the runners, the rows, stage by stage;
 //! - [`status`]: what the cache holds of a plan (succeeded, failed, missing) and why trials are missing;
 //! - [`verify`]: every program segment checked and re-hashed; a sample of trials rerun and compared;
 //! - [`gc`]: each program folder compacted, and pruned by the program pipelines of its schema.
@@ -33,6 +35,7 @@ pub mod key;
 pub mod model;
 pub mod plan;
 pub mod provenance;
+pub mod race;
 pub mod result;
 pub mod rows;
 pub mod run;

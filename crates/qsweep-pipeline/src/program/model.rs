@@ -235,8 +235,15 @@ pub struct ProgramCell {
     pub params: Vec<ParamValue>,
     /// The values of the experiment's varied params, in axis order.
     pub coords: Vec<ParamValue>,
-    /// One per seed.
+    /// One per seed: the pipeline's seeds, and in a race the extra seeds of the rounds replayed
+    /// so far (`crate::program::race`).
     pub trials: Vec<ProgramTrial>,
+    /// In a raced experiment, whether the cell is still in the race after the last decided round
+    /// (`None`: not raced, or not replayed).
+    pub contender: Option<bool>,
+    /// Its trials on the fresh seeds, once the replay found it its experiment's best (`fresh:`);
+    /// never part of its own numbers.
+    pub fresh: Vec<ProgramTrial>,
 }
 
 /// One experiment: the cells of its grid (the product of its axes, first axis outermost).
@@ -252,6 +259,10 @@ pub struct ProgramExperiment {
     pub axes: Vec<String>,
     /// The params it fixes, with their values.
     pub fixed: Vec<(String, ParamValue)>,
+    /// Its race (`race:`; `None`: its full grid runs).
+    pub race: Option<crate::declared::RaceSpec>,
+    /// The fresh seeds its best cell gets (`fresh:`; empty: none).
+    pub fresh: Vec<u64>,
     /// Its cells.
     pub cells: Vec<ProgramCell>,
 }
@@ -265,6 +276,29 @@ pub struct ProgramVariant {
     pub title: Option<String>,
     /// Its `set` entries as `PATH=VALUE`.
     pub set: Vec<String>,
+}
+
+impl ProgramPlan {
+    /// Whether a stage of the plan is planned from the outcomes of the stages before it (a race's
+    /// rounds, the fresh seeds), so a run goes round by round and readers replay it first.
+    pub fn has_stages(&self) -> bool {
+        self.experiments.iter().any(|e| e.race.is_some() || !e.fresh.is_empty())
+    }
+
+    /// The most stages the plan can take: a race's rounds (the most of any experiment), then one
+    /// more for the fresh seeds.
+    pub fn stages_max(&self) -> u32 {
+        let rounds = self
+            .experiments
+            .iter()
+            .filter_map(|e| {
+                let r = e.race?;
+                Some(crate::race::rounds_max(self.seeds.len() as u32, r.batch, r.max_seeds))
+            })
+            .max()
+            .unwrap_or(1);
+        rounds + u32::from(self.experiments.iter().any(|e| !e.fresh.is_empty()))
+    }
 }
 
 /// The resolved plan of a program pipeline.
@@ -330,8 +364,9 @@ pub const FIXED_COLUMNS: [&str; 11] = [
 ];
 
 /// The columns a report's `trials.parquet` adds before a row's own (the trial's experiment and
-/// variant): no param or metric may take one of these names either.
-pub const REPORT_COLUMNS: [&str; 2] = ["experiment", "variant"];
+/// variant, and whether it is a fresh-seed trial): no param or metric may take one of these names
+/// either.
+pub const REPORT_COLUMNS: [&str; 3] = ["experiment", "variant", "fresh"];
 
 /// How much of a failed trial's stderr is kept.
 pub const STDERR_TAIL: usize = 4096;

@@ -140,11 +140,20 @@ fn by_name(
     (order.iter().map(|&i| params[i].clone()).collect(), experiments)
 }
 
-/// How many trials `decl` plans with the variants `select` (all when empty), counted without
-/// building anything.
+/// How many trials `decl` plans at most with the variants `select` (all when empty), counted
+/// without building anything.
 pub fn planned_trials(decl: &ProgramDecl, select: &[String]) -> u128 {
-    let per_plan: u128 =
-        decl.experiments.iter().map(ExperimentDecl::cell_count).sum::<u128>() * decl.seeds.len() as u128;
+    // A raced experiment counts at `max_seeds`, the most its race can run; `fresh:` adds its
+    // seeds to one cell per experiment.
+    let seeds = decl.seeds.len() as u128;
+    let per_plan: u128 = decl
+        .experiments
+        .iter()
+        .map(|e| {
+            e.cell_count() * e.race.map_or(seeds, |r| seeds.max(u128::from(r.max_seeds)))
+                + decl.fresh.len() as u128
+        })
+        .sum();
     let variants = decl.variants.iter().filter(|v| select.is_empty() || select.contains(&v.id)).count();
     per_plan * variants.max(1) as u128
 }
@@ -198,7 +207,7 @@ impl Grid<'_> {
                             key: self.identity.key(self.params, &params, seed),
                         })
                         .collect();
-                    ProgramCell { params, coords, trials }
+                    ProgramCell { params, coords, trials, contender: None, fresh: Vec::new() }
                 })
                 .collect();
             out.push(ProgramExperiment {
@@ -207,6 +216,8 @@ impl Grid<'_> {
                 title: e.title.clone(),
                 axes: e.axes.iter().map(|(n, _)| n.clone()).collect(),
                 fixed: e.fixed.clone(),
+                race: e.race,
+                fresh: self.decl.fresh.clone(),
                 cells,
             });
         }

@@ -166,3 +166,63 @@ pub fn shard_counts(plan: &ProgramPlan, cached: &HashSet<Key>, shards: u32) -> V
     }
     per_shard
 }
+
+/// What [`run_stages`] did: the runs' counts together, and the plan as the last replay left it.
+#[derive(Debug, Clone)]
+pub struct StagedRun {
+    /// Every stage's counts added up; `cached` is the trials of the final plan already stored
+    /// before this run.
+    pub summary: ProgramRunSummary,
+    /// The plan replayed against the cache after the last stage that ran.
+    pub replayed: super::race::ProgramReplayed,
+}
+
+/// Run `plan` stage by stage: replay it against the cache (`super::race`), run the trials the
+/// replay plans that the cache lacks, and again, until a stage runs nothing new (a finished race
+/// and its fresh seeds: a rerun runs nothing), a trial does not finish or the run is interrupted.
+/// A plan without stages runs once, as [`run_trials`]; a shard (`sel.shard`) runs the trials it
+/// owns of the stages the cache lets it plan now, then stops (the next round needs every shard's
+/// outcomes). `--force` and `--retry-failed` apply to the first stage; the rounds after it are
+/// new trials.
+pub fn run_stages(
+    plan: &ProgramPlan,
+    store: &Store,
+    mut sel: Selection,
+    opts: &ExecOptions,
+    runner: &RunnerOptions,
+    reporter: &mut dyn Reporter,
+) -> anyhow::Result<StagedRun> {
+    let mut total = ProgramRunSummary::default();
+    let mut executed_before = 0;
+    loop {
+        let scan = store.keys()?;
+        let mut read = super::race::read_store(Some(store), &scan, plan);
+        let replayed = super::race::replay(plan.clone(), &mut read)?;
+        let done = run_trials(&replayed.plan, store, &scan, sel, opts, runner, reporter)?;
+        let e = &done.exec;
+        total.exec.exec.executed += e.exec.executed;
+        total.exec.exec.failed += e.exec.failed;
+        total.exec.exec.elsewhere += e.exec.elsewhere;
+        total.exec.exec.interrupted |= e.exec.interrupted;
+        total.exec.unfinished.extend(e.unfinished.iter().cloned());
+        // The trials stored before this stage include those earlier stages ran.
+        total.cached = done.cached.saturating_sub(executed_before);
+        executed_before += e.exec.executed + e.exec.elsewhere;
+        let stop = !plan.has_stages()
+            || sel.shard.is_some()
+            || e.exec.executed + e.exec.elsewhere == 0
+            || e.exec.interrupted
+            || !e.unfinished.is_empty()
+            || crate::exec::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed);
+        if stop {
+            let replayed = if plan.has_stages() && e.exec.executed + e.exec.elsewhere > 0 {
+                super::race::replay_store(plan.clone(), Some(store))?
+            } else {
+                replayed
+            };
+            return Ok(StagedRun { summary: total, replayed });
+        }
+        sel.force = false;
+        sel.retry_failed = false;
+    }
+}

@@ -88,7 +88,7 @@ pub fn status(plan: &ProgramPlan, cache: &Path, explain: bool) -> anyhow::Result
         if r.result.is_ok() { &mut ok } else { &mut failed }.insert(*k);
     }
     let keys_of = |e: &super::model::ProgramExperiment| -> Vec<Key> {
-        e.cells.iter().flat_map(|c| c.trials.iter().map(|t| t.key)).collect()
+        e.cells.iter().flat_map(|c| c.trials.iter().chain(&c.fresh).map(|t| t.key)).collect()
     };
     let experiments =
         plan.experiments.iter().map(|e| ProgramCount::of(keys_of(e).iter(), &ok, &failed)).collect();

@@ -49,8 +49,13 @@ pub fn plan_rows(plan: &ProgramPlan, store: Option<&Store>) -> anyhow::Result<Ha
     let Some(store) = store else { return Ok(HashMap::new()) };
     let scan = store.keys()?;
     let schema = RowSchema { params: plan.params.clone(), metrics: plan.program.metrics.clone() };
-    let wanted: HashSet<Key> =
-        plan.experiments.iter().flat_map(|e| &e.cells).flat_map(|c| &c.trials).map(|t| t.key).collect();
+    let wanted: HashSet<Key> = plan
+        .experiments
+        .iter()
+        .flat_map(|e| &e.cells)
+        .flat_map(|c| c.trials.iter().chain(&c.fresh))
+        .map(|t| t.key)
+        .collect();
     rows(&scan, &schema, &wanted)
 }
 

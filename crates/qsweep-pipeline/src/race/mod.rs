@@ -117,8 +117,27 @@ impl Plan {
     }
 }
 
-fn rounds_max(first: u32, batch: u32, max_seeds: u32) -> u32 {
+/// The most rounds a race from `first` seeds per cell can take, `batch` more per round up to
+/// `max_seeds`: 1 + ⌈(max_seeds − first) / batch⌉ (the engine's heatmaps and program pipelines'
+/// experiments alike).
+pub fn rounds_max(first: u32, batch: u32, max_seeds: u32) -> u32 {
     1 + max_seeds.saturating_sub(first).div_ceil(batch)
+}
+
+/// The seeds a contender with `have` seeds gets in the next round: up to `batch` more, at most
+/// `n_max` in all, numbered on from `next_seed` (the largest first-round seed + 1) past the
+/// `have − first` extra seeds it already has. One rule for every race, so a cell's extra seeds
+/// are the same whichever kind of pipeline races it.
+pub fn round_seeds(
+    next_seed: u64,
+    first: usize,
+    have: usize,
+    batch: usize,
+    n_max: usize,
+) -> std::ops::Range<u64> {
+    let add = n_max.saturating_sub(have).min(batch) as u64;
+    let start = next_seed + (have - first) as u64;
+    start..start + add
 }
 
 /// How a run has a plan it replays round by round back as planned for the next round: by undoing
@@ -377,10 +396,7 @@ impl Heat {
         for &k in left {
             let cell = &mut e.cells[self.cells[k]];
             let have = cell.trials.len();
-            let add = (n_max - have).min(batch);
-            let extra = (have - self.first as usize) as u64;
-            for j in 0..add as u64 {
-                let seed = self.next_seed + extra + j;
+            for seed in round_seeds(self.next_seed, self.first as usize, have, batch, n_max) {
                 let key = Key::from_canonical(&self.canonical[k], seed, ENGINE_VERSION);
                 cell.trials.push(PlannedTrial { seed, key });
             }
@@ -428,13 +444,29 @@ pub fn decide(samples: &[Option<Sample>], level: f64) -> Vec<bool> {
             mean: (!s.values.is_empty()).then(|| crate::analysis::mean(&s.values)),
         })
     });
+    let Some(best) = best_cell(candidates) else { return samples.iter().map(Option::is_some).collect() };
+    let values: Vec<Option<&[f64]>> =
+        samples.iter().map(|s| s.as_ref().map(|s| s.values.as_slice())).collect();
+    eliminate(&values, best.cell, level)
+}
+
+/// One round's tests, the part every race shares: each contender (`Some` sample: the values where
+/// a higher one is worse) other than `best` is tested against the best's sample with the
+/// one-sided Welch test ([`welch::welch_p_greater`]), Holm's procedure at family-wise level `level`
+/// over the contenders tested, and the rejected ones leave; which stay (`None`: already out, stays
+/// out). A contender of fewer than two values, or against a best of fewer than two, is not tested
+/// and stays (a test needs a spread); the engine's cells always have the round's full sample.
+pub fn eliminate(samples: &[Option<&[f64]>], best: usize, level: f64) -> Vec<bool> {
     let mut keep: Vec<bool> = samples.iter().map(Option::is_some).collect();
-    let Some(best) = best_cell(candidates) else { return keep };
-    let best_values = &samples[best.cell].as_ref().expect("the best is a contender").values;
-    let tested: Vec<usize> = (0..samples.len()).filter(|&i| keep[i] && i != best.cell).collect();
+    let best_values = samples[best].expect("the best is a contender");
+    if best_values.len() < 2 {
+        return keep;
+    }
+    let tested: Vec<usize> =
+        (0..samples.len()).filter(|&i| i != best && samples[i].is_some_and(|s| s.len() >= 2)).collect();
     let p: Vec<f64> = tested
         .iter()
-        .map(|&i| welch::welch_p_greater(&samples[i].as_ref().expect("a contender").values, best_values))
+        .map(|&i| welch::welch_p_greater(samples[i].expect("a contender"), best_values))
         .collect();
     for (&i, drop) in tested.iter().zip(welch::holm_reject(&p, level)) {
         keep[i] = !drop;

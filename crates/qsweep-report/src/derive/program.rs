@@ -8,8 +8,9 @@
 use qsweep_pipeline::analysis::{quantile_sorted, Summary};
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::program::model::{
-    Goal, MetricType, MetricValue, ParamValue, ProgramExperiment, ProgramPlan, ProgramRow,
+    Goal, MetricType, MetricValue, ParamValue, ProgramExperiment, ProgramPlan, ProgramRow, ProgramTrial,
 };
+use qsweep_pipeline::program::race::{best_by_goal, RaceStanding};
 use std::collections::HashMap;
 
 /// A list metric's curve over seeds: at each index, the median and the interquartile range of the
@@ -37,6 +38,23 @@ pub struct CellStats {
     pub scalars: Vec<Summary>,
     /// Per list metric ([`ProgramStats::lists`] order), its curve.
     pub curves: Vec<Curve>,
+    /// In a raced experiment, whether the cell is still a contender (`None`: not raced).
+    pub contender: Option<bool>,
+    /// Its trials on the fresh seeds, when it is its experiment's best and they are planned.
+    pub fresh: Option<FreshStats>,
+}
+
+/// A best cell measured again on the fresh seeds (`fresh:`): never part of its own numbers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FreshStats {
+    /// Fresh trials planned (one per fresh seed).
+    pub planned: usize,
+    /// Of those, with a row in the cache.
+    pub present: usize,
+    /// Of those, failed.
+    pub failed: usize,
+    /// Per scalar metric, its summary over the fresh trials that succeeded.
+    pub scalars: Vec<Summary>,
 }
 
 /// One experiment (of one variant) with its cells' numbers.
@@ -52,8 +70,13 @@ pub struct ExperimentStats {
     pub axes: Vec<String>,
     /// Its cells, in the plan's order.
     pub cells: Vec<CellStats>,
-    /// The index of the best cell by the objective (`None` without an objective or values).
+    /// The index of the best cell by the objective among the contenders (`None` without an
+    /// objective or values).
     pub best: Option<usize>,
+    /// How its race stands (`None`: not raced).
+    pub race: Option<RaceStanding>,
+    /// Its fresh seeds (`fresh:`; 0: none declared).
+    pub fresh_seeds: usize,
 }
 
 /// Every number of a program pipeline's report.
@@ -86,8 +109,9 @@ pub fn is_list(t: MetricType) -> bool {
     matches!(t, MetricType::ListFloat | MetricType::ListU32)
 }
 
-/// The numbers of `plan`'s report from `rows` (the cache's row of each key present).
-pub fn derive(plan: &ProgramPlan, rows: &HashMap<Key, ProgramRow>) -> ProgramStats {
+/// The numbers of `plan`'s report (replayed: its races' rounds and fresh trials planned, with
+/// `races` how each race stands) from `rows` (the cache's row of each key present).
+pub fn derive(plan: &ProgramPlan, rows: &HashMap<Key, ProgramRow>, races: &[RaceStanding]) -> ProgramStats {
     let metrics = &plan.program.metrics;
     let scalar_at: Vec<usize> = (0..metrics.len()).filter(|&j| is_scalar(metrics[j].1)).collect();
     let list_at: Vec<usize> = (0..metrics.len()).filter(|&j| is_list(metrics[j].1)).collect();
@@ -96,8 +120,16 @@ pub fn derive(plan: &ProgramPlan, rows: &HashMap<Key, ProgramRow>) -> ProgramSta
         .objective
         .as_ref()
         .and_then(|o| scalar_at.iter().position(|&j| metrics[j].0 == o.metric).map(|i| (i, o.goal)));
-    let experiments =
-        plan.experiments.iter().map(|e| experiment(e, rows, &scalar_at, &list_at, objective)).collect();
+    let experiments = plan
+        .experiments
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let mut x = experiment(e, rows, &scalar_at, &list_at, objective);
+            x.race = races.iter().find(|r| r.experiment == i).cloned();
+            x
+        })
+        .collect();
     ProgramStats {
         scalars: scalar_at.iter().map(|&j| metrics[j].clone()).collect(),
         lists: list_at.iter().map(|&j| metrics[j].0.clone()).collect(),
@@ -117,23 +149,23 @@ fn experiment(
         .cells
         .iter()
         .map(|c| {
-            let got: Vec<&ProgramRow> = c.trials.iter().filter_map(|t| rows.get(&t.key)).collect();
-            let ok: Vec<&Vec<MetricValue>> = got.iter().filter_map(|r| r.result.as_ref().ok()).collect();
+            let (planned, present, failed, ok) = trials_of(&c.trials, rows);
             let keys: Vec<Key> = c.trials.iter().map(|t| t.key).collect();
+            let fresh = (!c.fresh.is_empty()).then(|| {
+                let (planned, present, failed, ok) = trials_of(&c.fresh, rows);
+                let keys: Vec<Key> = c.fresh.iter().map(|t| t.key).collect();
+                FreshStats { planned, present, failed, scalars: summaries(&ok, scalar_at, &keys) }
+            });
             CellStats {
                 params: c.params.clone(),
                 coords: c.coords.clone(),
-                planned: c.trials.len(),
-                present: got.len(),
-                failed: got.len() - ok.len(),
-                scalars: scalar_at
-                    .iter()
-                    .map(|&j| {
-                        let values: Vec<f64> = ok.iter().filter_map(|m| scalar(m.get(j)?)).collect();
-                        Summary::of(&values, interval_seed(&keys, j))
-                    })
-                    .collect(),
+                planned,
+                present,
+                failed,
+                scalars: summaries(&ok, scalar_at, &keys),
                 curves: list_at.iter().map(|&j| curve(ok.iter().filter_map(|m| list(m.get(j)?)))).collect(),
+                contender: c.contender,
+                fresh,
             }
         })
         .collect();
@@ -145,24 +177,43 @@ fn experiment(
         axes: e.axes.clone(),
         cells,
         best,
+        race: None,
+        fresh_seeds: e.fresh.len(),
     }
 }
 
-/// The cell with the best mean of scalar `i` under `goal`; the first of equals (plan order).
+/// Of `trials`: planned, with a row, failed, and the metrics of those that succeeded.
+fn trials_of<'r>(
+    trials: &[ProgramTrial],
+    rows: &'r HashMap<Key, ProgramRow>,
+) -> (usize, usize, usize, Vec<&'r Vec<MetricValue>>) {
+    let got: Vec<&ProgramRow> = trials.iter().filter_map(|t| rows.get(&t.key)).collect();
+    let ok: Vec<&Vec<MetricValue>> = got.iter().filter_map(|r| r.result.as_ref().ok()).collect();
+    (trials.len(), got.len(), got.len() - ok.len(), ok)
+}
+
+/// Each scalar metric's summary over `ok`, its interval seeded by the trials' `keys`.
+fn summaries(ok: &[&Vec<MetricValue>], scalar_at: &[usize], keys: &[Key]) -> Vec<Summary> {
+    scalar_at
+        .iter()
+        .map(|&j| {
+            let values: Vec<f64> = ok.iter().filter_map(|m| scalar(m.get(j)?)).collect();
+            Summary::of(&values, interval_seed(keys, j))
+        })
+        .collect()
+}
+
+/// The cell with the best mean of scalar `i` under `goal` among the contenders (every cell
+/// without a race); the first of equals (plan order). The race's rule
+/// ([`qsweep_pipeline::program::race::best_by_goal`]), so the report names the cell the race and
+/// the fresh seeds chose.
 pub fn best_cell(cells: &[CellStats], i: usize, goal: Goal) -> Option<usize> {
-    let mut best: Option<(usize, f64)> = None;
-    for (c, cell) in cells.iter().enumerate() {
-        let Some(m) = cell.scalars[i].mean else { continue };
-        let better = match (best, goal) {
-            (None, _) => true,
-            (Some((_, b)), Goal::Minimize) => m < b,
-            (Some((_, b)), Goal::Maximize) => m > b,
-        };
-        if better {
-            best = Some((c, m));
-        }
-    }
-    best.map(|b| b.0)
+    let means = cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.contender != Some(false))
+        .map(|(c, cell)| (c, cell.scalars[i].mean));
+    best_by_goal(means, goal)
 }
 
 /// A scalar metric's value as a number (a bool as 0 or 1).
@@ -221,6 +272,8 @@ mod tests {
             failed: 0,
             scalars: means.iter().map(|m| Summary { n: 1, mean: *m, ..Summary::default() }).collect(),
             curves: vec![],
+            contender: None,
+            fresh: None,
         }
     }
 
@@ -231,6 +284,11 @@ mod tests {
         assert_eq!(best_cell(&cells, 0, Goal::Minimize), Some(2));
         assert_eq!(best_cell(&cells, 0, Goal::Maximize), Some(4));
         assert_eq!(best_cell(&[cell(&[None])], 0, Goal::Minimize), None);
+        // In a race, only the contenders can be best.
+        let mut raced = cells.clone();
+        raced[2].contender = Some(false);
+        raced[3].contender = Some(true);
+        assert_eq!(best_cell(&raced, 0, Goal::Minimize), Some(3));
     }
 
     #[test]

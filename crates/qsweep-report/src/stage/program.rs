@@ -10,12 +10,13 @@ use crate::render::program::{
     self, figures,
     pages::{self, Counts},
 };
-use arrow::array::{ArrayRef, StringArray};
+use arrow::array::{ArrayRef, BooleanArray, StringArray};
 use arrow::datatypes::{DataType, Field, Schema};
 use arrow::record_batch::RecordBatch;
 use qsweep_pipeline::cache::Key;
 use qsweep_pipeline::error::user_error;
-use qsweep_pipeline::program::model::{ProgramPlan, ProgramRow};
+use qsweep_pipeline::program::model::ProgramRow;
+use qsweep_pipeline::program::race::ProgramReplayed;
 use qsweep_pipeline::program::rows::{to_batch, RowSchema};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -38,9 +39,11 @@ pub struct ProgramReport {
     pub intervals: usize,
 }
 
-/// Write the report of `plan` into `dir` from `rows` (the cache's row of each key present).
+/// Write the report of the `replayed` plan (its races' rounds and fresh seeds replayed from the
+/// cache, `qsweep_pipeline::program::race`) into `dir` from `rows` (the cache's row of each key
+/// present).
 pub fn write(
-    plan: &ProgramPlan,
+    replayed: &ProgramReplayed,
     schema: &RowSchema,
     rows: &HashMap<Key, ProgramRow>,
     dir: &Path,
@@ -52,18 +55,22 @@ pub fn write(
             dir.display()
         )));
     }
-    let present: Vec<(&str, Option<&str>, &ProgramRow)> = plan
+    let plan = &replayed.plan;
+    // Each cell's own trials, then its fresh ones (flagged in `trials.parquet`).
+    let present: Vec<(&str, Option<&str>, &ProgramRow, bool)> = plan
         .experiments
         .iter()
         .flat_map(|e| e.cells.iter().map(move |c| (e, c)))
         .flat_map(|(e, c)| {
-            c.trials
-                .iter()
-                .filter_map(move |t| rows.get(&t.key).map(|r| (e.id.as_str(), e.variant.as_deref(), r)))
+            let own = c.trials.iter().map(|t| (t, false));
+            own.chain(c.fresh.iter().map(|t| (t, true))).filter_map(move |(t, fresh)| {
+                rows.get(&t.key).map(|r| (e.id.as_str(), e.variant.as_deref(), r, fresh))
+            })
         })
         .collect();
     let distinct = present.iter().map(|p| p.2.key).collect::<std::collections::HashSet<_>>().len();
-    let planned: usize = plan.experiments.iter().flat_map(|e| &e.cells).map(|c| c.trials.len()).sum();
+    let planned: usize =
+        plan.experiments.iter().flat_map(|e| &e.cells).map(|c| c.trials.len() + c.fresh.len()).sum();
     // The engine's rule: a complete report of the plan replaces whatever is kept; an incomplete
     // one never replaces a report of more trials (a fresh clone's empty cache, a wrong --cache).
     if !force && present.len() < planned {
@@ -99,13 +106,17 @@ pub fn write(
     }
     fields.push(Field::new("experiment", DataType::Utf8, false));
     columns.push(Arc::new(StringArray::from_iter_values(present.iter().map(|p| p.0))));
+    if plan.experiments.iter().any(|e| !e.fresh.is_empty()) {
+        fields.push(Field::new("fresh", DataType::Boolean, false));
+        columns.push(Arc::new(present.iter().map(|p| Some(p.3)).collect::<BooleanArray>()));
+    }
     fields.extend(batch.schema().fields().iter().map(|f| f.as_ref().clone()));
     columns.extend(batch.columns().iter().cloned());
     let all = RecordBatch::try_new(
         Arc::new(Schema::new_with_metadata(fields, batch.schema().metadata().clone())),
         columns,
     )?;
-    let stats = derive::program::derive(plan, rows);
+    let stats = derive::program::derive(plan, rows, &replayed.races);
     out.intervals = stats.experiments.iter().map(|e| e.cells.len()).sum::<usize>() * stats.scalars.len();
     let counts = Counts { planned: out.planned, present: out.present, failed: out.failed };
     let mut files: Vec<(String, Vec<u8>)> = vec![

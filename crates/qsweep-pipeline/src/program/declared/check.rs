@@ -43,7 +43,8 @@ pub fn check(
             ));
         }
     }
-    let experiments = experiments(raw.experiments.as_deref(), &params)?;
+    let mut experiments = experiments(raw.experiments.as_deref(), &params)?;
+    let fresh = stages(raw, objective.is_some(), &mut experiments)?;
     let variants = variants(raw.variants.as_deref(), &params, &experiments, set_by_cli)?;
     Ok(ProgramDecl {
         name: raw.name.clone(),
@@ -66,7 +67,55 @@ pub fn check(
         params,
         experiments,
         variants,
+        fresh,
     })
+}
+
+/// The rules of `race:` and `fresh:` (the engine's blocks, `crate::declared`): each race checked
+/// against the first round's seeds and given to the experiments it covers (an experiment's own
+/// block wins over the pipeline's); the fresh seeds disjoint from the grid's and the races'. Both
+/// choose a best cell, so both need an `objective`. The fresh seeds, or none.
+fn stages(
+    raw: &ProgramFile,
+    has_objective: bool,
+    experiments: &mut [ExperimentDecl],
+) -> Result<Vec<u64>, Problem> {
+    let seeds = &raw.seeds.0;
+    let need_objective = |path: Vec<String>, what: &str| {
+        Problem {
+        path,
+        message: format!(
+            "{what} picks each experiment's best cell by the objective, but `program.objective` is not declared; \
+             add e.g. `objective: {{ metric: loss, goal: minimize }}` under `program:`"
+        ),
+    }
+    };
+    if let Some(r) = &raw.race {
+        if !has_objective {
+            return Err(need_objective(vec!["race".into()], "a race"));
+        }
+        crate::declared::check_race(r, seeds, &["race".to_string()])?;
+    }
+    let entries = raw.experiments.as_deref().unwrap_or_default();
+    for (i, e) in entries.iter().enumerate() {
+        if let Some(r) = &e.race {
+            let at = vec!["experiments".to_string(), i.to_string(), "race".to_string()];
+            if !has_objective {
+                return Err(need_objective(at, "a race"));
+            }
+            crate::declared::check_race(r, seeds, &at)?;
+        }
+    }
+    for e in experiments.iter_mut() {
+        e.race = e.race.or(raw.race);
+    }
+    let Some(f) = &raw.fresh else { return Ok(Vec::new()) };
+    if !has_objective {
+        return Err(need_objective(vec!["fresh".into()], "`fresh:`"));
+    }
+    let races: Vec<_> = experiments.iter().filter_map(|e| e.race).collect();
+    crate::declared::check_fresh_seeds(f, seeds, &races)?;
+    Ok(f.seed_list().expect("checked by check_fresh_seeds"))
 }
 
 fn problem(path: &[&str], message: impl Into<String>) -> Problem {
@@ -253,6 +302,7 @@ fn experiments(
             title: None,
             axes: vec![],
             fixed: vec![],
+            race: None,
         }]);
     };
     if raw.is_empty() {
@@ -313,7 +363,7 @@ fn experiment(
         }
         fixed.push((name.clone(), typed(name, default, v).map_err(|m| problem(&at, m))?));
     }
-    Ok(ExperimentDecl { id: e.id.clone(), title: e.title.clone(), axes, fixed })
+    Ok(ExperimentDecl { id: e.id.clone(), title: e.title.clone(), axes, fixed, race: e.race })
 }
 
 /// The values of an axis of param `name`: one value, a list, or a range `"A..B"` of an int or

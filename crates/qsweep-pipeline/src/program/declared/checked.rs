@@ -1,6 +1,7 @@
 //! A program pipeline file, checked: every name known, every value of its param's type, the
 //! experiments' axes and the variants' params resolved. What the loader gives the plan.
 
+use crate::declared::RaceSpec;
 use crate::program::model::{MetricType, Objective, ParamType, ParamValue, Protocol, Provenance};
 use std::time::Duration;
 
@@ -39,6 +40,8 @@ pub struct ProgramDecl {
     pub experiments: Vec<ExperimentDecl>,
     /// The variants.
     pub variants: Vec<VariantDecl>,
+    /// The fresh seeds of every experiment's best cell (`fresh:`), in order; empty without.
+    pub fresh: Vec<u64>,
 }
 
 impl ProgramDecl {
@@ -65,6 +68,8 @@ pub struct ExperimentDecl {
     pub axes: Vec<(String, Vec<ParamValue>)>,
     /// The params it fixes, with their values.
     pub fixed: Vec<(String, ParamValue)>,
+    /// Its race: its own `race:` block, else the pipeline's (`None`: its full grid runs).
+    pub race: Option<RaceSpec>,
 }
 
 impl ExperimentDecl {

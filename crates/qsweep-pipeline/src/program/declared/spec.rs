@@ -4,7 +4,7 @@
 //! fields mean together (names known, values of their param's type) is checked by `check`.
 
 use super::values::{Argv, Globs, MetricName, ProvenanceEntry, Scalar, Timeout, Vary};
-use crate::declared::Seeds;
+use crate::declared::{FreshSpec, RaceSpec, Seeds};
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 use std::fmt;
@@ -32,6 +32,12 @@ pub struct ProgramFile {
     /// The variants.
     #[serde(default)]
     pub variants: Option<Vec<VariantEntry>>,
+    /// Race seeds into the cells that can still be their experiment's best (every experiment).
+    #[serde(default)]
+    pub race: Option<RaceSpec>,
+    /// Each experiment's best cell again, on seeds that took no part in choosing it.
+    #[serde(default)]
+    pub fresh: Option<FreshSpec>,
 }
 
 /// `program:`.
@@ -106,6 +112,9 @@ pub struct ExperimentEntry {
     /// Param → value for every cell of this experiment.
     #[serde(default)]
     pub fixed: Named<Scalar>,
+    /// This experiment's race (instead of the pipeline-wide one).
+    #[serde(default)]
+    pub race: Option<RaceSpec>,
 }
 
 /// One entry of `variants:`.

@@ -95,6 +95,9 @@ fn heatmap(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
     let lo = means.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = means.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let mut s = open(w, h, &title(stats, e, m));
+    if e.race.is_some() {
+        s.push_str(OUT_PATTERN);
+    }
     for (i, c) in e.cells.iter().enumerate() {
         let r = rows.iter().position(|v| *v == c.coords[0].to_string()).unwrap_or(0) as u32;
         let k = cols.iter().position(|v| *v == c.coords[1].to_string()).unwrap_or(0) as u32;
@@ -117,6 +120,11 @@ fn heatmap(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
             y + ch / 2 + 4,
             escape::xml(&label)
         );
+        if c.contender == Some(false) {
+            // Faded and hatched: the cell left the race.
+            let _ =
+                writeln!(s, "<rect x=\"{x}\" y=\"{y}\" width=\"{cw}\" height=\"{ch}\" fill=\"url(#out)\"/>");
+        }
         if e.best == Some(i) {
             let _ = writeln!(
                 s,
@@ -148,10 +156,20 @@ fn heatmap(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
         top - 24,
         escape::xml(&e.axes[0])
     );
-    let _ = writeln!(s, "<text x=\"{left}\" y=\"{}\">{}</text>", h - 24, escape::xml(&legend(stats, e)),);
+    let mut legend = legend(stats, e);
+    if e.race.is_some() {
+        legend.push_str("; faded, hatched: left the race (significantly worse)");
+    }
+    let _ = writeln!(s, "<text x=\"{left}\" y=\"{}\">{legend}</text>", h - 24, legend = escape::xml(&legend));
     s.push_str("</svg>\n");
     s
 }
+
+/// A white wash with grey diagonal hatching, laid over a cell that left the race.
+const OUT_PATTERN: &str =
+    "<defs><pattern id=\"out\" width=\"6\" height=\"6\" patternUnits=\"userSpaceOnUse\" \
+patternTransform=\"rotate(45)\"><rect width=\"6\" height=\"6\" fill=\"white\" fill-opacity=\"0.6\"/>\
+<line x1=\"0\" y1=\"0\" x2=\"0\" y2=\"6\" stroke=\"#666666\" stroke-width=\"1.5\"/></pattern></defs>\n";
 
 /// The line under a figure: the colour scale or the bars, and the best cell's outline.
 fn legend(stats: &ProgramStats, e: &ExperimentStats) -> String {
@@ -260,10 +278,13 @@ fn line(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
     let _ = writeln!(s, "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\"/>", path.join(" "), LINES[0]);
     for &(i, mean, lo, hi) in &points {
         let colour = if e.best == Some(i) { BEST } else { LINES[0] };
+        // A cell that left the race: faded, its point hollow.
+        let (opacity, fill) =
+            if e.cells[i].contender == Some(false) { ("0.35", "white") } else { ("1", colour) };
         let _ = writeln!(
             s,
-            "<line x1=\"{0:.1}\" y1=\"{1:.1}\" x2=\"{0:.1}\" y2=\"{2:.1}\" stroke=\"{colour}\" stroke-width=\"2\"/>\n\
-             <circle cx=\"{0:.1}\" cy=\"{3:.1}\" r=\"4\" fill=\"{colour}\"/>",
+            "<line x1=\"{0:.1}\" y1=\"{1:.1}\" x2=\"{0:.1}\" y2=\"{2:.1}\" stroke=\"{colour}\" stroke-width=\"2\" opacity=\"{opacity}\"/>\n\
+             <circle cx=\"{0:.1}\" cy=\"{3:.1}\" r=\"4\" fill=\"{fill}\" stroke=\"{colour}\" opacity=\"{opacity}\"/>",
             x(i),
             axis.y(lo),
             axis.y(hi),
@@ -287,7 +308,11 @@ fn line(stats: &ProgramStats, e: &ExperimentStats, m: usize) -> String {
         top + plot_h + 38.0,
         escape::xml(&e.axes[0]),
         h - 16.0,
-        escape::xml(&format!("{}; bars: 95 % bootstrap interval of the mean", legend(stats, e)))
+        escape::xml(&format!(
+            "{}; bars: 95 % bootstrap interval of the mean{}",
+            legend(stats, e),
+            if e.race.is_some() { "; faded, hollow: left the race (significantly worse)" } else { "" }
+        ))
     );
     s.push_str("</svg>\n");
     s

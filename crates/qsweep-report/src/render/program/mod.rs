@@ -5,7 +5,7 @@
 pub mod figures;
 pub mod pages;
 
-use crate::derive::program::{ExperimentStats, ProgramStats};
+use crate::derive::program::{ExperimentStats, FreshStats, ProgramStats};
 use arrow::array::{ArrayRef, BooleanArray, Float64Array, StringArray, UInt64Array};
 use arrow::datatypes::{DataType, Field, Schema};
 use arrow::record_batch::RecordBatch;
@@ -15,8 +15,25 @@ use std::sync::Arc;
 
 /// The columns of `cells.parquet` after `variant` (only with variants), `experiment` and one column
 /// per param: one row per cell and scalar metric (docs/reports.md).
-pub const CELL_COLUMNS: [&str; 10] =
-    ["metric", "n", "mean", "std", "ci_lo", "ci_hi", "best", "planned", "present", "failed"];
+pub const CELL_COLUMNS: [&str; 17] = [
+    "metric",
+    "n",
+    "mean",
+    "std",
+    "ci_lo",
+    "ci_hi",
+    "best",
+    "planned",
+    "present",
+    "failed",
+    "contender",
+    "fresh_n",
+    "fresh_mean",
+    "fresh_std",
+    "fresh_ci_lo",
+    "fresh_ci_hi",
+    "fresh_failed",
+];
 
 /// A number as pages and figures print it: at most four decimals, trailing zeros dropped.
 pub fn num(x: f64) -> String {
@@ -69,6 +86,16 @@ pub fn cells_batch(plan: &ProgramPlan, stats: &ProgramStats) -> anyhow::Result<R
     let count = |f: &dyn Fn(&(&ExperimentStats, usize, usize)) -> usize| -> ArrayRef {
         Arc::new(rows.iter().map(|r| f(r) as u64).collect::<UInt64Array>())
     };
+    // The best cell's fresh-seed estimate (null in every other cell's rows).
+    fn fresh<'a>(r: &(&'a ExperimentStats, usize, usize)) -> Option<&'a FreshStats> {
+        r.0.cells[r.1].fresh.as_ref()
+    }
+    let fresh_opt = |f: fn(&qsweep_pipeline::analysis::Summary) -> Option<f64>| -> ArrayRef {
+        Arc::new(rows.iter().map(|r| fresh(r).and_then(|x| f(&x.scalars[r.2]))).collect::<Float64Array>())
+    };
+    let fresh_count = |f: &dyn Fn(&FreshStats) -> usize| -> ArrayRef {
+        Arc::new(rows.iter().map(|r| fresh(r).map(|x| f(x) as u64)).collect::<UInt64Array>())
+    };
     let values: Vec<(DataType, bool, ArrayRef)> = vec![
         (
             DataType::Utf8,
@@ -88,6 +115,21 @@ pub fn cells_batch(plan: &ProgramPlan, stats: &ProgramStats) -> anyhow::Result<R
         (DataType::UInt64, false, count(&|r| r.0.cells[r.1].planned)),
         (DataType::UInt64, false, count(&|r| r.0.cells[r.1].present)),
         (DataType::UInt64, false, count(&|r| r.0.cells[r.1].failed)),
+        (
+            DataType::Boolean,
+            true,
+            Arc::new(rows.iter().map(|r| r.0.cells[r.1].contender).collect::<BooleanArray>()),
+        ),
+        (
+            DataType::UInt64,
+            true,
+            Arc::new(rows.iter().map(|r| fresh(r).map(|x| x.scalars[r.2].n as u64)).collect::<UInt64Array>()),
+        ),
+        (DataType::Float64, true, fresh_opt(|s| s.mean)),
+        (DataType::Float64, true, fresh_opt(|s| s.std)),
+        (DataType::Float64, true, fresh_opt(|s| s.ci_lo)),
+        (DataType::Float64, true, fresh_opt(|s| s.ci_hi)),
+        (DataType::UInt64, true, fresh_count(&|f| f.failed)),
     ];
     for (name, (t, nullable, column)) in CELL_COLUMNS.iter().zip(values) {
         fields.push(Field::new(*name, t, nullable));

@@ -59,9 +59,24 @@ fn blocks(plan: &ProgramPlan, stats: &ProgramStats, counts: Counts) -> Vec<Block
             let c = &e.cells[i];
             let at: Vec<String> = e.axes.iter().zip(&c.coords).map(|(a, v)| format!("{a} = {v}")).collect();
             let at = if at.is_empty() { "the defaults".to_string() } else { at.join(", ") };
+            let among = if e.race.is_some() { " among the race's contenders" } else { "" };
+            let fresh = match &c.fresh {
+                Some(f) => format!(
+                    " On {} fresh seeds, which took no part in choosing it: {} (95 % interval) over n = {}{}.",
+                    f.planned,
+                    estimate(&f.scalars[m]),
+                    f.scalars[m].n,
+                    if f.failed > 0 { format!(" ({} failed)", f.failed) } else { String::new() }
+                ),
+                None if e.fresh_seeds > 0 => {
+                    " Its fresh seeds are not run yet (they run once the best cell is decided).".to_string()
+                }
+                None => String::new(),
+            };
             b.push(Block::Para(
                 format!(
-                    "Best cell by {} ({}): {at}, {} over n = {} (on the seeds that chose it).",
+                    "Best cell by {} ({}{among}): {at}, {} over n = {} (selection estimate: on the seeds that \
+                     chose it).{fresh}",
                     stats.scalars[m].0,
                     match goal {
                         Goal::Minimize => "lowest mean",
@@ -73,11 +88,31 @@ fn blocks(plan: &ProgramPlan, stats: &ProgramStats, counts: Counts) -> Vec<Block
                 vec![],
             ));
         }
+        if let Some(r) = &e.race {
+            b.push(Block::Para(
+                format!(
+                    "Raced: {} of {} cells still contenders after {} of at most {} rounds{}; the race spent {} \
+                     trials where the full grid at max_seeds would take {}. A cell left the race when its mean \
+                     was significantly worse than the best's (one-sided Welch test, Holm over the round).",
+                    r.contenders,
+                    r.cells,
+                    r.rounds_done,
+                    r.rounds_max,
+                    if r.finished { " (over)" } else { " (not over yet)" },
+                    r.trials,
+                    r.without_race
+                ),
+                vec![],
+            ));
+        }
         for f in figures::listed(stats, e) {
             b.push(Block::Image(f.path, f.alt));
         }
         let mut header: Vec<String> = e.axes.clone();
         header.extend(["n".to_string(), "failed".to_string()]);
+        if e.race.is_some() {
+            header.push("race".to_string());
+        }
         for (name, _) in &stats.scalars {
             header.push(format!("{name}: mean ± std"));
             header.push(format!("{name}: 95 % interval"));
@@ -95,6 +130,9 @@ fn blocks(plan: &ProgramPlan, stats: &ProgramStats, counts: Counts) -> Vec<Block
                 }
                 r.push(c.scalars.first().map_or(c.present - c.failed, |s| s.n).to_string());
                 r.push(c.failed.to_string());
+                if e.race.is_some() {
+                    r.push(if c.contender == Some(false) { "out" } else { "contender" }.to_string());
+                }
                 for s in &c.scalars {
                     r.push(mean_std(s));
                     r.push(interval(s));
