@@ -128,6 +128,8 @@ fn load(spec: &str, cache: &CacheArgs) -> anyhow::Result<Loaded> {
     }
     let plan = super::program::plan(&args)?;
     let store = super::program::existing_folder(cache, &plan)?;
+    // A raced plan's cells hold the seeds their race gave them, as the report counts them.
+    let plan = qsweep_pipeline::program::race::replay_store(plan, store.as_ref())?.plan;
     let rows = qsweep_pipeline::program::stored::plan_rows(&plan, store.as_ref())?;
     Ok(Loaded::Program { label: spec.to_string(), variant, plan: Box::new(plan), rows })
 }

@@ -145,9 +145,12 @@ impl Overall {
     }
 }
 
-/// A p-value as text: three decimals, or two significant digits below 0.001.
+/// A p-value as text: three decimals, two significant digits below 0.001, and `0` for exactly 0
+/// (two samples without spread and with different means), never `0.000`, which reads as rounded.
 pub fn p_text(p: f64) -> String {
-    if p < 0.001 && p > 0.0 {
+    if p == 0.0 {
+        "0".into()
+    } else if p < 0.001 && p > 0.0 {
         format!("{p:.1e}")
     } else {
         format!("{p:.3}")
@@ -272,6 +275,14 @@ fn overall(cells: &[CellComparison]) -> Overall {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn p_values_read_as_what_they_are() {
+        assert_eq!(p_text(0.0), "0");
+        assert_eq!(p_text(0.00012), "1.2e-4");
+        assert_eq!(p_text(0.0421), "0.042");
+        assert_eq!(p_text(1.0), "1.000");
+    }
+
     use super::*;
     use qsweep_pipeline::analysis::Moments;
 

@@ -21,4 +21,4 @@ pub mod stats;
 /// instead of keeping files an older definition wrote. The golden test
 /// (`tests/cli/memo.rs::analysis_golden_*`) fails when the outputs of a fixed input change while
 /// this does not.
-pub const ANALYSIS_VERSION: u32 = 5;
+pub const ANALYSIS_VERSION: u32 = 6;

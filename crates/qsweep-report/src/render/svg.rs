@@ -3,6 +3,9 @@
 //! small. [`compact`] rewrites that output, line by line:
 //!
 //! - `opacity="1"` (the default) is dropped, and font sizes are rounded to 0.01 px;
+//! - a polyline's or polygon's point equal to the one before it, or lying on the straight segment
+//!   between its neighbours, is dropped ([`simplify_points`]): a curve drawn at pixel resolution
+//!   repeats many;
 //! - the font family, the same on every text, is set once on the root element (SVG inherits it);
 //! - a filled rectangle followed by the outline of the same rectangle becomes one element;
 //! - consecutive polylines with the same stroke become one `<path>` of the same segments;
@@ -21,6 +24,49 @@ pub fn compact(svg: &str) -> String {
 /// sees them as what is drawn over a cell).
 pub fn compact_with(svg: &str, between: impl FnOnce(String) -> String) -> String {
     group(&crate::render::svg_grid::grid_images(&between(merge(svg))))
+}
+
+/// `points` (`x,y x,y …`) without the points that change nothing drawn: one equal to the point
+/// before it, and one lying on the segment between the points kept before it and after it
+/// (exactly: a zero cross product and within the segment's box), so the line or the polygon's
+/// outline is the same set of points. The kept points are written as they were; text that is not
+/// a list of number pairs is returned as it is.
+pub fn simplify_points(points: &str) -> String {
+    let parsed: Option<Vec<(&str, f64, f64)>> = points
+        .split_whitespace()
+        .map(|t| {
+            let (x, y) = t.split_once(',')?;
+            Some((t, x.parse().ok()?, y.parse().ok()?))
+        })
+        .collect();
+    let Some(parsed) = parsed else { return points.to_string() };
+    let last = parsed.last().copied().filter(|_| parsed.len() > 1);
+    let mut kept: Vec<(&str, f64, f64)> = Vec::with_capacity(parsed.len());
+    for p in parsed {
+        if kept.last().is_some_and(|q| (q.1, q.2) == (p.1, p.2)) {
+            continue;
+        }
+        kept.push(p);
+        while let [.., a, b, c] = kept[..] {
+            let cross = (b.1 - a.1) * (c.2 - a.2) - (b.2 - a.2) * (c.1 - a.1);
+            let within =
+                a.1.min(c.1) <= b.1 && b.1 <= a.1.max(c.1) && a.2.min(c.2) <= b.2 && b.2 <= a.2.max(c.2);
+            if cross == 0.0 && within {
+                kept.remove(kept.len() - 2);
+            } else {
+                break;
+            }
+        }
+    }
+    // A line of one point is no line: a zero-length segment keeps both its ends.
+    if kept.len() == 1 {
+        kept.extend(last);
+    }
+    let mut out = kept.iter().map(|p| p.0).collect::<Vec<_>>().join(" ");
+    if points.ends_with(' ') && !out.is_empty() {
+        out.push(' ');
+    }
+    out
 }
 
 /// The per-element rewrites: defaults dropped, outlines merged, polylines joined.
@@ -42,6 +88,11 @@ fn merge(svg: &str) -> String {
     let mut root_done = false;
     for line in svg.lines() {
         let mut l = line.replace(" opacity=\"1\"", "");
+        if let Some((head, rest)) = l.split_once(" points=\"") {
+            if let Some((pts, tail)) = rest.split_once('"') {
+                l = format!("{head} points=\"{}\"{tail}", simplify_points(pts));
+            }
+        }
         if !root_done && l.starts_with("<svg ") && !l.contains(" font-family=") {
             l = l.replacen("<svg ", "<svg font-family=\"sans-serif\" ", 1);
             root_done = true;
@@ -209,6 +260,22 @@ fn round_font_size(l: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn points_that_change_nothing_drawn_are_dropped_and_the_rest_kept_as_written() {
+        // Repeats, a horizontal run and a diagonal run collapse to their ends; the turns stay.
+        assert_eq!(
+            simplify_points("62,271 62,271 63,271 64,271 64,270 65,269 66,268 66,300 "),
+            "62,271 64,271 64,270 66,268 66,300 "
+        );
+        // A point beyond its neighbours' segment is a turn back, not on the segment: kept.
+        assert_eq!(simplify_points("0,0 2,0 1,0"), "0,0 2,0 1,0");
+        assert_eq!(simplify_points("1.5,2 1.50,2 3,4"), "1.5,2 3,4");
+        assert_eq!(simplify_points("not numbers"), "not numbers");
+        assert_eq!(simplify_points("663,48 663,48 "), "663,48 663,48 ", "a zero-length bar keeps both ends");
+        let line = "<polygon opacity=\"0.22\" fill=\"#E66E00\" points=\"1,1 2,1 3,1 3,2\"/>";
+        assert_eq!(merge(line), "<polygon opacity=\"0.22\" fill=\"#E66E00\" points=\"1,1 3,1 3,2\"/>\n");
+    }
 
     #[test]
     fn compacts_what_plotters_writes_and_keeps_the_rest() {

@@ -8,6 +8,7 @@ use super::{figure_stem, file_part, num};
 use crate::derive::program::{CellStats, Curve, ExperimentStats, ProgramStats};
 use crate::render::escape;
 use crate::render::figures::{nice_ticks, viridis};
+use crate::render::svg::simplify_points;
 use std::fmt::Write;
 
 const FONT: &str = "font-family=\"sans-serif\" font-size=\"12\"";
@@ -358,8 +359,8 @@ fn curves(stats: &ProgramStats, e: &ExperimentStats, l: usize) -> String {
             s,
             "<polygon points=\"{}\" fill=\"{colour}\" fill-opacity=\"0.15\" stroke=\"none\"/>\n\
              <polyline points=\"{}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"1.5\"/>",
-            band.join(" "),
-            median.join(" ")
+            simplify_points(&band.join(" ")),
+            simplify_points(&median.join(" "))
         );
         let coords: Vec<String> =
             e.axes.iter().zip(&e.cells[i].coords).map(|(a, v)| format!("{a}={v}")).collect();
