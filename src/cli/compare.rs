@@ -27,6 +27,13 @@ pub struct CompareArgs {
     /// [default: A's objective; an engine side's `episodes`].
     #[arg(long, value_name = "NAME[=OTHER]")]
     pub metric: Option<String>,
+    /// Only A's cells whose param NAME has one of these values (repeatable: every one must hold),
+    /// e.g. `--where-a system=cart-pole`.
+    #[arg(long = "where-a", value_name = "NAME=VALUE[,VALUE…]")]
+    pub where_a: Vec<String>,
+    /// Only B's cells whose param NAME has one of these values (as `--where-a`).
+    #[arg(long = "where-b", value_name = "NAME=VALUE[,VALUE…]")]
+    pub where_b: Vec<String>,
     /// The equivalence margin on B ÷ A, `LO,HI`.
     #[arg(long, value_name = "LO,HI", default_value = "0.80,1.25")]
     pub margin: String,
@@ -48,6 +55,16 @@ fn pair(flag: &str, s: &str, alone: bool) -> anyhow::Result<(String, String)> {
         _ => {
             Err(user_error(format!("{flag} {s}: expected NAME=OTHER{}", if alone { " or NAME" } else { "" })))
         }
+    }
+}
+
+/// `NAME=VALUE[,VALUE…]` as the name and its values.
+fn filter(flag: &str, s: &str) -> anyhow::Result<(String, Vec<String>)> {
+    match s.split_once('=') {
+        Some((n, v)) if !n.is_empty() && !v.is_empty() => {
+            Ok((n.to_string(), v.split(',').map(|x| x.trim().to_string()).collect()))
+        }
+        _ => Err(user_error(format!("{flag} {s}: expected NAME=VALUE or NAME=VALUE,VALUE,…"))),
     }
 }
 
@@ -140,6 +157,8 @@ pub fn run(a: CompareArgs) -> anyhow::Result<u8> {
         map: a.map.iter().map(|m| pair("--map", m, false)).collect::<Result<_, _>>()?,
         metric: a.metric.as_deref().map(|m| pair("--metric", m, true)).transpose()?,
         margin: margin(&a.margin)?,
+        where_a: a.where_a.iter().map(|w| filter("--where-a", w)).collect::<Result<_, _>>()?,
+        where_b: a.where_b.iter().map(|w| filter("--where-b", w)).collect::<Result<_, _>>()?,
     };
     let (la, lb) = (load(&a.a, &a.cache)?, load(&a.b, &a.cache)?);
     let c = comparison::compare(&la.side(), &lb.side(), &request)?;

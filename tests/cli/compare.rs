@@ -380,3 +380,19 @@ fn compare_engine_sides_bad_inputs_exit_2_with_a_clear_message() {
         assert!(err.contains(want), "qsweep {}: {err}", all.join(" "));
     }
 }
+
+#[test]
+fn compare_where_keeps_only_the_cells_named_and_an_unknown_param_exits_2() {
+    let sb = before_after(6, "1.2");
+    // A's cells x = 2 and 5 only, B's x = 5 and 6: one cell is matched, the others are one side's.
+    let v = json(&sb, &["a.yaml", "b.yaml", "--where-a", "x=2,5", "--where-b", "x=5", "--where-b", "x=5,6"]);
+    let cells = v["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 1, "{v}");
+    assert_eq!(cells[0]["params"]["x"], 5, "{v}");
+    let out = stdout(&mut sb.qsweep(&["compare", "a.yaml", "b.yaml", "--where-a", "x=1,2,3"]));
+    assert!(out.starts_with("compared 3 cells of a.yaml and b.yaml"), "{out}");
+    let err = fails_with(&mut sb.qsweep(&["compare", "a.yaml", "b.yaml", "--where-b", "y=1"]), 2);
+    assert!(err.contains("--where on b.yaml: it has no param `y`; its params: x"), "{err}");
+    let err = fails_with(&mut sb.qsweep(&["compare", "a.yaml", "b.yaml", "--where-a", "x"]), 2);
+    assert!(err.contains("--where-a x: expected NAME=VALUE"), "{err}");
+}

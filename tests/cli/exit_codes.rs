@@ -124,7 +124,11 @@ fn every_subcommand_exits_with_the_documented_codes() {
                 metrics: { x: int }\nparams: { a: 1 }\n";
     let ran = Test::new().file("p.yaml", prog).args(["run", "p.yaml", "--quiet", "--no-report"]).run();
     case("compare", ok, ran.then().args(["compare", "p.yaml", "p.yaml", "--metric", "x"]));
-    case("compare", usage, Test::new().pipeline("tiny.yaml").args(["compare", "tiny.yaml", "tiny.yaml"]));
+    case(
+        "compare",
+        usage,
+        Test::new().file("p.yaml", prog).args(["compare", "p.yaml", "p.yaml", "--where-a", "nope=1"]),
+    );
     case(
         "compare",
         failure,

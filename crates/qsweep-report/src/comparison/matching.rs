@@ -48,6 +48,10 @@ pub struct Request {
     pub metric: Option<(String, String)>,
     /// The equivalence margin on B ÷ A.
     pub margin: (f64, f64),
+    /// `--where-a NAME=V,…`: only A's cells whose param NAME shows one of the values.
+    pub where_a: Vec<(String, Vec<String>)>,
+    /// `--where-b`, for B.
+    pub where_b: Vec<(String, Vec<String>)>,
 }
 
 /// The default equivalence margin on B ÷ A: the conventional 0.80–1.25, symmetric on a log scale.
@@ -112,8 +116,8 @@ pub fn match_cells(a: &Side, b: &Side, request: &Request) -> anyhow::Result<Matc
     let metric = metric(a, b, request.metric.as_ref())?;
     let names_a: Vec<&str> = shared.iter().map(|(n, _)| n.as_str()).collect();
     let names_b: Vec<&str> = shared.iter().map(|(_, n)| n.as_str()).collect();
-    let cells_a = cells_of(a, &names_a, &metric.0)?;
-    let cells_b = cells_of(b, &names_b, &metric.1)?;
+    let cells_a = cells_of(a, &names_a, &metric.0, &Filter::new(a, &request.where_a)?)?;
+    let cells_b = cells_of(b, &names_b, &metric.1, &Filter::new(b, &request.where_b)?)?;
     let by_key_b: HashMap<&Vec<String>, &SideCell> = cells_b.iter().map(|c| (&c.key, c)).collect();
     let mut out = Matched {
         labels: (a.label.to_string(), b.label.to_string()),
@@ -295,18 +299,54 @@ struct SideCell {
     sample: Sample,
 }
 
-/// The cells of `side` (of its variant), one per shared-value tuple (`shared`: their names on this
-/// side), in plan order, each with its sample of `metric`.
-fn cells_of(side: &Side, shared: &[&str], metric: &str) -> anyhow::Result<Vec<SideCell>> {
+/// `--where-a`/`--where-b` of one side: each param's position and the values it may show (as
+/// the param prints: `cart-pole`, `0.1`, `true`).
+struct Filter(Vec<(usize, Vec<String>)>);
+
+impl Filter {
+    /// The filter of `side` from `wheres`; a param the side does not have is the user's error.
+    fn new(side: &Side, wheres: &[(String, Vec<String>)]) -> anyhow::Result<Self> {
+        let names = param_names(side);
+        let mut out = Vec::new();
+        for (name, values) in wheres {
+            let Some(i) = names.iter().position(|n| n == name) else {
+                return Err(user_error(format!(
+                    "--where on {}: it has no param `{name}`; its params: {}",
+                    side.label,
+                    names.join(", ")
+                )));
+            };
+            out.push((i, values.clone()));
+        }
+        Ok(Self(out))
+    }
+
+    /// Whether a cell of these param values is kept.
+    fn keeps(&self, params: &[ParamValue]) -> bool {
+        self.0.iter().all(|(i, values)| values.contains(&params[*i].to_string()))
+    }
+}
+
+/// The cells of `side` (of its variant) that `filter` keeps, one per shared-value tuple (`shared`:
+/// their names on this side), in plan order, each with its sample of `metric`.
+fn cells_of(side: &Side, shared: &[&str], metric: &str, filter: &Filter) -> anyhow::Result<Vec<SideCell>> {
     match side.source {
-        Source::Program { plan, variant, rows } => program_cells(side, plan, variant, rows, shared, metric),
-        Source::Cells(set) => set_cells(side, set, shared, metric),
+        Source::Program { plan, variant, rows } => {
+            program_cells(side, plan, variant, rows, shared, metric, filter)
+        }
+        Source::Cells(set) => set_cells(side, set, shared, metric, filter),
     }
 }
 
 /// A [`CellSet`]'s cells: two with the same shared values are one when they are one configuration
 /// (their identity, e.g. in two experiments), else ambiguous.
-fn set_cells(side: &Side, set: &CellSet, shared: &[&str], metric: &str) -> anyhow::Result<Vec<SideCell>> {
+fn set_cells(
+    side: &Side,
+    set: &CellSet,
+    shared: &[&str],
+    metric: &str,
+    filter: &Filter,
+) -> anyhow::Result<Vec<SideCell>> {
     let idx: Vec<usize> = shared
         .iter()
         .map(|n| set.params.iter().position(|p| p == n).expect("a shared param is named"))
@@ -314,7 +354,7 @@ fn set_cells(side: &Side, set: &CellSet, shared: &[&str], metric: &str) -> anyho
     let m = set.metrics.iter().position(|x| x == metric).expect("the metric is checked");
     let mut out: Vec<SideCell> = Vec::new();
     let mut first_of: HashMap<Vec<String>, usize> = HashMap::new();
-    for (ci, c) in set.cells.iter().enumerate() {
+    for (ci, c) in set.cells.iter().enumerate().filter(|(_, c)| filter.keeps(&c.params)) {
         let values: Vec<ParamValue> = idx.iter().map(|&i| c.params[i].clone()).collect();
         let key: Vec<String> = values.iter().map(value_key).collect();
         match first_of.get(&key) {
@@ -340,6 +380,7 @@ fn program_cells(
     rows: &HashMap<Key, ProgramRow>,
     shared: &[&str],
     metric: &str,
+    filter: &Filter,
 ) -> anyhow::Result<Vec<SideCell>> {
     let idx: Vec<usize> = shared
         .iter()
@@ -365,7 +406,7 @@ fn program_cells(
     let mut cells: Vec<Merged> = Vec::new();
     let mut at: HashMap<Vec<String>, usize> = HashMap::new();
     for e in exps {
-        for c in &e.cells {
+        for c in e.cells.iter().filter(|c| filter.keeps(&c.params)) {
             let values: Vec<ParamValue> = idx.iter().map(|&i| c.params[i].clone()).collect();
             let key: Vec<String> = values.iter().map(value_key).collect();
             match at.get(&key) {
