@@ -39,10 +39,11 @@ fn blocks(plan: &ProgramPlan, stats: &ProgramStats, counts: Counts) -> Vec<Block
         format!(
             "Trials present: {} of {} planned; {} failed. Each cell: n trials that succeeded, and per metric \
              mean ± sample std with the 95 % bootstrap interval of the mean (a bool's mean is its share of true). \
-             Every trial:",
+             Every trial's row is in trials.parquet beside this page (written with the report, not committed: \
+             the cache holds the rows); every cell:",
             counts.present, counts.planned, counts.failed
         ),
-        vec![("trials.parquet".into(), "trials.parquet".into()), ("every cell: cells.parquet".into(), "cells.parquet".into())],
+        vec![("cells.parquet".into(), "cells.parquet".into())],
     ));
     if stats.objective.is_none() {
         b.push(Block::Para(
