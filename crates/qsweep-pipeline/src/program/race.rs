@@ -113,7 +113,6 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
     };
     let identity = Identity::of(&plan.program);
     let first = plan.seeds.len();
-    let next_seed = plan.seeds.iter().max().map_or(0, |m| m + 1);
     let mut heats: Vec<Heat> = Vec::new();
     for (ei, e) in plan.experiments.iter_mut().enumerate() {
         if e.race.is_some() {
@@ -124,8 +123,8 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
         }
     }
     // Per stored key, the objective's value when the trial succeeded.
-    let mut known: HashMap<Key, Option<f64>> = HashMap::new();
-    let mut learn = |wanted: HashSet<Key>, known: &mut HashMap<Key, Option<f64>>| -> anyhow::Result<()> {
+    let mut known: Known = HashMap::new();
+    let mut learn = |wanted: HashSet<Key>, known: &mut Known| -> anyhow::Result<()> {
         if !wanted.is_empty() {
             for (k, r) in read(&wanted)? {
                 known.insert(k, objective_value(&r, metric));
@@ -133,6 +132,29 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
         }
         Ok(())
     };
+    run_rounds(&mut plan, &identity, &mut heats, goal, &mut known, &mut learn)?;
+    plan_fresh(&mut plan, &identity, &heats, goal, &mut known, &mut learn)?;
+    let races = standings(&plan, heats, first);
+    Ok(ProgramReplayed { plan, races })
+}
+
+/// Per stored key, the objective's value when the trial succeeded.
+type Known = HashMap<Key, Option<f64>>;
+
+/// How a replay learns the objective's values of the keys asked for.
+type Learn<'a> = dyn FnMut(HashSet<Key>, &mut Known) -> anyhow::Result<()> + 'a;
+
+/// Replay every race's rounds as far as their trials are stored, planning the next round's.
+fn run_rounds(
+    plan: &mut ProgramPlan,
+    identity: &Identity,
+    heats: &mut [Heat],
+    goal: Goal,
+    known: &mut Known,
+    learn: &mut Learn,
+) -> anyhow::Result<()> {
+    let first = plan.seeds.len();
+    let next_seed = plan.seeds.iter().max().map_or(0, |m| m + 1);
     loop {
         let wanted: HashSet<Key> = heats
             .iter()
@@ -141,11 +163,11 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
             .flat_map(|c| c.trials.iter().map(|t| t.key))
             .filter(|k| !known.contains_key(k))
             .collect();
-        learn(wanted, &mut known)?;
+        learn(wanted, known)?;
         let mut advanced = false;
         for h in heats.iter_mut().filter(|h| !h.finished) {
             let e = &mut plan.experiments[h.exp];
-            let Some(samples) = samples(e, &known, goal) else { continue };
+            let Some(samples) = samples(e, known, goal) else { continue };
             let race = e.race.expect("a raced experiment");
             let best = best_by_goal(
                 samples.iter().enumerate().map(|(i, s)| (i, s.as_deref().and_then(signed_mean))),
@@ -184,6 +206,19 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
             break;
         }
     }
+    Ok(())
+}
+
+/// The fresh trials of every experiment whose best cell is decided (its race over, its
+/// candidates' trials stored).
+fn plan_fresh(
+    plan: &mut ProgramPlan,
+    identity: &Identity,
+    heats: &[Heat],
+    goal: Goal,
+    known: &mut Known,
+    learn: &mut Learn,
+) -> anyhow::Result<()> {
     // Fresh seeds last: an experiment's best cell is decided once its race is.
     let ready: Vec<usize> = (0..plan.experiments.len())
         .filter(|&ei| {
@@ -197,7 +232,7 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
         .flat_map(|c| c.trials.iter().map(|t| t.key))
         .filter(|k| !known.contains_key(k))
         .collect();
-    learn(wanted, &mut known)?;
+    learn(wanted, known)?;
     for ei in ready {
         let e = &mut plan.experiments[ei];
         let stored = candidates(e).all(|c| c.trials.iter().all(|t| known.contains_key(&t.key)));
@@ -216,7 +251,12 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
             .map(|&seed| ProgramTrial { seed, key: identity.key(&plan.params, &cell.params, seed) })
             .collect();
     }
-    let races = heats
+    Ok(())
+}
+
+/// Where each race stands.
+fn standings(plan: &ProgramPlan, heats: Vec<Heat>, first: usize) -> Vec<RaceStanding> {
+    heats
         .into_iter()
         .map(|h| {
             let e = &plan.experiments[h.exp];
@@ -232,8 +272,7 @@ pub fn replay(mut plan: ProgramPlan, read: &mut ReadRows) -> anyhow::Result<Prog
                 without_race: e.cells.len() * first.max(race.max_seeds as usize),
             }
         })
-        .collect();
-    Ok(ProgramReplayed { plan, races })
+        .collect()
 }
 
 /// One raced experiment while it is replayed.

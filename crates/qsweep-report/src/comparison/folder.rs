@@ -39,31 +39,8 @@ fn column(
 
 /// The cells of the report folder `dir`, only those of `variant` when given.
 pub fn read(dir: &Path, variant: Option<&str>) -> anyhow::Result<CellSet> {
-    let file = dir.join(CELLS);
-    if !file.is_file() {
-        return Err(user_error(format!(
-            "{}: no {CELLS} in this folder: give an engine report folder (e.g. reports/paper/as-written, \
-             or reports/paper with its variant column), written with the `cells` format",
-            dir.display()
-        )));
-    }
-    let bad = |e: &dyn std::fmt::Display| {
-        user_error(format!("{}: cannot read it as an engine report's cells: {e}", file.display()))
-    };
-    let reader = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(&file)?)
-        .map_err(|e| bad(&e))?
-        .build()
-        .map_err(|e| bad(&e))?;
-    let batches: Vec<RecordBatch> = reader.collect::<Result<_, _>>().map_err(|e| bad(&e))?;
+    let (file, batches) = open(dir)?;
     let schema_has = |n: &str| batches.first().is_some_and(|b| b.column_by_name(n).is_some());
-    for need in ["system", "repr", "algorithm", "experiment", "actions", "n", "mean", "std"] {
-        if !batches.is_empty() && !schema_has(need) {
-            return Err(user_error(format!(
-                "{}: no column `{need}`: not an engine report's {CELLS} (a program pipeline's report is compared through its pipeline file)",
-                file.display()
-            )));
-        }
-    }
     let has_variant = schema_has("variant");
     if let Some(v) = variant {
         if !has_variant {
@@ -73,22 +50,7 @@ pub fn read(dir: &Path, variant: Option<&str>) -> anyhow::Result<CellSet> {
             )));
         }
     }
-    // The varied settings: every axis label's names that are no state variable and not `actions`.
-    let mut settings: Vec<String> = Vec::new();
-    for b in &batches {
-        for axis in ["axis1_label", "axis2_label"] {
-            let Some(c) = column(b, axis, &DataType::Utf8, &file)? else { continue };
-            let c = c.as_any().downcast_ref::<StringArray>().expect("cast to utf8");
-            for label in c.iter().flatten() {
-                for name in label.split("==").map(str::trim) {
-                    if !VARIABLES.contains(&name) && name != "actions" && !settings.iter().any(|s| s == name)
-                    {
-                        settings.push(name.to_string());
-                    }
-                }
-            }
-        }
-    }
+    let settings = varied_settings(&batches, &file)?;
     let lead_variant = has_variant && variant.is_none();
     let mut params: Vec<String> = Vec::new();
     if lead_variant {
@@ -171,24 +133,82 @@ pub fn read(dir: &Path, variant: Option<&str>) -> anyhow::Result<CellSet> {
             cells.push(SetCell { params: values, identity, samples: vec![Sample::Moments(moments)] });
         }
     }
-    if let Some(v) = variant {
-        if cells.is_empty() {
-            let mut known: Vec<String> = Vec::new();
-            for b in &batches {
-                if let Some(c) = column(b, "variant", &DataType::Utf8, &file)? {
-                    for x in c.as_any().downcast_ref::<StringArray>().expect("utf8").iter().flatten() {
-                        if !known.iter().any(|k| k == x) {
-                            known.push(x.to_string());
-                        }
-                    }
-                }
-            }
+    if let (Some(v), true) = (variant, cells.is_empty()) {
+        return Err(no_such_variant(dir, v, &batches, &file)?);
+    }
+    Ok(CellSet { what: "report folder", params, metrics: vec![EPISODES.to_string()], cells })
+}
+
+/// The batches of `dir`'s cells.parquet, checked to be an engine report's.
+fn open(dir: &Path) -> anyhow::Result<(std::path::PathBuf, Vec<RecordBatch>)> {
+    let file = dir.join(CELLS);
+    if !file.is_file() {
+        return Err(user_error(format!(
+            "{}: no {CELLS} in this folder: give an engine report folder (e.g. reports/paper/as-written, \
+             or reports/paper with its variant column), written with the `cells` format",
+            dir.display()
+        )));
+    }
+    let bad = |e: &dyn std::fmt::Display| {
+        user_error(format!("{}: cannot read it as an engine report's cells: {e}", file.display()))
+    };
+    let reader = ParquetRecordBatchReaderBuilder::try_new(std::fs::File::open(&file)?)
+        .map_err(|e| bad(&e))?
+        .build()
+        .map_err(|e| bad(&e))?;
+    let batches: Vec<RecordBatch> = reader.collect::<Result<_, _>>().map_err(|e| bad(&e))?;
+    let schema_has = |n: &str| batches.first().is_some_and(|b| b.column_by_name(n).is_some());
+    for need in ["system", "repr", "algorithm", "experiment", "actions", "n", "mean", "std"] {
+        if !batches.is_empty() && !schema_has(need) {
             return Err(user_error(format!(
-                "{}@{v}: no variant `{v}` in its {CELLS} (its variants: {})",
-                dir.display(),
-                known.join(", ")
+                "{}: no column `{need}`: not an engine report's {CELLS} (a program pipeline's report is compared through its pipeline file)",
+                file.display()
             )));
         }
     }
-    Ok(CellSet { what: "report folder", params, metrics: vec![EPISODES.to_string()], cells })
+    Ok((file, batches))
+}
+
+/// The varied settings: every axis label's names that are no state variable and not `actions`.
+fn varied_settings(batches: &[RecordBatch], file: &Path) -> anyhow::Result<Vec<String>> {
+    let mut settings: Vec<String> = Vec::new();
+    for b in batches {
+        for axis in ["axis1_label", "axis2_label"] {
+            let Some(c) = column(b, axis, &DataType::Utf8, file)? else { continue };
+            let c = c.as_any().downcast_ref::<StringArray>().expect("cast to utf8");
+            for label in c.iter().flatten() {
+                for name in label.split("==").map(str::trim) {
+                    if !VARIABLES.contains(&name) && name != "actions" && !settings.iter().any(|s| s == name)
+                    {
+                        settings.push(name.to_string());
+                    }
+                }
+            }
+        }
+    }
+    Ok(settings)
+}
+
+/// The error of `@v` naming no variant of the folder, with the variants it has.
+fn no_such_variant(
+    dir: &Path,
+    v: &str,
+    batches: &[RecordBatch],
+    file: &Path,
+) -> anyhow::Result<anyhow::Error> {
+    let mut known: Vec<String> = Vec::new();
+    for b in batches {
+        if let Some(c) = column(b, "variant", &DataType::Utf8, file)? {
+            for x in c.as_any().downcast_ref::<StringArray>().expect("utf8").iter().flatten() {
+                if !known.iter().any(|k| k == x) {
+                    known.push(x.to_string());
+                }
+            }
+        }
+    }
+    Ok(user_error(format!(
+        "{}@{v}: no variant `{v}` in its {CELLS} (its variants: {})",
+        dir.display(),
+        known.join(", ")
+    )))
 }

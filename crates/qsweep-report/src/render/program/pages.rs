@@ -5,10 +5,11 @@
 
 use super::figures;
 use super::num;
-use crate::derive::program::ProgramStats;
+use crate::derive::program::{ExperimentStats, ProgramStats};
 use crate::render::escape;
 use qsweep_pipeline::analysis::Summary;
 use qsweep_pipeline::program::model::{Goal, ProgramPlan};
+use qsweep_pipeline::program::race::RaceStanding;
 
 /// The counts a page states at its top.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,94 +57,100 @@ fn blocks(plan: &ProgramPlan, stats: &ProgramStats, counts: Counts) -> Vec<Block
         let variant = e.variant.as_deref().map(|v| format!(" (variant {v})")).unwrap_or_default();
         let title = e.title.as_deref().map(|t| format!(": {t}")).unwrap_or_default();
         b.push(Block::Heading(format!("Experiment {}{title}{variant}", e.id)));
-        if let (Some((m, goal)), Some(i)) = (stats.objective, e.best) {
-            let c = &e.cells[i];
-            let at: Vec<String> = e.axes.iter().zip(&c.coords).map(|(a, v)| format!("{a} = {v}")).collect();
-            let at = if at.is_empty() { "the defaults".to_string() } else { at.join(", ") };
-            let among = if e.race.is_some() { " among the race's contenders" } else { "" };
-            let fresh = match &c.fresh {
-                Some(f) => format!(
-                    " On {} fresh seeds, which took no part in choosing it: {} (95 % interval) over n = {}{}.",
-                    f.planned,
-                    estimate(&f.scalars[m]),
-                    f.scalars[m].n,
-                    if f.failed > 0 { format!(" ({} failed)", f.failed) } else { String::new() }
-                ),
-                None if e.fresh_seeds > 0 => {
-                    " Its fresh seeds are not run yet (they run once the best cell is decided).".to_string()
-                }
-                None => String::new(),
-            };
-            b.push(Block::Para(
-                format!(
-                    "Best cell by {} ({}{among}): {at}, {} over n = {} (selection estimate: on the seeds that \
-                     chose it).{fresh}",
-                    stats.scalars[m].0,
-                    match goal {
-                        Goal::Minimize => "lowest mean",
-                        Goal::Maximize => "highest mean",
-                    },
-                    estimate(&c.scalars[m]),
-                    c.scalars[m].n
-                ),
-                vec![],
-            ));
-        }
-        if let Some(r) = &e.race {
-            b.push(Block::Para(
-                format!(
-                    "Raced: {} of {} cells still contenders after {} of at most {} rounds{}; the race spent {} \
-                     trials where the full grid at max_seeds would take {}. A cell left the race when its mean \
-                     was significantly worse than the best's (one-sided Welch test, Holm over the round).",
-                    r.contenders,
-                    r.cells,
-                    r.rounds_done,
-                    r.rounds_max,
-                    if r.finished { " (over)" } else { " (not over yet)" },
-                    r.trials,
-                    r.without_race
-                ),
-                vec![],
-            ));
-        }
+        b.extend(best_cell(stats, e).map(|t| Block::Para(t, vec![])));
+        b.extend(e.race.as_ref().map(|r| Block::Para(race(r), vec![])));
         for f in figures::listed(stats, e) {
             b.push(Block::Image(f.path, f.alt));
         }
-        let mut header: Vec<String> = e.axes.clone();
-        header.extend(["n".to_string(), "failed".to_string()]);
-        if e.race.is_some() {
-            header.push("race".to_string());
-        }
-        for (name, _) in &stats.scalars {
-            header.push(format!("{name}: mean ± std"));
-            header.push(format!("{name}: 95 % interval"));
-        }
-        let rows = e
-            .cells
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let mut r: Vec<String> = c.coords.iter().map(ToString::to_string).collect();
-                if e.best == Some(i) {
-                    if let Some(first) = r.first_mut() {
-                        first.push_str(" (best)");
-                    }
-                }
-                r.push(c.scalars.first().map_or(c.present - c.failed, |s| s.n).to_string());
-                r.push(c.failed.to_string());
-                if e.race.is_some() {
-                    r.push(if c.contender == Some(false) { "out" } else { "contender" }.to_string());
-                }
-                for s in &c.scalars {
-                    r.push(mean_std(s));
-                    r.push(interval(s));
-                }
-                r
-            })
-            .collect();
-        b.push(Block::Table(header, rows));
+        b.push(cell_table(stats, e));
     }
     b
+}
+
+/// The best cell's line: its selection estimate and, with fresh seeds, its estimate on those.
+fn best_cell(stats: &ProgramStats, e: &ExperimentStats) -> Option<String> {
+    let ((m, goal), i) = (stats.objective?, e.best?);
+    let c = &e.cells[i];
+    let at: Vec<String> = e.axes.iter().zip(&c.coords).map(|(a, v)| format!("{a} = {v}")).collect();
+    let at = if at.is_empty() { "the defaults".to_string() } else { at.join(", ") };
+    let among = if e.race.is_some() { " among the race's contenders" } else { "" };
+    let fresh = match &c.fresh {
+        Some(f) => format!(
+            " On {} fresh seeds, which took no part in choosing it: {} (95 % interval) over n = {}{}.",
+            f.planned,
+            estimate(&f.scalars[m]),
+            f.scalars[m].n,
+            if f.failed > 0 { format!(" ({} failed)", f.failed) } else { String::new() }
+        ),
+        None if e.fresh_seeds > 0 => {
+            " Its fresh seeds are not run yet (they run once the best cell is decided).".to_string()
+        }
+        None => String::new(),
+    };
+    Some(format!(
+        "Best cell by {} ({}{among}): {at}, {} over n = {} (selection estimate: on the seeds that \
+         chose it).{fresh}",
+        stats.scalars[m].0,
+        match goal {
+            Goal::Minimize => "lowest mean",
+            Goal::Maximize => "highest mean",
+        },
+        estimate(&c.scalars[m]),
+        c.scalars[m].n
+    ))
+}
+
+/// What a race spent and where it stands.
+fn race(r: &RaceStanding) -> String {
+    format!(
+        "Raced: {} of {} cells still contenders after {} of at most {} rounds{}; the race spent {} \
+         trials where the full grid at max_seeds would take {}. A cell left the race when its mean \
+         was significantly worse than the best's (one-sided Welch test, Holm over the round).",
+        r.contenders,
+        r.cells,
+        r.rounds_done,
+        r.rounds_max,
+        if r.finished { " (over)" } else { " (not over yet)" },
+        r.trials,
+        r.without_race
+    )
+}
+
+/// Every cell of `e`: its axes' values, n, failed, its race standing and each scalar metric.
+fn cell_table(stats: &ProgramStats, e: &ExperimentStats) -> Block {
+    let mut header: Vec<String> = e.axes.clone();
+    header.extend(["n".to_string(), "failed".to_string()]);
+    if e.race.is_some() {
+        header.push("race".to_string());
+    }
+    for (name, _) in &stats.scalars {
+        header.push(format!("{name}: mean ± std"));
+        header.push(format!("{name}: 95 % interval"));
+    }
+    let rows = e
+        .cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut r: Vec<String> = c.coords.iter().map(ToString::to_string).collect();
+            if e.best == Some(i) {
+                if let Some(first) = r.first_mut() {
+                    first.push_str(" (best)");
+                }
+            }
+            r.push(c.scalars.first().map_or(c.present - c.failed, |s| s.n).to_string());
+            r.push(c.failed.to_string());
+            if e.race.is_some() {
+                r.push(if c.contender == Some(false) { "out" } else { "contender" }.to_string());
+            }
+            for s in &c.scalars {
+                r.push(mean_std(s));
+                r.push(interval(s));
+            }
+            r
+        })
+        .collect();
+    Block::Table(header, rows)
 }
 
 /// `mean ± std [lo, hi]`, or what is known of it.
