@@ -5,9 +5,9 @@
 
 use super::stats::{Comparison, Verdict};
 use crate::render::figures::{Canvas, Picture, Res, INK, SUBTLE};
+use crate::render::log_axis::LogAxis;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
-use qsweep_engine::math::{exp, ln};
 
 /// Width of the figure, in pixels.
 pub const WIDTH: u32 = 900;
@@ -26,59 +26,12 @@ fn color(v: Verdict) -> RGBColor {
     }
 }
 
-/// The log axis: the margin and every finite positive ratio and interval end, widened to the
-/// 1-2-5 values around them, within 10⁻³ to 10³.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Axis {
-    /// The smallest and largest value shown.
-    pub domain: (f64, f64),
-}
-
-impl Axis {
-    /// The axis of `c`.
-    pub fn of(c: &Comparison) -> Self {
-        let (mut lo, mut hi) = (c.margin.0.min(1.0), c.margin.1.max(1.0));
-        for x in &c.cells {
-            for v in [x.ratio, x.ratio_ci.map(|r| r.0), x.ratio_ci.map(|r| r.1)].into_iter().flatten() {
-                if v.is_finite() && v > 0.0 {
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
-            }
-        }
-        let steps = one_two_five(1e-3, 1e3);
-        let lo = steps.iter().rev().find(|&&s| s <= lo * (1.0 + 1e-9)).copied().unwrap_or(1e-3);
-        let hi = steps.iter().find(|&&s| s >= hi * (1.0 - 1e-9)).copied().unwrap_or(1e3);
-        Self { domain: (lo, hi) }
-    }
-
-    /// The x pixel of `v`, clamped to the domain (the engine's own logarithm: the same pixels on
-    /// every machine).
-    pub fn x(&self, v: f64) -> i32 {
-        let (a, b) = (ln(self.domain.0), ln(self.domain.1));
-        let t = if v > 0.0 { ((ln(v.min(1e300)) - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
-        PLOT_X.0 + (t * f64::from(PLOT_X.1 - PLOT_X.0)).round() as i32
-    }
-
-    /// The value at x pixel `x` (the inverse of [`Axis::x`], up to rounding).
-    pub fn value(&self, x: f64) -> f64 {
-        let (a, b) = (ln(self.domain.0), ln(self.domain.1));
-        exp(a + (x - f64::from(PLOT_X.0)) / f64::from(PLOT_X.1 - PLOT_X.0) * (b - a))
-    }
-}
-
-/// 1, 2, 5 × 10^k within `[lo, hi]`.
-fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
-    let mut out = Vec::new();
-    for decade in [1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3] {
-        for m in [1.0, 2.0, 5.0] {
-            let v = m * decade;
-            if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
-                out.push(v);
-            }
-        }
-    }
-    out
+/// The axis of `c`: its margin, 1, and every ratio and interval end
+/// ([`crate::render::log_axis`]).
+pub fn axis_of(c: &Comparison) -> LogAxis {
+    let values =
+        c.cells.iter().flat_map(|x| [x.ratio, x.ratio_ci.map(|r| r.0), x.ratio_ci.map(|r| r.1)]).flatten();
+    LogAxis::around((c.margin.0.min(1.0), c.margin.1.max(1.0)), values, PLOT_X)
 }
 
 /// Pixel size of the figure of `rows` cells.
@@ -94,14 +47,14 @@ fn row_y(i: usize) -> i32 {
 /// The figure of `c` as SVG text.
 pub fn svg(c: &Comparison) -> anyhow::Result<String> {
     let d =
-        crate::render::figures::paint_as(&Figure { c, axis: Axis::of(c) }, size(c.cells.len()), true, false)
+        crate::render::figures::paint_as(&Figure { c, axis: axis_of(c) }, size(c.cells.len()), true, false)
             .map_err(|e| anyhow::anyhow!("drawing compare.svg: {e}"))?;
     d.svg.ok_or_else(|| anyhow::anyhow!("drawing compare.svg: no SVG"))
 }
 
 struct Figure<'a> {
     c: &'a Comparison,
-    axis: Axis,
+    axis: LogAxis,
 }
 
 impl Picture for Figure<'_> {
@@ -128,7 +81,7 @@ impl Picture for Figure<'_> {
             }
         }
         cv.line((PLOT_X.0, bottom), (PLOT_X.1, bottom), INK.stroke_width(1))?;
-        for v in one_two_five(ax.domain.0, ax.domain.1) {
+        for v in ax.ticks() {
             let x = ax.x(v);
             cv.line((x, bottom), (x, bottom + 4), INK.stroke_width(1))?;
             let s = format!("{v:.3}");
@@ -185,7 +138,7 @@ mod tests {
     #[test]
     fn the_axis_is_logarithmic_and_spans_the_margin_and_the_ratios() {
         let c = comparison();
-        let ax = Axis::of(&c);
+        let ax = axis_of(&c);
         assert_eq!(ax.domain, (0.5, 2.0));
         assert_eq!(ax.x(0.5), PLOT_X.0);
         assert_eq!(ax.x(2.0), PLOT_X.1);

@@ -14,6 +14,7 @@ pub mod figures;
 pub mod folder;
 pub mod glyphs;
 pub mod html;
+pub mod log_axis;
 pub mod markdown;
 pub mod program;
 pub mod svg;

@@ -8,13 +8,13 @@
 //! figure and the table cannot disagree.
 
 use crate::render::figures::{self, Canvas, Drawn, Picture, Res, INK, SUBTLE};
+use crate::render::log_axis::LogAxis;
 use crate::replication::compare::fit::Fit;
 pub use crate::replication::compare::ratios::{rows_of, ForestRow};
 use crate::replication::compare::VariantInfo;
 use crate::replication::stats::equivalence::MARGIN;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
-use qsweep_engine::math::{exp, ln};
 
 /// The figure's path in the comparison folder, without extension.
 pub const STEM: &str = "figures/forest";
@@ -75,64 +75,14 @@ pub fn labels(series: &[Series]) -> Vec<String> {
     out
 }
 
-/// The log axis: values `domain` onto pixels `PLOT_X`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Axis {
-    /// The smallest and largest value shown.
-    pub domain: (f64, f64),
-}
-
-impl Axis {
-    /// The axis for `series`: [`TWO_X`] and every ratio and interval end, widened to the 1-2-5
-    /// values around them, at most 10⁻³ to 10³ (beyond, a value sits on the edge).
-    pub fn of(series: &[Series]) -> Self {
-        let (mut lo, mut hi) = TWO_X;
-        for r in series.iter().flat_map(|s| s.rows) {
-            for v in [Some(r.ratio), r.ci.map(|c| c.0), r.ci.map(|c| c.1)].into_iter().flatten() {
-                if v.is_finite() && v > 0.0 {
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
-            }
-        }
-        let steps = one_two_five(1e-3, 1e3);
-        let lo = steps.iter().rev().find(|&&s| s <= lo * (1.0 + 1e-9)).copied().unwrap_or(1e-3);
-        let hi = steps.iter().find(|&&s| s >= hi * (1.0 - 1e-9)).copied().unwrap_or(1e3);
-        Self { domain: (lo, hi) }
-    }
-
-    /// The x pixel of `v` (clamped to the domain).
-    pub fn x(&self, v: f64) -> i32 {
-        // The engine's own logarithm, so the pixels are the same on every machine.
-        let (a, b) = (ln(self.domain.0), ln(self.domain.1));
-        let t = if v > 0.0 { ((ln(v) - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
-        PLOT_X.0 + (t * f64::from(PLOT_X.1 - PLOT_X.0)).round() as i32
-    }
-
-    /// The value at x pixel `x` (the inverse of [`Axis::x`], up to rounding).
-    pub fn value(&self, x: f64) -> f64 {
-        let (a, b) = (ln(self.domain.0), ln(self.domain.1));
-        exp(a + (x - f64::from(PLOT_X.0)) / f64::from(PLOT_X.1 - PLOT_X.0) * (b - a))
-    }
-
-    /// The ticks: the 1-2-5 values in the domain.
-    pub fn ticks(&self) -> Vec<f64> {
-        one_two_five(self.domain.0, self.domain.1)
-    }
-}
-
-/// 1, 2, 5 × 10^k within `[lo, hi]`.
-fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
-    let mut out = Vec::new();
-    for decade in [1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3] {
-        for m in [1.0, 2.0, 5.0] {
-            let v = m * decade;
-            if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
-                out.push(v);
-            }
-        }
-    }
-    out
+/// The axis for `series`: [`TWO_X`] and every ratio and interval end
+/// ([`crate::render::log_axis`]).
+pub fn axis_of(series: &[Series]) -> LogAxis {
+    let values = series
+        .iter()
+        .flat_map(|s| s.rows)
+        .flat_map(|r| [Some(r.ratio), r.ci.map(|c| c.0), r.ci.map(|c| c.1)].into_iter().flatten());
+    LogAxis::around(TWO_X, values, PLOT_X)
 }
 
 /// A tick label: "0.05", "1", "20".
@@ -165,7 +115,7 @@ pub fn write(
 /// The forest plot of `series`, titled with the pipeline's name.
 pub fn forest_figure(name: &str, series: &[Series], (svg, png): (bool, bool)) -> anyhow::Result<Drawn> {
     let labels = labels(series);
-    let forest = Forest { name, series, labels: &labels, axis: Axis::of(series) };
+    let forest = Forest { name, series, labels: &labels, axis: axis_of(series) };
     figures::paint_as(&forest, figure_size(labels.len()), svg, png)
         .map_err(|e| anyhow::anyhow!("drawing the forest plot: {e}"))
 }
@@ -174,7 +124,7 @@ struct Forest<'a> {
     name: &'a str,
     series: &'a [Series<'a>],
     labels: &'a [String],
-    axis: Axis,
+    axis: LogAxis,
 }
 
 /// The y pixel of the middle of row `i`.
@@ -361,7 +311,7 @@ systems:
         };
         let rows = [row(0.06, Some((0.05, 0.074))), row(3.0, Some((2.5, 3.3))), row(1.0, None)];
         let s = [Series { info: &info, role: "as written", rows: &rows, scored: &[], fit: Fit::default() }];
-        let ax = Axis::of(&s);
+        let ax = axis_of(&s);
         assert_eq!(ax.domain, (0.05, 5.0));
         assert_eq!(ax.ticks(), [0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0]);
         assert_eq!(
@@ -377,7 +327,7 @@ systems:
         let t = Tally::of(&s[0]);
         assert_eq!((t.rows, t.within_2x, t.whole_interval), (3, 1, 0));
         // Nothing to plot: the default 2× band only.
-        assert_eq!(Axis::of(&[]).domain, (0.5, 2.0));
+        assert_eq!(axis_of(&[]).domain, (0.5, 2.0));
     }
 
     /// The plotted dots and bars, read back from the SVG, are the rows' ratios and intervals.
@@ -408,7 +358,7 @@ systems:
         let (w, h) = figure_size(3);
         assert_eq!(doc.root_element().attribute("width"), Some(w.to_string().as_str()));
         assert_eq!(doc.root_element().attribute("height"), Some(h.to_string().as_str()));
-        let ax = Axis::of(&series);
+        let ax = axis_of(&series);
         let hex = |c: RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
         for (k, s) in series.iter().enumerate() {
             let mut dots: Vec<(i32, i32)> = doc
