@@ -28,6 +28,8 @@ pub use config::{Algorithm, TrialConfig};
 pub use trial::{run_trial, run_trial_at, Counting, Outcome, StopReason};
 
 #[cfg(test)]
+mod dense_tests;
+#[cfg(test)]
 mod pinned_tests;
 #[cfg(test)]
 mod reference_tests;

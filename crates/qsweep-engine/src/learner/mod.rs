@@ -28,7 +28,7 @@
 mod traces;
 
 use super::config::LearnerConfig;
-use super::repr::Features;
+use super::repr::{DenseView, Features};
 use super::simd::{dispatch, Simd};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
@@ -124,9 +124,22 @@ impl Learner {
         self
     }
 
+    /// The same learner with one trace per parameter swept in full every step, whatever the
+    /// vector level (the layouts give the same bits): the layout of the dense fuzzy path, whose
+    /// activation extends every rule's trace. Only before the first update.
+    pub fn with_dense_traces(mut self) -> Self {
+        if self.rule.decay != 0.0 {
+            self.traces = Traces::Dense(DenseTraces::new(self.q.len()));
+        }
+        self
+    }
+
     /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action).
     #[inline(always)]
     pub fn q_values<F: Features>(&self, phi: &F, out: &mut [f64]) {
+        if F::DENSE {
+            return dense_q_values_at(self.simd, &self.q, self.n_actions, phi.dense(), out);
+        }
         let (index, weight) = phi.rules();
         if F::ONE_HOT {
             // 0 + q, not a copy: LLVM turns a copy of a run-time length into a memcpy call.
@@ -165,8 +178,34 @@ impl Learner {
     pub fn update<F: Features>(&mut self, phi: &F, action: usize, delta: f64) {
         let step = self.alpha * delta;
         self.last_step = step;
-        let (index, weight) = phi.rules();
         let (q, na, rule, simd) = (&mut self.q[..], self.n_actions, self.rule, self.simd);
+        if F::DENSE {
+            let v = phi.dense();
+            let weight = &v.weight[..q.len() / na];
+            match &mut self.traces {
+                // Adding step·0 to a rule outside the windows is exact (up to a zero's sign, which
+                // no sum sees) while the step is finite; an overflowing α·δ takes the literal list.
+                Traces::None if step.is_finite() => dense_q0_update(q, na, weight, action, step),
+                Traces::Dense(t) if step.is_finite() => {
+                    t.update_every_rule(q, na, rule, weight, action, step, simd)
+                }
+                traces => {
+                    let (n, index, weight) = v.sparse();
+                    match traces {
+                        Traces::None => q0_update_at(simd, q, na, &index[..n], &weight[..n], action, step),
+                        Traces::Dense(t) => {
+                            t.update(q, na, rule, (&index[..n], &weight[..n]), action, step, simd)
+                        }
+                        Traces::Sparse(t) => t.update(q, na, rule, (&index[..n], &weight[..n]), action, step),
+                        Traces::Chunked(t) => {
+                            t.update(q, na, rule, (&index[..n], &weight[..n]), action, step, simd)
+                        }
+                    }
+                }
+            }
+            return;
+        }
+        let (index, weight) = phi.rules();
         match &mut self.traces {
             // Q(0): the trace of this step is extend(0, w) = w (weights are never negative).
             // A crisp row is one addition, cheaper inline than through a kernel call.
@@ -268,6 +307,114 @@ fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], a
         };
     }
     unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+}
+
+/// The Q(0) update over every rule of a dense activation: q[r·na + action] += step·wᵣ (the rules
+/// outside the windows weigh 0).
+#[inline(always)]
+fn dense_q0_update(q: &mut [f64], na: usize, weight: &[f64], action: usize, step: f64) {
+    for (row, &w) in q.chunks_exact_mut(na).zip(weight) {
+        row[action] += step * w;
+    }
+}
+
+dispatch! {
+    /// [`dense_q_values_by_count`] at `simd`'s vector width.
+    fn dense_q_values_at => dense_q_values_by_count(q: &[f64], na: usize, v: DenseView<'_>, out: &mut [f64])
+}
+
+/// Q(s, ·) over every rule of a dense activation, the same bits as the sparse sums over its
+/// windows ([`q_values_fixed`]): each rule goes to the partial sum of its position in the sparse
+/// list, and the rules outside the windows add w·q = ±0, which changes no partial sum (started at
+/// +0, one is never −0) unless q is infinite or NaN there: a NaN result is recomputed from the
+/// sparse list.
+#[inline(always)]
+fn dense_q_values_by_count(q: &[f64], na: usize, v: DenseView<'_>, out: &mut [f64]) {
+    macro_rules! unrolled {
+        ($($n:literal)*) => {
+            match na {
+                $($n => dense_q_values_fixed::<$n>(q, v, out),)*
+                _ => out[0] = f64::NAN,
+            }
+        };
+    }
+    unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+    if out.iter().any(|x| x.is_nan()) {
+        let (n, index, weight) = v.sparse();
+        q_values_by_count(q, na, &index[..n], &weight[..n], out);
+    }
+}
+
+#[inline(always)]
+fn dense_q_values_fixed<const N: usize>(q: &[f64], v: DenseView<'_>, out: &mut [f64]) {
+    let out: &mut [f64; N] = (&mut out[..N]).try_into().expect("N actions");
+    match const { lanes(N) } {
+        4 => {
+            let s = dense_lane_sums::<N, 4>(q, v);
+            for a in 0..N {
+                out[a] = (s[0][a] + s[1][a]) + (s[2][a] + s[3][a]);
+            }
+        }
+        2 => {
+            let s = dense_lane_sums::<N, 2>(q, v);
+            for a in 0..N {
+                out[a] = s[0][a] + s[1][a];
+            }
+        }
+        _ => *out = dense_lane_sums::<N, 1>(q, v)[0],
+    }
+}
+
+/// [`lane_sums`] over every rule: rule (k0, k1) goes to partial sum j mod L, j its position in the
+/// sparse list, (k0 − first₀)·len₁ + (k1 − first₁). Along a row j grows by one a rule, so the
+/// partial sums are rotated by the row's first position and then indexed by k1 mod L (a rule
+/// outside the windows adds 0, so its partial sum does not matter).
+#[inline(always)]
+fn dense_lane_sums<const N: usize, const L: usize>(q: &[f64], v: DenseView<'_>) -> [[f64; N]; L] {
+    let mut acc = [[0.0f64; N]; L];
+    let rows: &[[f64; N]] = q.as_chunks::<N>().0;
+    let n1 = v.n1 as usize;
+    for (k0, (row_q, row_w)) in rows.chunks_exact(n1).zip(v.weight.chunks_exact(n1)).enumerate() {
+        // Wrapping arithmetic is exact mod L, a power of two.
+        let j0 = (k0 as u32).wrapping_sub(v.first[0]).wrapping_mul(v.len[1]).wrapping_sub(v.first[1]);
+        let start = j0 as usize % L;
+        rotate_left_by(&mut acc, start);
+        let ((qc, qt), (wc, wt)) = (row_q.as_chunks::<L>(), row_w.as_chunks::<L>());
+        for (qq, ww) in qc.iter().zip(wc) {
+            for l in 0..L {
+                for a in 0..N {
+                    acc[l][a] += ww[l] * qq[l][a];
+                }
+            }
+        }
+        for l in 0..L {
+            if l < qt.len() {
+                for a in 0..N {
+                    acc[l][a] += wt[l] * qt[l][a];
+                }
+            }
+        }
+        rotate_left_by(&mut acc, (L - start) % L);
+    }
+    acc
+}
+
+/// `acc.rotate_left(s)` for s < L without a branch or a memory round trip: a rotation by each
+/// power of two in s, each a bitwise blend (the values' bits are moved, never computed).
+#[inline(always)]
+fn rotate_left_by<const N: usize, const L: usize>(acc: &mut [[f64; N]; L], s: usize) {
+    let mut shift = 1;
+    while shift < L {
+        let m = 0u64.wrapping_sub(u64::from(s & shift != 0));
+        let old = *acc;
+        for i in 0..L {
+            for a in 0..N {
+                let (x, y) = (old[i][a].to_bits(), old[(i + shift) % L][a].to_bits());
+                acc[i][a] = f64::from_bits(x ^ ((x ^ y) & m));
+            }
+        }
+        shift *= 2;
+    }
 }
 
 /// Interleaved partial sums per action for `N` actions: enough independent additions in flight to

@@ -106,6 +106,28 @@ impl DenseTraces {
         self.sweep_all(q, na, rule, index, action, step, simd);
     }
 
+    /// [`update`](Self::update) for an activation over every rule (`weight[r]` for rule r, 0
+    /// outside the windows) and a finite step: extending a trace by 0 leaves it as it is (traces
+    /// are never negative, so e + 0 and max(e, 0) are e), and the sweep is the same.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)] // update's signature
+    pub(super) fn update_every_rule(
+        &mut self,
+        q: &mut [f64],
+        na: usize,
+        rule: TraceRule,
+        weight: &[f64],
+        action: usize,
+        step: f64,
+        simd: Simd,
+    ) {
+        debug_assert!(step.is_finite());
+        for (row, &w) in self.e.chunks_exact_mut(na).zip(weight) {
+            row[action] = rule.extend(row[action], w);
+        }
+        dense_sweep(simd, q, &mut self.e, rule, step);
+    }
+
     /// The pass of [`update`](Self::update) after the extension of `index`'s traces for `action`.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]

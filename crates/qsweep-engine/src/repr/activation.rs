@@ -109,13 +109,55 @@ pub(crate) fn strides(counts: &[u32]) -> Vec<u32> {
     s
 }
 
+/// A two-variable rule base's activation over every rule, in rule order (`k0 · n1 + k1`): the
+/// windows' rules weigh what the sparse list gives them, every other rule exactly 0. The sparse
+/// list is the window's rules in the same order (variable 0's window outer), so the learner can
+/// rebuild it ([`DenseView::sparse`]) for the rare cases that need the literal list.
+#[derive(Debug, Clone, Copy)]
+pub struct DenseView<'a> {
+    /// One weight per rule.
+    pub weight: &'a [f64],
+    /// Sets of the last variable (the row length).
+    pub n1: u32,
+    /// Each variable's window: its first set and its length.
+    pub first: [u32; 2],
+    /// See `first`.
+    pub len: [u32; 2],
+}
+
+/// Most rules a [`DenseView`] holds.
+pub const DENSE_MAX_RULES: usize = 36;
+
+impl DenseView<'_> {
+    /// The sparse list of the windows' rules in activation order: (count, indices, weights).
+    pub fn sparse(&self) -> (usize, [u32; DENSE_MAX_RULES], [f64; DENSE_MAX_RULES]) {
+        let (mut index, mut weight) = ([0u32; DENSE_MAX_RULES], [0.0f64; DENSE_MAX_RULES]);
+        let mut n = 0;
+        for k0 in self.first[0]..self.first[0] + self.len[0] {
+            for k1 in self.first[1]..self.first[1] + self.len[1] {
+                let i = k0 * self.n1 + k1;
+                (index[n], weight[n]) = (i, self.weight[i as usize]);
+                n += 1;
+            }
+        }
+        (n, index, weight)
+    }
+}
+
 /// A state's activations in the form the learner evaluates and updates: the general sparse list
 /// ([`Activations`], fuzzy rule bases) or a crisp table's single row ([`OneHot`], weight 1).
 pub trait Features {
     /// Whether this is always one feature of weight 1 (lets the learner skip the sum).
     const ONE_HOT: bool;
-    /// The active features and their weights, in activation order.
+    /// Whether this is a two-variable rule base's weight over every rule ([`DenseView`]), which
+    /// the learner reads through [`dense`](Self::dense) instead of [`rules`](Self::rules).
+    const DENSE: bool = false;
+    /// The active features and their weights, in activation order (not for a `DENSE` form).
     fn rules(&self) -> (&[u32], &[f64]);
+    /// The weights of every rule (only for a `DENSE` form).
+    fn dense(&self) -> DenseView<'_> {
+        unreachable!("only a dense activation has a dense view")
+    }
     /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate.
     fn overlap(&self, other: &Self) -> f64;
 }

@@ -31,17 +31,17 @@ const _: () = assert!(SMALL_WINDOW.is_multiple_of(EXP_LANES) && MAX_SETS.is_mult
 pub const HALF_CROSSING_WIDTH: f64 = 0.424_660_900_144_009_5;
 
 #[derive(Debug, Clone)]
-struct Variable {
-    lo: f64,
-    hi: f64,
-    n: usize,
+pub(super) struct Variable {
+    pub(super) lo: f64,
+    pub(super) hi: f64,
+    pub(super) n: usize,
     /// 1 / spacing (the window position is a product, not a division).
-    inv_spacing: f64,
-    inv_two_sigma_sq: f64,
+    pub(super) inv_spacing: f64,
+    pub(super) inv_two_sigma_sq: f64,
     /// Half-width of the window of sets that can exceed `prune`, in units of `spacing`.
-    reach: f64,
+    pub(super) reach: f64,
     /// Every set's centre, `lo + k·spacing` (the midpoint for a single set).
-    centres: Vec<f64>,
+    pub(super) centres: Vec<f64>,
 }
 
 impl Variable {
@@ -58,7 +58,7 @@ impl Variable {
     /// The set nearest to window position `pos` (≥ 0 or NaN): ⌊pos + ½⌋ with halves rounded up,
     /// as `pos.round()` rounds them (exact for pos < 2⁵², without a library call).
     #[inline(always)]
-    fn nearest(&self, pos: f64) -> usize {
+    pub(super) fn nearest(&self, pos: f64) -> usize {
         let t = pos as usize;
         let up = pos - t as f64 >= 0.5;
         (t + usize::from(up)).min(self.n - 1)
@@ -68,7 +68,7 @@ impl Variable {
 /// A grid of Gaussian fuzzy sets with normalised product firing strengths.
 #[derive(Debug, Clone)]
 pub struct Fuzzy {
-    vars: Vec<Variable>,
+    pub(super) vars: Vec<Variable>,
     strides: Vec<u32>,
     n_features: usize,
     /// Largest window of any variable.
@@ -319,7 +319,7 @@ fn activate_with_large(f: &Fuzzy, state: &[f64], out: &mut Activations) {
 /// `y.ceil().max(0.0) as usize` without the `ceil` library call: 0 for y ≤ 0 and NaN, else the
 /// smallest integer ≥ y (exact for the small y of a window edge, which is below `MAX_SETS`).
 #[inline]
-fn ceil_to_index(y: f64) -> usize {
+pub(super) fn ceil_to_index(y: f64) -> usize {
     if y > 0.0 {
         let t = y as usize;
         if (t as f64) < y {

@@ -4,11 +4,13 @@
 
 mod activation;
 mod crisp;
+mod dense;
 mod fuzzy;
 
 pub(crate) use activation::strides;
-pub use activation::{Activations, Encode, Features, OneHot, Representation};
+pub use activation::{Activations, DenseView, Encode, Features, OneHot, Representation, DENSE_MAX_RULES};
 pub use crisp::{Binning, Crisp};
+pub use dense::{DenseActive, DenseFuzzy};
 pub use fuzzy::{Fuzzy, HALF_CROSSING_WIDTH, MAX_SETS};
 
 use serde::{Deserialize, Serialize};

@@ -1,0 +1,195 @@
+//! The dense form of a small two-variable fuzzy rule base (Mountain Car, Ball-Beam): every set of
+//! both variables in fixed-size arrays padded to `P` lanes, the prune window a branch-free mask,
+//! so the activation has no per-step list bookkeeping and the learner's sums run over every rule.
+//!
+//! The same bits as [`Fuzzy`]'s windowed activation: each membership inside the window is the
+//! same exponential of the same argument ([`math::exp_lanes`] is `exp` lane by lane), the
+//! normaliser the same sum in window order (the masked sets add +0, which changes no sum: a sum
+//! of non-negative terms started at +0 is never −0), each rule's weight the same product
+//! `μ₀·μ₁`; every set outside the window weighs exactly 0. An empty window (the nearest set) and
+//! a zero normaliser (the nearest set takes it all) are the windowed path's own rules.
+
+use super::activation::{DenseView, Encode, Features, Representation, DENSE_MAX_RULES};
+use super::fuzzy::{ceil_to_index, Fuzzy, Variable};
+use crate::math;
+use crate::repr::Activations;
+
+/// Memberships whose exponentials are computed together, as the windowed activation does.
+const EXP_LANES: usize = 4;
+
+/// One variable's sets padded to `P` lanes (the centres past `n` are never unmasked).
+#[derive(Debug, Clone)]
+struct Padded<const P: usize> {
+    var: Variable,
+    centres: [f64; P],
+}
+
+/// A two-variable fuzzy rule base of at most [`DENSE_MAX_RULES`] rules and `P` sets a variable,
+/// activated densely ([`DenseActive`]); built from the windowed [`Fuzzy`] it mirrors bit for bit.
+#[derive(Debug, Clone)]
+pub struct DenseFuzzy<const P: usize> {
+    vars: [Padded<P>; 2],
+    windowed: Fuzzy,
+}
+
+/// A state's activation in dense form: per variable its normalised memberships over every set (0
+/// outside the window) and its window, and every rule's weight.
+#[derive(Debug, Clone)]
+///
+/// The arrays are boxed so that the trial loop's swap of φ(s) and φ(s′) moves two pointers.
+pub struct DenseActive<const P: usize> {
+    mu: Box<[[f64; P]; 2]>,
+    first: [u32; 2],
+    len: [u32; 2],
+    n1: u32,
+    weight: Box<[f64; DENSE_MAX_RULES]>,
+}
+
+impl<const P: usize> Default for DenseActive<P> {
+    fn default() -> Self {
+        Self {
+            mu: Box::new([[0.0; P]; 2]),
+            first: [0; 2],
+            len: [0; 2],
+            n1: 1,
+            weight: Box::new([0.0; DENSE_MAX_RULES]),
+        }
+    }
+}
+
+impl<const P: usize> DenseFuzzy<P> {
+    /// Whether `sets` (per variable) fit the dense form with `P` lanes.
+    pub fn fits(sets: &[u32]) -> bool {
+        sets.len() == 2
+            && sets.iter().all(|&n| n as usize <= P)
+            && sets.iter().map(|&n| n as usize).product::<usize>() <= DENSE_MAX_RULES
+    }
+
+    /// The dense form of `fuzzy`, which must [`fit`](Self::fits).
+    pub fn new(fuzzy: Fuzzy) -> Self {
+        const { assert!(P.is_multiple_of(EXP_LANES)) };
+        let sets: Vec<u32> = fuzzy.vars.iter().map(|v| v.n as u32).collect();
+        assert!(Self::fits(&sets), "{sets:?} does not fit {P} lanes");
+        let pad = |j: usize| {
+            let var = fuzzy.vars[j].clone();
+            let mut centres = [0.0; P];
+            centres[..var.n].copy_from_slice(&var.centres);
+            Padded { var, centres }
+        };
+        Self { vars: [pad(0), pad(1)], windowed: fuzzy }
+    }
+
+    /// Variable `j`'s normalised memberships over all `P` lanes at `value` (0 outside its window),
+    /// and its window (first set, length), as [`Fuzzy`]'s `memberships` gives them.
+    #[inline(always)]
+    fn memberships(&self, j: usize, value: f64, mu: &mut [f64; P]) -> (usize, usize) {
+        let Padded { var: v, centres } = &self.vars[j];
+        if v.n == 1 {
+            *mu = [0.0; P];
+            mu[0] = 1.0;
+            return (0, 1);
+        }
+        let x = value.clamp(v.lo, v.hi);
+        let pos = (x - v.lo) * v.inv_spacing;
+        let first = ceil_to_index(pos - v.reach);
+        let last = ((pos + v.reach) as usize).min(v.n - 1);
+        let (first, last) = if first > last {
+            let nearest = v.nearest(pos);
+            (nearest, nearest)
+        } else {
+            (first, last)
+        };
+        let mut raw = [0.0; P];
+        for k in 0..P {
+            let d = x - centres[k];
+            let inside = k >= first && k <= last;
+            // Outside the window 0 (exp's fast path), masked again below.
+            raw[k] = if inside { -(d * d) * v.inv_two_sigma_sq } else { 0.0 };
+        }
+        for chunk in raw.as_chunks_mut::<EXP_LANES>().0 {
+            math::exp_lanes(chunk);
+        }
+        let mut sum = 0.0;
+        for (k, r) in raw.iter_mut().enumerate() {
+            *r = if k >= first && k <= last { *r } else { 0.0 };
+            sum += *r;
+        }
+        if sum.is_nan() || sum <= 0.0 {
+            let nearest = v.nearest(pos);
+            *mu = [0.0; P];
+            mu[nearest] = 1.0;
+            return (nearest, 1);
+        }
+        let inv = 1.0 / sum;
+        for k in 0..P {
+            // Masked after the product too: 0·inv is NaN when the sum is subnormal.
+            mu[k] = if k >= first && k <= last { raw[k] * inv } else { 0.0 };
+        }
+        (first, last + 1 - first)
+    }
+}
+
+impl<const P: usize> Representation for DenseFuzzy<P> {
+    fn n_features(&self) -> usize {
+        self.windowed.n_features()
+    }
+
+    fn max_active(&self) -> usize {
+        self.windowed.max_active()
+    }
+
+    fn activate(&self, state: &[f64], out: &mut Activations) {
+        self.windowed.activate(state, out);
+    }
+}
+
+impl<const P: usize> Encode for DenseFuzzy<P> {
+    type Active = DenseActive<P>;
+
+    #[inline(always)]
+    fn encode(&self, state: &[f64], out: &mut DenseActive<P>) {
+        let mu = &mut *out.mu;
+        for j in 0..2 {
+            let (first, len) = self.memberships(j, state[j], &mut mu[j]);
+            out.first[j] = first as u32;
+            out.len[j] = len as u32;
+        }
+        let (n0, n1) = (self.vars[0].var.n, self.vars[1].var.n);
+        out.n1 = n1 as u32;
+        // Each rule's weight μ₀·μ₁, as the windowed activation multiplies it.
+        for k0 in 0..n0 {
+            for k1 in 0..n1 {
+                out.weight[k0 * n1 + k1] = mu[0][k0] * mu[1][k1];
+            }
+        }
+    }
+}
+
+impl<const P: usize> Features for DenseActive<P> {
+    const ONE_HOT: bool = false;
+    const DENSE: bool = true;
+
+    fn rules(&self) -> (&[u32], &[f64]) {
+        unreachable!("a dense activation is read through `dense`")
+    }
+
+    #[inline(always)]
+    fn dense(&self) -> DenseView<'_> {
+        DenseView { weight: &self.weight[..], n1: self.n1, first: self.first, len: self.len }
+    }
+
+    /// The windowed activation's factorised overlap, each variable's dot over every set: the sets
+    /// outside either window add +0, which changes no sum of non-negative terms.
+    #[inline(always)]
+    fn overlap(&self, other: &Self) -> f64 {
+        let mut product = 1.0;
+        for j in 0..2 {
+            let mut dot = 0.0;
+            for k in 0..P {
+                dot += self.mu[j][k] * other.mu[j][k];
+            }
+            product *= dot;
+        }
+        product
+    }
+}
