@@ -9,10 +9,9 @@
 //! `μ₀·μ₁`; every set outside the window weighs exactly 0. An empty window (the nearest set) and
 //! a zero normaliser (the nearest set takes it all) are the windowed path's own rules.
 
-use super::activation::{DenseView, Encode, Features, Representation, DENSE_MAX_RULES};
+use super::activation::{Activations, DenseView, Encode, Features, Representation, DENSE_MAX_RULES};
 use super::fuzzy::{ceil_to_index, Fuzzy, Variable};
 use crate::math;
-use crate::repr::Activations;
 
 /// Memberships whose exponentials are computed together, as the windowed activation does.
 const EXP_LANES: usize = 4;
