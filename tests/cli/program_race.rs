@@ -145,3 +145,21 @@ fn program_race_without_an_objective_is_file_line_col_and_exit_2() {
     let err = fails_with(&mut sb.qsweep(&["status", "x.yaml"]), 2);
     assert!(err.contains("x.yaml:9:") && err.contains("experiments.0.race"), "{err}");
 }
+
+#[test]
+fn program_gc_given_a_raced_pipeline_keeps_its_race_and_fresh_trials() {
+    let sb = sandbox(RACED);
+    stdout(&mut sb.qsweep(&["run", "x.yaml", "--jobs", "2", "--no-report"]));
+    // A row no plan references: the same program at x = 42, dropped by gc with the raced pipeline.
+    sb.write("other.yaml", &RACED.replace("name: raced", "name: other").replace("[0, 1, 5, 9]", "[42]"));
+    stdout(&mut sb.qsweep(&["run", "other.yaml", "--no-report"]));
+    let out = stdout(&mut sb.qsweep(&["gc", "x.yaml"]));
+    assert!(out.contains("removed"), "{out}");
+    // Every raced and fresh trial is still there: a rerun runs nothing, and neither does status miss any.
+    let again = stdout(&mut sb.qsweep(&["run", "x.yaml", "--no-report"]));
+    assert!(summary(&again).starts_with("executed 0, cached 28, failed 0 "), "{again}");
+    assert_eq!(runs(&sb).len(), 28 + 3 + 4, "the other pipeline's 3 + 4 trials, and nothing since");
+    // The other pipeline's rows are gone: its rerun runs them again.
+    let other = stdout(&mut sb.qsweep(&["run", "other.yaml", "--no-report"]));
+    assert!(summary(&other).starts_with("executed 7, cached 0, failed 0 "), "{other}");
+}
