@@ -239,6 +239,34 @@ pub struct ProgramStatusReport {
     pub damaged_segments: usize,
     /// When the folder holds no rows: the schema ids of the other program folders that do.
     pub other_schemas: Vec<String>,
+    /// One entry per raced experiment; only for pipelines with a `race:` (an addition, not a new
+    /// version).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub race: Option<Vec<ProgramStatusRace>>,
+}
+
+/// One raced experiment of [`ProgramStatusReport`] (of one variant).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProgramStatusRace {
+    /// The variant's id; only for pipelines that declare `variants:`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
+    /// Experiment id.
+    pub experiment: String,
+    /// Cells of the experiment.
+    pub cells: usize,
+    /// Rounds decided (all their trials stored).
+    pub rounds_done: u32,
+    /// The most rounds the race can take.
+    pub rounds_max: u32,
+    /// Whether the race is over.
+    pub finished: bool,
+    /// Cells still in the race.
+    pub contenders: usize,
+    /// Trials of the decided rounds and the pending one.
+    pub trials: usize,
+    /// Trials with `max_seeds` seeds in every cell.
+    pub without_race: usize,
 }
 
 impl ProgramStatusReport {

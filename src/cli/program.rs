@@ -222,7 +222,7 @@ pub fn status(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = &replayed.plan;
     let s = qsweep_pipeline::program::status::status(plan, &cache, a.explain)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&status_json(plan, &s))?);
+        println!("{}", serde_json::to_string_pretty(&status_json(plan, &s, &replayed.races))?);
     } else {
         print_status(plan, &s, &cache);
         print_races(plan, &replayed.races);
@@ -233,7 +233,11 @@ pub fn status(a: StatusArgs) -> anyhow::Result<u8> {
     Ok(exit::OK)
 }
 
-fn status_json(plan: &ProgramPlan, s: &ProgramStatus) -> crate::json::ProgramStatusReport {
+fn status_json(
+    plan: &ProgramPlan,
+    s: &ProgramStatus,
+    races: &[RaceStanding],
+) -> crate::json::ProgramStatusReport {
     crate::json::ProgramStatusReport {
         format_version: crate::json::ProgramStatusReport::FORMAT_VERSION,
         pipeline: plan.name.clone(),
@@ -259,6 +263,25 @@ fn status_json(plan: &ProgramPlan, s: &ProgramStatus) -> crate::json::ProgramSta
             .collect(),
         damaged_segments: s.damaged.len(),
         other_schemas: s.other_schemas.clone(),
+        race: (!races.is_empty()).then(|| {
+            races
+                .iter()
+                .map(|r| {
+                    let e = &plan.experiments[r.experiment];
+                    crate::json::ProgramStatusRace {
+                        variant: e.variant.clone(),
+                        experiment: e.id.clone(),
+                        cells: r.cells,
+                        rounds_done: r.rounds_done,
+                        rounds_max: r.rounds_max,
+                        finished: r.finished,
+                        contenders: r.contenders,
+                        trials: r.trials,
+                        without_race: r.without_race,
+                    }
+                })
+                .collect()
+        }),
     }
 }
 

@@ -163,3 +163,20 @@ fn program_gc_given_a_raced_pipeline_keeps_its_race_and_fresh_trials() {
     let other = stdout(&mut sb.qsweep(&["run", "other.yaml", "--no-report"]));
     assert!(summary(&other).starts_with("executed 7, cached 0, failed 0 "), "{other}");
 }
+
+#[test]
+fn program_status_json_lists_each_race_as_the_text_does() {
+    let sb = sandbox(RACED);
+    stdout(&mut sb.qsweep(&["run", "x.yaml", "--jobs", "2", "--no-report"]));
+    let v: serde_json::Value =
+        serde_json::from_str(&stdout(&mut sb.qsweep(&["status", "x.yaml", "--json"]))).unwrap();
+    let race = &v["race"][0];
+    assert_eq!(
+        (race["experiment"].as_str(), race["cells"].as_u64(), race["contenders"].as_u64()),
+        (Some("e"), Some(4), Some(2)),
+        "{v}"
+    );
+    assert_eq!((race["trials"].as_u64(), race["without_race"].as_u64()), (Some(24), Some(36)), "{v}");
+    assert_eq!(race["finished"].as_bool(), Some(true), "{v}");
+    assert_eq!(race["rounds_done"], race["rounds_max"], "{v}");
+}

@@ -84,6 +84,14 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
          metrics: { x: int }\nparams: { a: 1 }\nseeds: 1\n",
     )
     .unwrap();
+    // And a raced one, so its status prints the optional `race` list.
+    std::fs::write(
+        d.join("prog-race.yaml"),
+        "name: prog-race\nprogram:\n  command: [sh, -c, 'cat >/dev/null; echo \"{\\\"x\\\": 1}\"']\n  \
+         metrics: { x: int }\n  objective: { metric: x, goal: minimize }\nparams: { a: 1 }\nseeds: 2\n\
+         race: { confidence: 0.95, batch: 1, max_seeds: 3 }\nexperiments:\n  - { id: e, vary: { a: [1, 2] } }\n",
+    )
+    .unwrap();
     let program_run = qsweep(d, &["run", "prog.yaml", "--json", "--quiet"]);
     let engine_run = qsweep(d, &["run", "tiny.yaml", "--json", "--no-report", "--quiet"]);
     // The program pipeline against itself: one cell, one trial a side (no test, but every field).
@@ -96,7 +104,7 @@ fn json_tables_list_exactly_the_fields_each_command_prints() {
         "docs/json.md's table of a compared cell against `qsweep compare --json`'s cells"
     );
     let cases: Vec<(&str, String)> = vec![
-        ("`qsweep status --json` on a", qsweep(d, &["status", "prog.yaml", "--json"])),
+        ("`qsweep status --json` on a", qsweep(d, &["status", "prog-race.yaml", "--json"])),
         ("`qsweep report --json`", qsweep(d, &["report", "tiny.yaml", "--json", "--out", "r"])),
         // A raced pipeline, so the optional `race` list is printed too.
         ("`qsweep status --json`", qsweep(d, &["status", "race.yaml", "--json"])),
