@@ -102,9 +102,12 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
 }
 
 /// Whether trials take the dense fuzzy path where it fits (issue 65). Off: it gives the windowed
-/// path's bits (`dense_tests`) but does not pay yet: on Mountain Car fuzzy 4²/3a (callgrind, AVX2)
-/// 2,316 instructions a step under Q(λ) and 1,714 under Q(0), against the windowed path's 1,925
-/// and 1,683 (its Q(s, ·) sums rotate the partial sums twice a row).
+/// path's bits (`dense_tests`) but does not pay on both algorithms yet: on Mountain Car fuzzy
+/// 4²/3a (callgrind, AVX2, instructions at 220,000 steps less at 20,000, per step) 2,035 a step
+/// under Q(λ) and 1,610 under Q(0), against the windowed path's 1,950 and 1,703 in the same build
+/// (first 2,316 and 1,714 dense). Left: the Q(s, ·) kernel, ≈ 250 instructions a call for 16
+/// rules of 3 actions, twice a Q(λ) step (row loops of two pairs; the 3-wide sums), and the
+/// activation's per-lane masks and exponentials.
 const DENSE_SELECTED: bool = false;
 
 /// Most actions the dense fuzzy path takes (its Q(s, ·) kernels are unrolled up to this many).

@@ -181,7 +181,7 @@ impl Learner {
         let (q, na, rule, simd) = (&mut self.q[..], self.n_actions, self.rule, self.simd);
         if F::DENSE {
             let v = phi.dense();
-            let weight = &v.weight[..q.len() / na];
+            let weight = v.weight;
             match &mut self.traces {
                 // Adding step·0 to a rule outside the windows is exact (up to a zero's sign, which
                 // no sum sees) while the step is finite; an overflowing α·δ takes the literal list.
@@ -313,8 +313,9 @@ fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], a
 /// outside the windows weigh 0).
 #[inline(always)]
 fn dense_q0_update(q: &mut [f64], na: usize, weight: &[f64], action: usize, step: f64) {
-    for (row, &w) in q.chunks_exact_mut(na).zip(weight) {
-        row[action] += step * w;
+    // Indexed, not `chunks_exact_mut(na)`, whose count is a division.
+    for (r, &w) in weight.iter().enumerate() {
+        q[r * na + action] += step * w;
     }
 }
 
@@ -356,12 +357,64 @@ fn dense_q_values_fixed<const N: usize>(q: &[f64], v: DenseView<'_>, out: &mut [
             }
         }
         2 => {
-            let s = dense_lane_sums::<N, 2>(q, v);
+            let [x, y] = dense_pair_sums::<N>(q, v);
             for a in 0..N {
-                out[a] = s[0][a] + s[1][a];
+                out[a] = x[a] + y[a];
             }
         }
         _ => *out = dense_lane_sums::<N, 1>(q, v)[0],
+    }
+}
+
+/// [`dense_lane_sums`] for two partial sums, without moving them: rule (k0, k1) goes to partial
+/// sum j mod 2, j = (k0 − first₀)·len₁ + (k1 − first₁), which is (k0·len₁ + k1) mod 2 up to a
+/// constant c = (first₀·len₁ + first₁) mod 2. A c of 1 only exchanges the two sums, whose final
+/// addition x + y cannot tell (IEEE addition commutes; a NaN is recomputed from the sparse list),
+/// so c is dropped. When len₁ and n1 have the same parity, (k0·len₁ + k1) mod 2 is the parity of
+/// the rule's own index k0·n1 + k1, and the table is one run of rules alternating between the
+/// sums; otherwise every other row starts on the second sum, which is the same row loop with
+/// the sums' roles exchanged.
+#[inline(always)]
+fn dense_pair_sums<const N: usize>(q: &[f64], v: DenseView<'_>) -> [[f64; N]; 2] {
+    let (mut x, mut y) = ([0.0f64; N], [0.0f64; N]);
+    let rows: &[[f64; N]] = q.as_chunks::<N>().0;
+    if (v.len[1] ^ v.n1) & 1 == 0 {
+        pair_row(&mut x, &mut y, &rows[..v.weight.len()], v.weight);
+        return [x, y];
+    }
+    let n1 = v.n1 as usize;
+    let mut pairs = rows.chunks_exact(n1).zip(v.weight.chunks_exact(n1));
+    if v.len[1] & 1 == 0 {
+        for (row_q, row_w) in pairs {
+            pair_row(&mut x, &mut y, row_q, row_w);
+        }
+    } else {
+        while let Some((row_q, row_w)) = pairs.next() {
+            pair_row(&mut x, &mut y, row_q, row_w);
+            let Some((row_q, row_w)) = pairs.next() else { break };
+            pair_row(&mut y, &mut x, row_q, row_w);
+        }
+    }
+    [x, y]
+}
+
+/// A run of rules of [`dense_pair_sums`] (a row, or the whole table): its even positions to `x`,
+/// its odd ones to `y`, in order.
+#[inline(always)]
+fn pair_row<const N: usize>(x: &mut [f64; N], y: &mut [f64; N], row_q: &[[f64; N]], row_w: &[f64]) {
+    let ((qc, qt), (wc, wt)) = (row_q.as_chunks::<2>(), row_w.as_chunks::<2>());
+    for (qq, ww) in qc.iter().zip(wc) {
+        for a in 0..N {
+            x[a] += ww[0] * qq[0][a];
+        }
+        for a in 0..N {
+            y[a] += ww[1] * qq[1][a];
+        }
+    }
+    if let (Some(qq), Some(&w)) = (qt.first(), wt.first()) {
+        for a in 0..N {
+            x[a] += w * qq[a];
+        }
     }
 }
 

@@ -122,8 +122,16 @@ impl DenseTraces {
         simd: Simd,
     ) {
         debug_assert!(step.is_finite());
-        for (row, &w) in self.e.chunks_exact_mut(na).zip(weight) {
-            row[action] = rule.extend(row[action], w);
+        // The rule's kind chosen once, not per trace; indexed rows (no division for a count).
+        let e = &mut self.e[..];
+        if rule.replacing {
+            for (r, &w) in weight.iter().enumerate() {
+                e[r * na + action] = e[r * na + action].max(w);
+            }
+        } else {
+            for (r, &w) in weight.iter().enumerate() {
+                e[r * na + action] += w;
+            }
         }
         dense_sweep(simd, q, &mut self.e, rule, step);
     }

@@ -115,8 +115,10 @@ pub(crate) fn strides(counts: &[u32]) -> Vec<u32> {
 /// rebuild it ([`DenseView::sparse`]) for the rare cases that need the literal list.
 #[derive(Debug, Clone, Copy)]
 pub struct DenseView<'a> {
-    /// One weight per rule.
+    /// One weight per rule (`n0 · n1` of them).
     pub weight: &'a [f64],
+    /// Sets of the first variable (the rows).
+    pub n0: u32,
     /// Sets of the last variable (the row length).
     pub n1: u32,
     /// Each variable's window: its first set and its length.

@@ -40,6 +40,7 @@ pub struct DenseActive<const P: usize> {
     mu: Box<[[f64; P]; 2]>,
     first: [u32; 2],
     len: [u32; 2],
+    n0: u32,
     n1: u32,
     weight: Box<[f64; DENSE_MAX_RULES]>,
 }
@@ -50,6 +51,7 @@ impl<const P: usize> Default for DenseActive<P> {
             mu: Box::new([[0.0; P]; 2]),
             first: [0; 2],
             len: [0; 2],
+            n0: 1,
             n1: 1,
             weight: Box::new([0.0; DENSE_MAX_RULES]),
         }
@@ -98,20 +100,25 @@ impl<const P: usize> DenseFuzzy<P> {
         } else {
             (first, last)
         };
+        // Set k is inside the window when k − first (wrapping) is below its length: one
+        // comparison a lane.
+        let span = (last - first) as u64;
+        let inside: [bool; P] = std::array::from_fn(|k| (k as u64).wrapping_sub(first as u64) <= span);
         let mut raw = [0.0; P];
         for k in 0..P {
             let d = x - centres[k];
-            let inside = k >= first && k <= last;
             // Outside the window 0 (exp's fast path), masked again below.
-            raw[k] = if inside { -(d * d) * v.inv_two_sigma_sq } else { 0.0 };
+            raw[k] = if inside[k] { -(d * d) * v.inv_two_sigma_sq } else { 0.0 };
         }
         for chunk in raw.as_chunks_mut::<EXP_LANES>().0 {
             math::exp_lanes(chunk);
         }
+        for k in 0..P {
+            raw[k] = if inside[k] { raw[k] } else { 0.0 };
+        }
         let mut sum = 0.0;
-        for (k, r) in raw.iter_mut().enumerate() {
-            *r = if k >= first && k <= last { *r } else { 0.0 };
-            sum += *r;
+        for r in raw {
+            sum += r;
         }
         if sum.is_nan() || sum <= 0.0 {
             let nearest = v.nearest(pos);
@@ -122,7 +129,7 @@ impl<const P: usize> DenseFuzzy<P> {
         let inv = 1.0 / sum;
         for k in 0..P {
             // Masked after the product too: 0·inv is NaN when the sum is subnormal.
-            mu[k] = if k >= first && k <= last { raw[k] * inv } else { 0.0 };
+            mu[k] = if inside[k] { raw[k] * inv } else { 0.0 };
         }
         (first, last + 1 - first)
     }
@@ -154,11 +161,12 @@ impl<const P: usize> Encode for DenseFuzzy<P> {
             out.len[j] = len as u32;
         }
         let (n0, n1) = (self.vars[0].var.n, self.vars[1].var.n);
-        out.n1 = n1 as u32;
+        (out.n0, out.n1) = (n0 as u32, n1 as u32);
         // Each rule's weight μ₀·μ₁, as the windowed activation multiplies it.
-        for k0 in 0..n0 {
-            for k1 in 0..n1 {
-                out.weight[k0 * n1 + k1] = mu[0][k0] * mu[1][k1];
+        let mu1 = &mu[1][..n1];
+        for (k0, &m0) in mu[0][..n0].iter().enumerate() {
+            for (w, &m1) in out.weight[k0 * n1..][..n1].iter_mut().zip(mu1) {
+                *w = m0 * m1;
             }
         }
     }
@@ -174,7 +182,14 @@ impl<const P: usize> Features for DenseActive<P> {
 
     #[inline(always)]
     fn dense(&self) -> DenseView<'_> {
-        DenseView { weight: &self.weight[..], n1: self.n1, first: self.first, len: self.len }
+        let rules = (self.n0 * self.n1) as usize;
+        DenseView {
+            weight: &self.weight[..rules],
+            n0: self.n0,
+            n1: self.n1,
+            first: self.first,
+            len: self.len,
+        }
     }
 
     /// The windowed activation's factorised overlap, each variable's dot over every set: the sets
