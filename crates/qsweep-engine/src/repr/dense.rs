@@ -10,7 +10,7 @@
 //! a zero normaliser (the nearest set takes it all) are the windowed path's own rules.
 
 use super::activation::{Activations, DenseView, Encode, Features, Representation, DENSE_MAX_RULES};
-use super::fuzzy::{ceil_to_index, Fuzzy, Variable};
+use super::fuzzy::{Fuzzy, Variable};
 use crate::math;
 
 /// Memberships whose exponentials are computed together, as the windowed activation does.
@@ -90,16 +90,7 @@ impl<const P: usize> DenseFuzzy<P> {
             mu[0] = 1.0;
             return (0, 1);
         }
-        let x = value.clamp(v.lo, v.hi);
-        let pos = (x - v.lo) * v.inv_spacing;
-        let first = ceil_to_index(pos - v.reach);
-        let last = ((pos + v.reach) as usize).min(v.n - 1);
-        let (first, last) = if first > last {
-            let nearest = v.nearest(pos);
-            (nearest, nearest)
-        } else {
-            (first, last)
-        };
+        let (x, pos, first, last) = v.window(value);
         // Set k is inside the window when k − first (wrapping) is below its length: one
         // comparison a lane.
         let span = (last - first) as u64;

@@ -63,6 +63,24 @@ impl Variable {
         let up = pos - t as f64 >= 0.5;
         (t + usize::from(up)).min(self.n - 1)
     }
+
+    /// The prune window of `value`: the value clamped to the range, its position in set
+    /// spacings, and the first and last set within reach (the nearest set alone when none is).
+    /// The one rule of the windowed and the dense activations.
+    #[inline(always)]
+    pub(super) fn window(&self, value: f64) -> (f64, f64, usize, usize) {
+        let x = value.clamp(self.lo, self.hi);
+        let pos = (x - self.lo) * self.inv_spacing;
+        let first = ceil_to_index(pos - self.reach);
+        // A saturating cast is floor for every input here (negatives and NaN give 0 either way).
+        let last = ((pos + self.reach) as usize).min(self.n - 1);
+        if first > last {
+            let nearest = self.nearest(pos);
+            (x, pos, nearest, nearest)
+        } else {
+            (x, pos, first, last)
+        }
+    }
 }
 
 /// A grid of Gaussian fuzzy sets with normalised product firing strengths.
@@ -139,17 +157,7 @@ impl Fuzzy {
             mu[0] = 1.0;
             return (0, 1);
         }
-        let x = value.clamp(v.lo, v.hi);
-        let pos = (x - v.lo) * v.inv_spacing;
-        let first = ceil_to_index(pos - v.reach);
-        // A saturating cast is floor for every input here (negatives and NaN give 0 either way).
-        let last = ((pos + v.reach) as usize).min(v.n - 1);
-        let (first, last) = if first > last {
-            let nearest = v.nearest(pos);
-            (nearest, nearest)
-        } else {
-            (first, last)
-        };
+        let (x, pos, first, last) = v.window(value);
         let m = last + 1 - first;
         for (w, &c) in mu[..m].iter_mut().zip(&v.centres[first..=last]) {
             let d = x - c;
@@ -319,7 +327,7 @@ fn activate_with_large(f: &Fuzzy, state: &[f64], out: &mut Activations) {
 /// `y.ceil().max(0.0) as usize` without the `ceil` library call: 0 for y ≤ 0 and NaN, else the
 /// smallest integer ≥ y (exact for the small y of a window edge, which is below `MAX_SETS`).
 #[inline]
-pub(super) fn ceil_to_index(y: f64) -> usize {
+fn ceil_to_index(y: f64) -> usize {
     if y > 0.0 {
         let t = y as usize;
         if (t as f64) < y {
