@@ -82,11 +82,13 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
     Ok(qsweep_pipeline::error::exit::OK)
 }
 
-/// The table's last line: which vector kernels ran.
+/// The table's last line: which vector kernels ran, and whether small fuzzy rule bases took the
+/// dense path.
 fn simd_line() -> String {
     format!(
-        "vector kernels: {} (QSWEEP_SIMD: off, avx2, avx512 or auto)",
-        qsweep_engine::simd::level().name()
+        "vector kernels: {} (QSWEEP_SIMD: off, avx2, avx512 or auto); dense fuzzy path: {} (QSWEEP_DENSE)",
+        qsweep_engine::simd::level().name(),
+        if qsweep_engine::trial::dense_enabled() { "on" } else { "off" }
     )
 }
 

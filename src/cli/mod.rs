@@ -49,7 +49,9 @@ pub enum Command {
     /// Run a pipeline's missing trials in parallel, store them in the cache, then write the report.
     ///
     /// Each thread runs crisp trials four at a time, as lanes of one loop; `QSWEEP_LOCKSTEP=off`
-    /// runs every trial alone. Either way every trial's row is the same, only the speed differs.
+    /// runs every trial alone. Fuzzy rule bases of two variables with at most 4 sets each take a
+    /// dense step; `QSWEEP_DENSE=off` takes the windowed one. Either way every trial's row is the
+    /// same, only the speed differs.
     Run(run::RunArgs),
     /// Show how many of a pipeline's trials are cached and missing, without running anything.
     Status(status::StatusArgs),

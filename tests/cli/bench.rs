@@ -108,3 +108,44 @@ fn cell_of(rec: &qsweep_pipeline::cache::TrialRecord) -> qsweep_pipeline::plan::
         fresh: vec![],
     }
 }
+
+/// `QSWEEP_DENSE` picks the path a small fuzzy rule base takes, never its outcome: `qsweep trial`
+/// gives the same outcome (every episode's length) with it on and off, under both algorithms and
+/// on both two-variable systems; the bench table says which path ran.
+#[test]
+fn dense_fuzzy_path_switch_changes_no_outcome() {
+    for (env, algorithm) in [("mountain-car", "q-lambda"), ("ball-beam", "q0")] {
+        let args = [
+            "trial",
+            "--env",
+            env,
+            "--repr",
+            "fuzzy",
+            "--resolution",
+            "3,4",
+            "--actions",
+            "3",
+            "--algorithm",
+            algorithm,
+            "--seed",
+            "5",
+            "--max-episodes",
+            "40",
+            "--json",
+        ];
+        let outcome = |dense: &str| {
+            let out = qsweep().args(args).env("QSWEEP_DENSE", dense).output().unwrap();
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            v["outcome"].clone()
+        };
+        let on = outcome("on");
+        assert!(on["episodes"].as_u64().unwrap() > 1, "{on}");
+        assert_eq!(on, outcome("off"), "{env} {algorithm}");
+    }
+    let bench = ["bench", "--steps", "2000", "--repeat", "1", "--filter", "mountain-car/fuzzy/q0/2^2"];
+    for (dense, says) in [("on", "dense fuzzy path: on"), ("off", "dense fuzzy path: off")] {
+        let out = qsweep().args(bench).env("QSWEEP_DENSE", dense).output().unwrap();
+        assert!(String::from_utf8_lossy(&out.stdout).contains(says));
+    }
+}

@@ -92,7 +92,7 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
         }
         ReprKind::Fuzzy => {
             let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
-            if DENSE_SELECTED && dense_pays(&r.resolution, cfg.actions) {
+            if dense_enabled() && dense_pays(&r.resolution, cfg.actions) {
                 run_fuzzy(cfg, seed, env, repr, simd, true)
             } else {
                 run(cfg, seed, env, repr, simd)
@@ -101,23 +101,23 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
     }
 }
 
-/// Whether trials take the dense fuzzy path where it fits (issue 65). Off: it gives the windowed
-/// path's bits (`dense_tests`) but does not pay on both algorithms yet: on Mountain Car fuzzy
-/// 4²/3a (callgrind, AVX2, instructions at 220,000 steps less at 20,000, per step) 2,035 a step
-/// under Q(λ) and 1,610 under Q(0), against the windowed path's 1,950 and 1,703 in the same build
-/// (first 2,316 and 1,714 dense). Left: the Q(s, ·) kernel, ≈ 250 instructions a call for 16
-/// rules of 3 actions, twice a Q(λ) step (row loops of two pairs; the 3-wide sums), and the
-/// activation's per-lane masks and exponentials.
-const DENSE_SELECTED: bool = false;
+/// Whether fuzzy trials take the dense path where it pays ([`dense_pays`]): `QSWEEP_DENSE` is not
+/// `off` (it never changes a result, only the speed; `off` is there to compare).
+pub fn dense_enabled() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| {
+        std::env::var("QSWEEP_DENSE")
+            .map_or(true, |v| !matches!(v.trim().to_ascii_lowercase().as_str(), "off" | "0" | "no" | "false"))
+    })
+}
 
-/// Most actions the dense fuzzy path takes (its Q(s, ·) kernels are unrolled up to this many).
-const DENSE_MAX_ACTIONS: u32 = 16;
-
-/// Whether a fuzzy rule base of `sets` per variable with `actions` actions takes the dense path
-/// ([`DenseFuzzy`]): two variables and at most [`crate::repr::DENSE_MAX_RULES`] rules, where
-/// it measured faster than the windowed activation (docs/speed.md). Either path gives the same bits.
+/// Whether a fuzzy rule base of `sets` per variable takes the dense path ([`DenseFuzzy`]): two
+/// variables of at most four sets each, where it measured fewer instructions a step than the
+/// windowed activation under both algorithms; with more sets (eight lanes a variable) it measured
+/// more (docs/speed.md); and at most 16 actions (its Q(s, ·) kernels are unrolled up to that many).
+/// Either path gives the same bits.
 fn dense_pays(sets: &[u32], actions: u32) -> bool {
-    actions <= DENSE_MAX_ACTIONS && DenseFuzzy::<16>::fits(sets)
+    actions <= 16 && DenseFuzzy::<4>::fits(sets)
 }
 
 /// A fuzzy trial through the dense path (`dense`, where its rule base fits) or the windowed one.
@@ -141,13 +141,8 @@ fn dense_or_windowed<E: Environment>(
     simd: Simd,
     dense: bool,
 ) -> (Outcome, Learner) {
-    let sets = &cfg.repr.resolution;
-    if dense && DenseFuzzy::<4>::fits(sets) {
+    if dense && dense_pays(&cfg.repr.resolution, cfg.actions) {
         run_dense(cfg, seed, env, DenseFuzzy::<4>::new(repr), simd)
-    } else if dense && DenseFuzzy::<8>::fits(sets) {
-        run_dense(cfg, seed, env, DenseFuzzy::<8>::new(repr), simd)
-    } else if dense && DenseFuzzy::<16>::fits(sets) {
-        run_dense(cfg, seed, env, DenseFuzzy::<16>::new(repr), simd)
     } else {
         let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
             .with_simd(simd);
@@ -165,7 +160,31 @@ fn run_dense<E: Environment, R: Encode>(
     let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
         .with_simd(simd)
         .with_dense_traces();
-    episodes(env, TrialRun::new::<E>(cfg, seed, repr, learner))
+    episodes_at(simd, env, TrialRun::new::<E>(cfg, seed, repr, learner))
+}
+
+/// [`episodes`] with the whole step loop compiled for `simd`'s level, so that the activation, the
+/// ε-greedy choice and the system's step inline into one function of that width (the same bits:
+/// [`crate::simd`]'s module doc).
+fn episodes_at<E: Environment, R: Encode>(simd: Simd, env: E, run: TrialRun<'_, R>) -> (Outcome, Learner) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2<E: Environment, R: Encode>(env: E, run: TrialRun<'_, R>) -> (Outcome, Learner) {
+            episodes(env, run)
+        }
+        #[target_feature(enable = "avx512f")]
+        unsafe fn avx512<E: Environment, R: Encode>(env: E, run: TrialRun<'_, R>) -> (Outcome, Learner) {
+            episodes(env, run)
+        }
+        match simd.capped() {
+            // SAFETY: capped by what the CPU has.
+            Simd::Avx2 => return unsafe { avx2(env, run) },
+            Simd::Avx512 => return unsafe { avx512(env, run) },
+            Simd::Baseline => {}
+        }
+    }
+    episodes(env, run)
 }
 
 /// A fuzzy trial's outcome and final Q parameters through the dense path (`dense`, where the rule
@@ -240,6 +259,7 @@ pub fn run_with_q(cfg: &TrialConfig, seed: u64) -> (Outcome, Vec<f64>) {
 }
 
 /// One trial run alone: `run`'s steps in one loop with its system.
+#[inline(always)]
 fn episodes<E: Environment, R: Encode>(mut env: E, mut run: TrialRun<'_, R>) -> (Outcome, Learner) {
     let outcome = match run.begin(&mut env) {
         Some(o) => o,

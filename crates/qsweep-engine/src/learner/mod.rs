@@ -6,7 +6,7 @@
 //! Parameters are laid out rule-major (`q[feature · n_actions + action]`) so all actions of a rule
 //! are contiguous. Where the traces live (a full sweep, chunks or a list; the private `traces`
 //! module) is chosen per table and vector level ([`Learner::new`]); the layouts give
-//! bit-identical results.
+//! bit-identical results. Q(s, ·)'s kernels, sparse and dense, are the private `sums` module.
 //!
 //! # Rounding (engine 2)
 //! Engine 1 summed Q(s, ·) strictly in activation order and re-summed Q(s′, a) after a Q(0)
@@ -25,11 +25,13 @@
 //! Every operation is a fixed sequence of IEEE-754 additions and multiplications, so the results
 //! are the same on every machine.
 
+mod sums;
 mod traces;
 
 use super::config::LearnerConfig;
-use super::repr::{DenseView, Features};
+use super::repr::Features;
 use super::simd::{dispatch, Simd};
+use sums::{dense_q_values_by_count, q_values_at};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
 /// At the baseline vector level, the most parameters a dense trace sweep covers: larger tables
@@ -44,12 +46,17 @@ pub const DENSE_TRACE_RATIO: usize = 10;
 /// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
 const MAX_UNROLLED_ACTIONS: usize = 16;
 
+/// Values past the end of the Q table, so that the dense Q(s, ·) kernels read every rule's row
+/// as `W` ≥ actions lanes (the lanes past the row's own are never read back).
+const Q_PAD: usize = MAX_UNROLLED_ACTIONS;
+
 /// Q parameters and eligibility traces of one trial.
 #[derive(Debug, Clone)]
 pub struct Learner {
     n_actions: usize,
     /// The most features one state activates (with the vector level, chooses the trace layout).
     max_active: usize,
+    /// The table (rule-major), then [`Q_PAD`] values no kernel reads back.
     q: Vec<f64>,
     traces: Traces,
     rule: TraceRule,
@@ -112,7 +119,8 @@ impl Learner {
         let simd = crate::simd::level();
         let n = n_features * n_actions;
         let traces = Traces::for_table(n, max_active, rule, simd);
-        let q = vec![cfg.q_init; n];
+        // Padded past the table so that a dense kernel can read any row as a whole vector.
+        let q = vec![cfg.q_init; n + Q_PAD];
         Self { n_actions, max_active, q, traces, rule, alpha: cfg.alpha, last_step: 0.0, simd }
     }
 
@@ -120,7 +128,7 @@ impl Learner {
     /// layout that suits them. Only before the first update: the traces start empty again.
     pub fn with_simd(mut self, simd: Simd) -> Self {
         self.simd = simd.capped();
-        self.traces = Traces::for_table(self.q.len(), self.max_active, self.rule, self.simd);
+        self.traces = Traces::for_table(self.n_params(), self.max_active, self.rule, self.simd);
         self
     }
 
@@ -129,7 +137,7 @@ impl Learner {
     /// activation extends every rule's trace. Only before the first update.
     pub fn with_dense_traces(mut self) -> Self {
         if self.rule.decay != 0.0 {
-            self.traces = Traces::Dense(DenseTraces::new(self.q.len()));
+            self.traces = Traces::Dense(DenseTraces::new(self.n_params()));
         }
         self
     }
@@ -138,7 +146,8 @@ impl Learner {
     #[inline(always)]
     pub fn q_values<F: Features>(&self, phi: &F, out: &mut [f64]) {
         if F::DENSE {
-            return dense_q_values_at(self.simd, &self.q, self.n_actions, phi.dense(), out);
+            // Not dispatched: a dense trial's whole loop is compiled for its level (trial.rs).
+            return dense_q_values_by_count(&self.q, self.n_actions, phi.dense(), out);
         }
         let (index, weight) = phi.rules();
         if F::ONE_HOT {
@@ -178,7 +187,8 @@ impl Learner {
     pub fn update<F: Features>(&mut self, phi: &F, action: usize, delta: f64) {
         let step = self.alpha * delta;
         self.last_step = step;
-        let (q, na, rule, simd) = (&mut self.q[..], self.n_actions, self.rule, self.simd);
+        let n = self.n_params();
+        let (q, na, rule, simd) = (&mut self.q[..n], self.n_actions, self.rule, self.simd);
         if F::DENSE {
             let v = phi.dense();
             let weight = v.weight;
@@ -237,7 +247,12 @@ impl Learner {
 
     /// The parameter vector q (rule-major).
     pub fn params(&self) -> &[f64] {
-        &self.q
+        &self.q[..self.n_params()]
+    }
+
+    /// Parameters in the table (features × actions).
+    fn n_params(&self) -> usize {
+        self.q.len() - Q_PAD
     }
 
     /// Number of traces that take part in the next update.
@@ -248,32 +263,12 @@ impl Learner {
     /// Every trace, one per parameter, as it enters the next update (decayed, before extension).
     pub fn traces_for_next_step(&self) -> Vec<f64> {
         match &self.traces {
-            Traces::None => vec![0.0; self.q.len()],
+            Traces::None => vec![0.0; self.n_params()],
             Traces::Dense(t) => t.values(),
-            Traces::Sparse(t) => t.values(self.q.len()),
+            Traces::Sparse(t) => t.values(self.n_params()),
             Traces::Chunked(t) => t.values(),
         }
     }
-}
-
-dispatch! {
-    /// [`q_values_by_count`] at `simd`'s vector width (the same sums in the same order).
-    fn q_values_at => q_values_by_count(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64])
-}
-
-/// Q(s, ·) for several active features: a kernel per action count.
-#[inline(always)]
-fn q_values_by_count(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64]) {
-    macro_rules! unrolled {
-        ($($n:literal)*) => {
-            match na {
-                $($n => q_values_fixed::<$n>(q, index, weight, out),)*
-                _ => q_values_any(q, na, index, weight, out),
-            }
-        };
-    }
-    const _: () = assert!(MAX_UNROLLED_ACTIONS == 16);
-    unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
 }
 
 dispatch! {
@@ -316,228 +311,6 @@ fn dense_q0_update(q: &mut [f64], na: usize, weight: &[f64], action: usize, step
     // Indexed, not `chunks_exact_mut(na)`, whose count is a division.
     for (r, &w) in weight.iter().enumerate() {
         q[r * na + action] += step * w;
-    }
-}
-
-dispatch! {
-    /// [`dense_q_values_by_count`] at `simd`'s vector width.
-    fn dense_q_values_at => dense_q_values_by_count(q: &[f64], na: usize, v: DenseView<'_>, out: &mut [f64])
-}
-
-/// Q(s, ·) over every rule of a dense activation, the same bits as the sparse sums over its
-/// windows ([`q_values_fixed`]): each rule goes to the partial sum of its position in the sparse
-/// list, and the rules outside the windows add w·q = ±0, which changes no partial sum (started at
-/// +0, one is never −0) unless q is infinite or NaN there: a NaN result is recomputed from the
-/// sparse list.
-#[inline(always)]
-fn dense_q_values_by_count(q: &[f64], na: usize, v: DenseView<'_>, out: &mut [f64]) {
-    macro_rules! unrolled {
-        ($($n:literal)*) => {
-            match na {
-                $($n => dense_q_values_fixed::<$n>(q, v, out),)*
-                _ => out[0] = f64::NAN,
-            }
-        };
-    }
-    unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
-    if out.iter().any(|x| x.is_nan()) {
-        let (n, index, weight) = v.sparse();
-        q_values_by_count(q, na, &index[..n], &weight[..n], out);
-    }
-}
-
-#[inline(always)]
-fn dense_q_values_fixed<const N: usize>(q: &[f64], v: DenseView<'_>, out: &mut [f64]) {
-    let out: &mut [f64; N] = (&mut out[..N]).try_into().expect("N actions");
-    match const { lanes(N) } {
-        4 => {
-            let s = dense_lane_sums::<N, 4>(q, v);
-            for a in 0..N {
-                out[a] = (s[0][a] + s[1][a]) + (s[2][a] + s[3][a]);
-            }
-        }
-        2 => {
-            let [x, y] = dense_pair_sums::<N>(q, v);
-            for a in 0..N {
-                out[a] = x[a] + y[a];
-            }
-        }
-        _ => *out = dense_lane_sums::<N, 1>(q, v)[0],
-    }
-}
-
-/// [`dense_lane_sums`] for two partial sums, without moving them: rule (k0, k1) goes to partial
-/// sum j mod 2, j = (k0 − first₀)·len₁ + (k1 − first₁), which is (k0·len₁ + k1) mod 2 up to a
-/// constant c = (first₀·len₁ + first₁) mod 2. A c of 1 only exchanges the two sums, whose final
-/// addition x + y cannot tell (IEEE addition commutes; a NaN is recomputed from the sparse list),
-/// so c is dropped. When len₁ and n1 have the same parity, (k0·len₁ + k1) mod 2 is the parity of
-/// the rule's own index k0·n1 + k1, and the table is one run of rules alternating between the
-/// sums; otherwise every other row starts on the second sum, which is the same row loop with
-/// the sums' roles exchanged.
-#[inline(always)]
-fn dense_pair_sums<const N: usize>(q: &[f64], v: DenseView<'_>) -> [[f64; N]; 2] {
-    let (mut x, mut y) = ([0.0f64; N], [0.0f64; N]);
-    let rows: &[[f64; N]] = q.as_chunks::<N>().0;
-    if (v.len[1] ^ v.n1) & 1 == 0 {
-        pair_row(&mut x, &mut y, &rows[..v.weight.len()], v.weight);
-        return [x, y];
-    }
-    let n1 = v.n1 as usize;
-    let mut pairs = rows.chunks_exact(n1).zip(v.weight.chunks_exact(n1));
-    if v.len[1] & 1 == 0 {
-        for (row_q, row_w) in pairs {
-            pair_row(&mut x, &mut y, row_q, row_w);
-        }
-    } else {
-        while let Some((row_q, row_w)) = pairs.next() {
-            pair_row(&mut x, &mut y, row_q, row_w);
-            let Some((row_q, row_w)) = pairs.next() else { break };
-            pair_row(&mut y, &mut x, row_q, row_w);
-        }
-    }
-    [x, y]
-}
-
-/// A run of rules of [`dense_pair_sums`] (a row, or the whole table): its even positions to `x`,
-/// its odd ones to `y`, in order.
-#[inline(always)]
-fn pair_row<const N: usize>(x: &mut [f64; N], y: &mut [f64; N], row_q: &[[f64; N]], row_w: &[f64]) {
-    let ((qc, qt), (wc, wt)) = (row_q.as_chunks::<2>(), row_w.as_chunks::<2>());
-    for (qq, ww) in qc.iter().zip(wc) {
-        for a in 0..N {
-            x[a] += ww[0] * qq[0][a];
-        }
-        for a in 0..N {
-            y[a] += ww[1] * qq[1][a];
-        }
-    }
-    if let (Some(qq), Some(&w)) = (qt.first(), wt.first()) {
-        for a in 0..N {
-            x[a] += w * qq[a];
-        }
-    }
-}
-
-/// [`lane_sums`] over every rule: rule (k0, k1) goes to partial sum j mod L, j its position in the
-/// sparse list, (k0 − first₀)·len₁ + (k1 − first₁). Along a row j grows by one a rule, so the
-/// partial sums are rotated by the row's first position and then indexed by k1 mod L (a rule
-/// outside the windows adds 0, so its partial sum does not matter).
-#[inline(always)]
-fn dense_lane_sums<const N: usize, const L: usize>(q: &[f64], v: DenseView<'_>) -> [[f64; N]; L] {
-    let mut acc = [[0.0f64; N]; L];
-    let rows: &[[f64; N]] = q.as_chunks::<N>().0;
-    let n1 = v.n1 as usize;
-    for (k0, (row_q, row_w)) in rows.chunks_exact(n1).zip(v.weight.chunks_exact(n1)).enumerate() {
-        // Wrapping arithmetic is exact mod L, a power of two.
-        let j0 = (k0 as u32).wrapping_sub(v.first[0]).wrapping_mul(v.len[1]).wrapping_sub(v.first[1]);
-        let start = j0 as usize % L;
-        rotate_left_by(&mut acc, start);
-        let ((qc, qt), (wc, wt)) = (row_q.as_chunks::<L>(), row_w.as_chunks::<L>());
-        for (qq, ww) in qc.iter().zip(wc) {
-            for l in 0..L {
-                for a in 0..N {
-                    acc[l][a] += ww[l] * qq[l][a];
-                }
-            }
-        }
-        for l in 0..L {
-            if l < qt.len() {
-                for a in 0..N {
-                    acc[l][a] += wt[l] * qt[l][a];
-                }
-            }
-        }
-        rotate_left_by(&mut acc, (L - start) % L);
-    }
-    acc
-}
-
-/// `acc.rotate_left(s)` for s < L without a branch or a memory round trip: a rotation by each
-/// power of two in s, each a bitwise blend (the values' bits are moved, never computed).
-#[inline(always)]
-fn rotate_left_by<const N: usize, const L: usize>(acc: &mut [[f64; N]; L], s: usize) {
-    let mut shift = 1;
-    while shift < L {
-        let m = 0u64.wrapping_sub(u64::from(s & shift != 0));
-        let old = *acc;
-        for i in 0..L {
-            for a in 0..N {
-                let (x, y) = (old[i][a].to_bits(), old[(i + shift) % L][a].to_bits());
-                acc[i][a] = f64::from_bits(x ^ ((x ^ y) & m));
-            }
-        }
-        shift *= 2;
-    }
-}
-
-/// Interleaved partial sums per action for `N` actions: enough independent additions in flight to
-/// hide their latency (with many actions the actions' own sums already are).
-const fn lanes(n: usize) -> usize {
-    if n <= 2 {
-        4
-    } else if n <= 4 {
-        2
-    } else {
-        1
-    }
-}
-
-/// `L` interleaved partial sums of Σᵢ wᵢ·q[iᵢ·N + a] for a = 0..N: rule j goes to partial sum
-/// j mod L, each summed in activation order from 0.
-#[inline(always)]
-fn lane_sums<const N: usize, const L: usize>(q: &[f64], index: &[u32], weight: &[f64]) -> [[f64; N]; L] {
-    let mut acc = [[0.0f64; N]; L];
-    // Rows as arrays: one bounds check per rule, not two.
-    let rows: &[[f64; N]] = q.as_chunks::<N>().0;
-    let (ic, wc) = (index.as_chunks::<L>(), weight.as_chunks::<L>());
-    for (ii, ww) in ic.0.iter().zip(wc.0) {
-        for l in 0..L {
-            let (r, w) = (&rows[ii[l] as usize], ww[l]);
-            for a in 0..N {
-                acc[l][a] += w * r[a];
-            }
-        }
-    }
-    for (l, (&i, &w)) in ic.1.iter().zip(wc.1).enumerate() {
-        let r = &rows[i as usize];
-        for a in 0..N {
-            acc[l][a] += w * r[a];
-        }
-    }
-    acc
-}
-
-/// Q(s, ·) with `N` actions: every action's partial sums stay in registers across the activation,
-/// added at the end as (s₀ + s₁) + (s₂ + s₃).
-#[inline(always)]
-fn q_values_fixed<const N: usize>(q: &[f64], index: &[u32], weight: &[f64], out: &mut [f64]) {
-    let out: &mut [f64; N] = (&mut out[..N]).try_into().expect("N actions");
-    match const { lanes(N) } {
-        4 => {
-            let s = lane_sums::<N, 4>(q, index, weight);
-            for a in 0..N {
-                out[a] = (s[0][a] + s[1][a]) + (s[2][a] + s[3][a]);
-            }
-        }
-        2 => {
-            let s = lane_sums::<N, 2>(q, index, weight);
-            for a in 0..N {
-                out[a] = s[0][a] + s[1][a];
-            }
-        }
-        _ => *out = lane_sums::<N, 1>(q, index, weight)[0],
-    }
-}
-
-/// Q(s, ·) for any action count, summing in `out` directly.
-#[inline(always)]
-fn q_values_any(q: &[f64], na: usize, index: &[u32], weight: &[f64], out: &mut [f64]) {
-    out.fill(0.0);
-    for (&i, &w) in index.iter().zip(weight) {
-        let row = &q[i as usize * na..(i as usize + 1) * na];
-        for (o, v) in out.iter_mut().zip(row) {
-            *o += w * v;
-        }
     }
 }
 

@@ -7,6 +7,7 @@ use crate::env::SystemKind;
 use crate::math;
 use crate::repr::{Activations, OneHot, ReprKind};
 use crate::simd::Simd;
+use sums::{lanes, q_values_any};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
 fn config(lambda: f64, replacing: bool, cutoff: f64) -> LearnerConfig {
@@ -157,7 +158,7 @@ fn every_trace_layout_matches_the_list_based_learner_bit_for_bit() {
                 if lambda > 0.0 {
                     assert_eq!(l.traces_for_next_step(), next, "{what}");
                 }
-                assert_eq!(zero_sign(&l.q), zero_sign(&oracle.q), "{what}");
+                assert_eq!(zero_sign(l.params()), zero_sign(&oracle.q), "{what}");
                 l.q_values(&phi, if k == 0 { &mut want } else { &mut got });
                 if k > 0 {
                     assert_eq!(bits(&got), bits(&want), "{what}");

@@ -133,7 +133,9 @@ impl DenseTraces {
                 e[r * na + action] += w;
             }
         }
-        dense_sweep(simd, q, &mut self.e, rule, step);
+        // Not dispatched: a dense trial's whole loop is compiled for its level (trial.rs).
+        let _ = simd;
+        sweep(q, &mut self.e, rule, step);
     }
 
     /// The pass of [`update`](Self::update) after the extension of `index`'s traces for `action`.

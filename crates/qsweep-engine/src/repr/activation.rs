@@ -125,6 +125,67 @@ pub struct DenseView<'a> {
     pub first: [u32; 2],
     /// See `first`.
     pub len: [u32; 2],
+    /// The rules in the order Q(s, ·)'s two partial sums take them (for its window's length).
+    pub order: &'a PairOrder,
+}
+
+/// The rules of a two-variable rule base in the order that Q(s, ·)'s two interleaved partial sums
+/// take them, for one parity of the last variable's window length: rule (k0, k1) sits at position
+/// j = (k0 − first₀)·len₁ + (k1 − first₁) of the windows' list and goes to partial sum j mod 2,
+/// which is (k0·len₁ + k1) mod 2 up to a constant that only exchanges the two sums (their final
+/// addition cannot tell). Pairs first (one rule for each sum), then the longer sum's rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PairOrder {
+    /// Rule indices: `pairs` pairs (first sum, second sum), then the first sum's remaining rules;
+    /// each rule of the base once (a kernel relies on it to skip bounds checks).
+    rules: [u8; DENSE_MAX_RULES],
+    /// How many pairs lead `rules`.
+    pairs: u8,
+    /// How many rules `rules` holds (every rule of the base).
+    len: u8,
+}
+
+impl PairOrder {
+    /// The order for `n0 × n1` rules (at most [`DENSE_MAX_RULES`]) and a window length of the
+    /// last variable whose parity is `odd`.
+    pub fn new(n0: usize, n1: usize, odd: bool) -> Self {
+        assert!(n0 * n1 <= DENSE_MAX_RULES, "{n0}×{n1} rules");
+        let p = usize::from(odd);
+        let (mut even, mut other) = (Vec::new(), Vec::new());
+        for k0 in 0..n0 {
+            for k1 in 0..n1 {
+                let list = if (k0 * p + k1) % 2 == 0 { &mut even } else { &mut other };
+                list.push((k0 * n1 + k1) as u8);
+            }
+        }
+        // The sums' names do not matter (their addition commutes): the longer one is "first".
+        let (first, second) = if even.len() >= other.len() { (even, other) } else { (other, even) };
+        let mut rules = [0u8; DENSE_MAX_RULES];
+        let mut at = 0;
+        for (&a, &b) in first.iter().zip(&second) {
+            (rules[at], rules[at + 1]) = (a, b);
+            at += 2;
+        }
+        for &a in &first[second.len()..] {
+            rules[at] = a;
+            at += 1;
+        }
+        Self { rules, pairs: second.len() as u8, len: at as u8 }
+    }
+
+    /// The pairs (first sum's rule, second sum's rule), then the first sum's remaining rules: a
+    /// permutation of `0..self.rules()`.
+    #[inline(always)]
+    pub fn split(&self) -> (&[[u8; 2]], &[u8]) {
+        let (pairs, rest) = self.rules[..self.len as usize].split_at(2 * self.pairs as usize);
+        (pairs.as_chunks::<2>().0, rest)
+    }
+
+    /// How many rules the order holds (every rule of its base).
+    #[inline(always)]
+    pub fn rules(&self) -> usize {
+        self.len as usize
+    }
 }
 
 /// Most rules a [`DenseView`] holds.

@@ -9,9 +9,17 @@
 //! `μ₀·μ₁`; every set outside the window weighs exactly 0. An empty window (the nearest set) and
 //! a zero normaliser (the nearest set takes it all) are the windowed path's own rules.
 
-use super::activation::{Activations, DenseView, Encode, Features, Representation, DENSE_MAX_RULES};
+use super::activation::{
+    Activations, DenseView, Encode, Features, PairOrder, Representation, DENSE_MAX_RULES,
+};
 use super::fuzzy::{Fuzzy, Variable};
 use crate::math;
+
+/// Most lanes a variable is padded to.
+const MAX_LANES: usize = 16;
+
+/// The weights' length: a weight a rule, then room for a row of [`MAX_LANES`] past the last.
+const WEIGHTS: usize = DENSE_MAX_RULES + MAX_LANES;
 
 /// Memberships whose exponentials are computed together, as the windowed activation does.
 const EXP_LANES: usize = 4;
@@ -28,6 +36,8 @@ struct Padded<const P: usize> {
 #[derive(Debug, Clone)]
 pub struct DenseFuzzy<const P: usize> {
     vars: [Padded<P>; 2],
+    /// Q(s, ·)'s order of the rules for an even and an odd window length of the last variable.
+    orders: [PairOrder; 2],
     windowed: Fuzzy,
 }
 
@@ -42,7 +52,9 @@ pub struct DenseActive<const P: usize> {
     len: [u32; 2],
     n0: u32,
     n1: u32,
-    weight: Box<[f64; DENSE_MAX_RULES]>,
+    /// One weight a rule, then spare lanes for a whole row's store past the last rule.
+    weight: Box<[f64; WEIGHTS]>,
+    order: PairOrder,
 }
 
 impl<const P: usize> Default for DenseActive<P> {
@@ -53,7 +65,8 @@ impl<const P: usize> Default for DenseActive<P> {
             len: [0; 2],
             n0: 1,
             n1: 1,
-            weight: Box::new([0.0; DENSE_MAX_RULES]),
+            weight: Box::new([0.0; WEIGHTS]),
+            order: PairOrder::new(1, 1, false),
         }
     }
 }
@@ -68,7 +81,7 @@ impl<const P: usize> DenseFuzzy<P> {
 
     /// The dense form of `fuzzy`, which must [`fit`](Self::fits).
     pub fn new(fuzzy: Fuzzy) -> Self {
-        const { assert!(P.is_multiple_of(EXP_LANES)) };
+        const { assert!(P.is_multiple_of(EXP_LANES) && P <= MAX_LANES) };
         let sets: Vec<u32> = fuzzy.vars.iter().map(|v| v.n as u32).collect();
         assert!(Self::fits(&sets), "{sets:?} does not fit {P} lanes");
         let pad = |j: usize| {
@@ -77,7 +90,9 @@ impl<const P: usize> DenseFuzzy<P> {
             centres[..var.n].copy_from_slice(&var.centres);
             Padded { var, centres }
         };
-        Self { vars: [pad(0), pad(1)], windowed: fuzzy }
+        let (n0, n1) = (sets[0] as usize, sets[1] as usize);
+        let orders = [PairOrder::new(n0, n1, false), PairOrder::new(n0, n1, true)];
+        Self { vars: [pad(0), pad(1)], orders, windowed: fuzzy }
     }
 
     /// Variable `j`'s normalised memberships over all `P` lanes at `value` (0 outside its window),
@@ -91,25 +106,26 @@ impl<const P: usize> DenseFuzzy<P> {
             return (0, 1);
         }
         let (x, pos, first, last) = v.window(value);
-        // Set k is inside the window when k − first (wrapping) is below its length: one
-        // comparison a lane.
+        // Set k is inside the window when k − first (wrapping) is at most its span: one
+        // comparison a lane, as a mask of all ones or zeros that clears a lane's bits (+0).
         let span = (last - first) as u64;
-        let inside: [bool; P] = std::array::from_fn(|k| (k as u64).wrapping_sub(first as u64) <= span);
+        let mask: [u64; P] = std::array::from_fn(|k| {
+            0u64.wrapping_sub(u64::from((k as u64).wrapping_sub(first as u64) <= span))
+        });
+        let keep = |v: f64, k: usize| f64::from_bits(v.to_bits() & mask[k]);
         let mut raw = [0.0; P];
         for k in 0..P {
             let d = x - centres[k];
-            // Outside the window 0 (exp's fast path), masked again below.
-            raw[k] = if inside[k] { -(d * d) * v.inv_two_sigma_sq } else { 0.0 };
+            // Outside the window exp(+0) (its fast path), masked again below.
+            raw[k] = keep(-(d * d) * v.inv_two_sigma_sq, k);
         }
         for chunk in raw.as_chunks_mut::<EXP_LANES>().0 {
             math::exp_lanes(chunk);
         }
-        for k in 0..P {
-            raw[k] = if inside[k] { raw[k] } else { 0.0 };
-        }
         let mut sum = 0.0;
-        for r in raw {
-            sum += r;
+        for (k, r) in raw.iter_mut().enumerate() {
+            *r = keep(*r, k);
+            sum += *r;
         }
         if sum.is_nan() || sum <= 0.0 {
             let nearest = v.nearest(pos);
@@ -120,7 +136,7 @@ impl<const P: usize> DenseFuzzy<P> {
         let inv = 1.0 / sum;
         for k in 0..P {
             // Masked after the product too: 0·inv is NaN when the sum is subnormal.
-            mu[k] = if inside[k] { raw[k] * inv } else { 0.0 };
+            mu[k] = keep(raw[k] * inv, k);
         }
         (first, last + 1 - first)
     }
@@ -153,11 +169,15 @@ impl<const P: usize> Encode for DenseFuzzy<P> {
         }
         let (n0, n1) = (self.vars[0].var.n, self.vars[1].var.n);
         (out.n0, out.n1) = (n0 as u32, n1 as u32);
-        // Each rule's weight μ₀·μ₁, as the windowed activation multiplies it.
-        let mu1 = &mu[1][..n1];
+        out.order = self.orders[out.len[1] as usize & 1];
+        // Each rule's weight μ₀·μ₁, as the windowed activation multiplies it: a row of `P` products
+        // at a time, each row written over the last one's lanes past n1 (products with sets that
+        // do not exist, +0 as μ₁ is there), the last row's into the weights' spare lanes.
+        let weight = &mut *out.weight;
         for (k0, &m0) in mu[0][..n0].iter().enumerate() {
-            for (w, &m1) in out.weight[k0 * n1..][..n1].iter_mut().zip(mu1) {
-                *w = m0 * m1;
+            let row: &mut [f64; P] = (&mut weight[k0 * n1..][..P]).try_into().expect("P lanes");
+            for k1 in 0..P {
+                row[k1] = m0 * mu[1][k1];
             }
         }
     }
@@ -180,6 +200,7 @@ impl<const P: usize> Features for DenseActive<P> {
             n1: self.n1,
             first: self.first,
             len: self.len,
+            order: &self.order,
         }
     }
 

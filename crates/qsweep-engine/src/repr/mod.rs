@@ -8,7 +8,9 @@ mod dense;
 mod fuzzy;
 
 pub(crate) use activation::strides;
-pub use activation::{Activations, DenseView, Encode, Features, OneHot, Representation, DENSE_MAX_RULES};
+pub use activation::{
+    Activations, DenseView, Encode, Features, OneHot, PairOrder, Representation, DENSE_MAX_RULES,
+};
 pub use crisp::{Binning, Crisp};
 pub use dense::{DenseActive, DenseFuzzy};
 pub use fuzzy::{Fuzzy, HALF_CROSSING_WIDTH, MAX_SETS};
