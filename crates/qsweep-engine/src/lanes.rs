@@ -1,12 +1,15 @@
-//! Trials in lockstep: several crisp trials of one system stepped as lanes of one loop, each
-//! lane taking the next trial when its own stops.
+//! Trials in lockstep: several crisp trials of one system, or several small fuzzy rule bases of
+//! one system on the dense path, stepped as lanes of one loop, each lane taking the next trial
+//! when its own stops.
 //!
 //! A crisp step is one trial's chain of dependent operations (dynamics → bin → greedy choice →
 //! update), and the core idles behind it; Mountain Car's cos(3x) alone is about half of it. With
 //! [`LANES`] trials in one loop, their dynamics run as vector lanes ([`Environment::step_each`],
 //! [`crate::math::cos_lanes`]) and the rest of their steps overlap in the core. A second hardware
 //! thread on the same core fills the same idle slots, so the gain is largest where a trial's
-//! thread has its core to itself (docs/speed.md, "Trials in lockstep").
+//! thread has its core to itself (docs/speed.md, "Trials in lockstep"). A dense fuzzy step
+//! ([`crate::repr::DenseFuzzy`]) is such a chain too, only longer (activation → Q(s′, ·) → δ →
+//! update → Q(s, ·) → choice), and its loop is compiled for the vector level as a whole.
 //!
 //! Each lane performs exactly the operations its trial performs when run alone, in the same
 //! order ([`TrialRun`] is both), and shares nothing with the other lanes but the loop: a trial's
@@ -15,23 +18,25 @@
 
 use super::config::{Algorithm, TrialConfig};
 use super::env::{with_env_type, FromParams, SystemKind, Transition};
-use super::repr::{Crisp, ReprKind};
-use super::trial::{run_trial, Outcome, TrialRun};
+use super::repr::{Crisp, DenseFuzzy, Encode, ReprKind};
+use super::simd::{self, Simd};
+use super::trial::{run_trial, takes_dense_path, Outcome, TrialRun};
 
 /// Trials one lockstep loop steps at once.
 pub const LANES: usize = crate::env::LANES;
 
-/// Whether a trial runs faster in lockstep than alone: crisp tables, of every system (measured,
-/// docs/speed.md). Fuzzy steps are long and mostly independent operations already.
+/// Whether a trial runs faster in lockstep than alone: crisp tables, of every system, and the
+/// fuzzy rule bases that take the dense path (measured, docs/speed.md). Other fuzzy steps are long
+/// and mostly independent operations already.
 pub fn benefits(cfg: &TrialConfig) -> bool {
-    cfg.repr.kind == ReprKind::Crisp
+    cfg.repr.kind == ReprKind::Crisp || takes_dense_path(cfg)
 }
 
 /// The trials that run best together in one loop, for a trial that [`benefits`]: those of the same
-/// system and algorithm (lanes that take the same branches, and whose steps cost about the
-/// same); `None` for the others.
-pub fn group(cfg: &TrialConfig) -> Option<(SystemKind, Algorithm)> {
-    benefits(cfg).then(|| (cfg.system(), cfg.learner.algorithm))
+/// system, representation and algorithm (lanes that take the same branches, and whose steps cost
+/// about the same); `None` for the others.
+pub fn group(cfg: &TrialConfig) -> Option<(SystemKind, ReprKind, Algorithm)> {
+    benefits(cfg).then(|| (cfg.system(), cfg.repr.kind, cfg.learner.algorithm))
 }
 
 /// Whether callers should run trials in lockstep: `QSWEEP_LOCKSTEP` is not `off` (it never
@@ -46,26 +51,38 @@ pub fn enabled() -> bool {
 
 /// Run the trials `next` hands out, [`LANES`] at a time in one loop, and give each to `done` as
 /// it stops (in stopping order): its id and its outcome. Every live lane takes one step per
-/// iteration of the loop, so the trials in it share its time equally. Every trial must be crisp
-/// and of `system`; one that is not runs alone when it comes (the same outcome).
+/// iteration of the loop, so the trials in it share its time equally. Every trial must be of
+/// `system` and of the first trial's kind (crisp, or fuzzy on the dense path, [`benefits`]); one
+/// that is not runs alone when it comes (the same outcome).
 pub fn run_lockstep<'c>(
     system: SystemKind,
-    next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
+    mut next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     done: impl FnMut(usize, Outcome),
 ) {
-    with_env_type!(system, E => lockstep::<E>(next, done))
+    let Some(first) = next() else { return };
+    let dense = takes_dense_path(first.1);
+    let mut first = Some(first);
+    let next = move || first.take().or_else(&mut next);
+    with_env_type!(system, E => if dense {
+        dense_at_level::<E>(simd::level(), next, done)
+    } else {
+        lockstep::<E, Crisp>(next, done)
+    })
 }
 
-/// The outcomes of `trials` (configuration and seed each), in order: the crisp trials of each
-/// system in one lockstep loop, every other trial alone. One thread; give it a batch of trials
-/// (a few loads of [`LANES`]) per thread to compute many in parallel.
+/// The outcomes of `trials` (configuration and seed each), in order: the trials of each lockstep
+/// [`group`] in one loop, every other trial alone. One thread; give it a batch of trials (a few
+/// loads of [`LANES`]) per thread to compute many in parallel.
 pub fn run_batch(trials: &[(&TrialConfig, u64)]) -> Vec<Outcome> {
     let mut out: Vec<Option<Outcome>> = vec![None; trials.len()];
-    for system in SystemKind::ALL {
+    let mut groups: Vec<_> = trials.iter().filter_map(|(cfg, _)| group(cfg)).collect();
+    groups.sort();
+    groups.dedup();
+    for g in groups {
         let mut next = (0..trials.len())
-            .filter(|&i| benefits(trials[i].0) && trials[i].0.system() == system)
+            .filter(|&i| group(trials[i].0) == Some(g))
             .map(|i| (i, trials[i].0, trials[i].1));
-        run_lockstep(system, || next.next(), |i, o| out[i] = Some(o));
+        run_lockstep(g.0, || next.next(), |i, o| out[i] = Some(o));
     }
     out.iter_mut()
         .zip(trials)
@@ -73,19 +90,77 @@ pub fn run_batch(trials: &[(&TrialConfig, u64)]) -> Vec<Outcome> {
         .collect()
 }
 
-/// One lane's trial.
-struct Lane<'c> {
-    id: usize,
-    run: TrialRun<'c, Crisp>,
+/// A kind of trial that lanes of one loop share: how a lane's trial starts.
+trait LaneKind {
+    /// The representation its trials encode states with.
+    type Repr: Encode;
+    /// Trial `cfg` with `seed` on system `E`, if it is of this kind.
+    fn run<'c, E: FromParams>(cfg: &'c TrialConfig, seed: u64) -> Option<TrialRun<'c, Self::Repr>>;
 }
 
-fn lockstep<'c, E: FromParams>(
+impl LaneKind for Crisp {
+    type Repr = Crisp;
+    fn run<'c, E: FromParams>(cfg: &'c TrialConfig, seed: u64) -> Option<TrialRun<'c, Crisp>> {
+        (cfg.repr.kind == ReprKind::Crisp).then(|| TrialRun::crisp::<E>(cfg, seed))
+    }
+}
+
+impl LaneKind for DenseFuzzy<4> {
+    type Repr = DenseFuzzy<4>;
+    fn run<'c, E: FromParams>(cfg: &'c TrialConfig, seed: u64) -> Option<TrialRun<'c, DenseFuzzy<4>>> {
+        TrialRun::dense::<E>(cfg, seed)
+    }
+}
+
+/// [`lockstep`] of dense fuzzy lanes with the whole loop compiled for `level` (as a dense trial
+/// alone is, `trial.rs`): the activation, the learner's kernels and the systems' steps inline
+/// into one function of that width, with the same bits.
+fn dense_at_level<'c, E: FromParams>(
+    level: Simd,
+    next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
+    done: impl FnMut(usize, Outcome),
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2<'c, E: FromParams>(
+            next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
+            done: impl FnMut(usize, Outcome),
+        ) {
+            lockstep::<E, DenseFuzzy<4>>(next, done)
+        }
+        #[target_feature(enable = "avx512f")]
+        unsafe fn avx512<'c, E: FromParams>(
+            next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
+            done: impl FnMut(usize, Outcome),
+        ) {
+            lockstep::<E, DenseFuzzy<4>>(next, done)
+        }
+        match level.capped() {
+            // SAFETY: capped by what the CPU has.
+            Simd::Avx2 => return unsafe { avx2::<E>(next, done) },
+            Simd::Avx512 => return unsafe { avx512::<E>(next, done) },
+            Simd::Baseline => {}
+        }
+    }
+    lockstep::<E, DenseFuzzy<4>>(next, done)
+}
+
+/// One lane's trial.
+struct Lane<'c, R: Encode> {
+    id: usize,
+    run: TrialRun<'c, R>,
+}
+
+#[inline(always)]
+fn lockstep<'c, E: FromParams, K: LaneKind>(
     mut next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     mut done: impl FnMut(usize, Outcome),
 ) {
-    let (mut lanes, mut envs): (Vec<Option<Lane<'c>>>, Vec<E>) = (Vec::new(), Vec::new());
+    let mut lanes: Vec<Option<Lane<'c, K::Repr>>> = Vec::new();
+    let mut envs: Vec<E> = Vec::new();
     while lanes.len() < LANES {
-        let Some((lane, env)) = start::<E>(&mut next, &mut done) else { break };
+        let Some((lane, env)) = start::<E, K>(&mut next, &mut done) else { break };
         lanes.push(Some(lane));
         envs.push(env);
     }
@@ -107,7 +182,7 @@ fn lockstep<'c, E: FromParams>(
             done(lane.id, o);
             *slot = None;
             if more {
-                match start::<E>(&mut next, &mut done) {
+                match start::<E, K>(&mut next, &mut done) {
                     Some((lane, e)) => (*slot, *env) = (Some(lane), e),
                     None => more = false,
                 }
@@ -117,19 +192,18 @@ fn lockstep<'c, E: FromParams>(
 }
 
 /// The next trial that needs a lane, with its system at the start of its first episode. A trial
-/// that stops before its first step, or is not a crisp trial of `E`, is settled here.
-fn start<'c, E: FromParams>(
+/// that stops before its first step, or is not of `E` and the lanes' kind, is settled here.
+fn start<'c, E: FromParams, K: LaneKind>(
     next: &mut impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
     done: &mut impl FnMut(usize, Outcome),
-) -> Option<(Lane<'c>, E)> {
+) -> Option<(Lane<'c, K::Repr>, E)> {
     loop {
         let (id, cfg, seed) = next()?;
-        let env = E::from_params(&cfg.env).filter(|_| cfg.repr.kind == ReprKind::Crisp);
-        let Some(mut env) = env else {
+        let lane = E::from_params(&cfg.env).and_then(|env| Some((env, K::run::<E>(cfg, seed)?)));
+        let Some((mut env, mut run)) = lane else {
             done(id, run_trial(cfg, seed));
             continue;
         };
-        let mut run = TrialRun::crisp::<E>(cfg, seed);
         match run.begin(&mut env) {
             Some(o) => done(id, o),
             None => return Some((Lane { id, run }, env)),

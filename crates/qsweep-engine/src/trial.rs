@@ -92,7 +92,7 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
         }
         ReprKind::Fuzzy => {
             let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
-            if dense_enabled() && dense_pays(&r.resolution, cfg.actions) {
+            if takes_dense_path(cfg) {
                 run_fuzzy(cfg, seed, env, repr, simd, true)
             } else {
                 run(cfg, seed, env, repr, simd)
@@ -118,6 +118,11 @@ pub fn dense_enabled() -> bool {
 /// Either path gives the same bits.
 fn dense_pays(sets: &[u32], actions: u32) -> bool {
     actions <= 16 && DenseFuzzy::<4>::fits(sets)
+}
+
+/// Whether trial `cfg` takes the dense fuzzy path ([`DenseFuzzy`]) when it runs.
+pub fn takes_dense_path(cfg: &TrialConfig) -> bool {
+    cfg.repr.kind == ReprKind::Fuzzy && dense_enabled() && dense_pays(&cfg.repr.resolution, cfg.actions)
 }
 
 /// A fuzzy trial through the dense path (`dense`, where its rule base fits) or the windowed one.
@@ -150,17 +155,14 @@ fn dense_or_windowed<E: Environment>(
     }
 }
 
-fn run_dense<E: Environment, R: Encode>(
+fn run_dense<E: Environment>(
     cfg: &TrialConfig,
     seed: u64,
     env: E,
-    repr: R,
+    repr: DenseFuzzy<4>,
     simd: Simd,
 ) -> (Outcome, Learner) {
-    let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
-        .with_simd(simd)
-        .with_dense_traces();
-    episodes_at(simd, env, TrialRun::new::<E>(cfg, seed, repr, learner))
+    episodes_at(simd, env, TrialRun::dense_with::<E>(cfg, seed, repr, simd))
 }
 
 /// [`episodes`] with the whole step loop compiled for `simd`'s level, so that the activation, the
@@ -314,6 +316,26 @@ impl<'c> TrialRun<'c, Crisp> {
         let r = &cfg.repr;
         let repr = Crisp::with_binning(&r.resolution, &r.ranges, r.binning);
         let learner = Learner::new(repr.n_features(), cfg.actions as usize, 1, &cfg.learner);
+        Self::new::<E>(cfg, seed, repr, learner)
+    }
+}
+
+impl<'c> TrialRun<'c, DenseFuzzy<4>> {
+    /// The fuzzy trial `cfg` with `seed` on system `E` through the dense path, if it takes it
+    /// ([`takes_dense_path`]), with its kernels at the process's vector level.
+    pub(crate) fn dense<E: Environment>(cfg: &'c TrialConfig, seed: u64) -> Option<Self> {
+        if !takes_dense_path(cfg) {
+            return None;
+        }
+        let (r, simd) = (&cfg.repr, simd::level());
+        let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
+        Some(Self::dense_with::<E>(cfg, seed, DenseFuzzy::new(repr), simd))
+    }
+
+    fn dense_with<E: Environment>(cfg: &'c TrialConfig, seed: u64, repr: DenseFuzzy<4>, simd: Simd) -> Self {
+        let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
+            .with_simd(simd)
+            .with_dense_traces();
         Self::new::<E>(cfg, seed, repr, learner)
     }
 }

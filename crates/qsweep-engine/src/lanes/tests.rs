@@ -139,3 +139,47 @@ fn a_batch_is_each_trial_run_alone() {
 fn trials_of(system: SystemKind, n: usize) -> Vec<(TrialConfig, u64)> {
     trials(system).into_iter().take(n).collect()
 }
+
+/// Small fuzzy rule bases on the dense path, in lockstep: every size it takes on both
+/// two-variable systems, both algorithms, several action counts, and the settings that reach its
+/// fallbacks (no prune, a tiny width, Watkins's cut with replacing traces, an overflowing step),
+/// stopping in several ways; each trial's outcome is the trial's alone, with company and without.
+#[test]
+fn dense_fuzzy_trials_in_lockstep_are_the_trials_alone() {
+    for system in [SystemKind::MountainCar, SystemKind::BallBeam] {
+        let mut jobs = Vec::new();
+        for (i, sets) in [[4, 4], [3, 3], [2, 4], [4, 1], [3, 2]].into_iter().enumerate() {
+            for (j, algorithm) in [Algorithm::Q0, Algorithm::QLambda].into_iter().enumerate() {
+                let mut c = TrialConfig::paper(
+                    system,
+                    ReprKind::Fuzzy,
+                    algorithm,
+                    sets.to_vec(),
+                    [3, 2, 5, 7][(i + j) % 4],
+                );
+                c.limits.max_episodes = 6;
+                c.limits.max_total_steps = 4_000 + 1_000 * i as u64;
+                match (2 * i + j) % 5 {
+                    1 => c.repr.prune = 0.0,
+                    2 => c.repr.width = 0.02,
+                    3 => (c.learner.watkins_cut, c.learner.traces) = (true, TraceKind::Replacing),
+                    4 if i == 2 => (c.learner.alpha, c.learner.q_init) = (1e300, 1e300),
+                    _ => {}
+                }
+                c.normalize();
+                assert!(benefits(&c), "{system} {sets:?}: the dense path takes it");
+                jobs.push((c, (10 * i + j) as u64));
+            }
+        }
+        let got = lockstep_outcomes(system, &jobs);
+        let stops: std::collections::BTreeSet<_> = got.iter().map(|o| o.stop.name()).collect();
+        assert!(stops.len() >= 2, "{system}: the trials should stop in several ways: {stops:?}");
+        for ((c, seed), o) in jobs.iter().zip(&got) {
+            assert_eq!(o, &run_trial(c, *seed), "{system} seed {seed}: {c:?}");
+        }
+        let few: Vec<_> = jobs.iter().step_by(4).take(3).cloned().collect();
+        for ((c, seed), o) in few.iter().zip(lockstep_outcomes(system, &few)) {
+            assert_eq!(o, run_trial(c, *seed), "{system} with 3 trials: seed {seed}");
+        }
+    }
+}

@@ -31,7 +31,7 @@ mod traces;
 use super::config::LearnerConfig;
 use super::repr::Features;
 use super::simd::{dispatch, Simd};
-use sums::{dense_q_values_by_count, q_values_at};
+use sums::{dense_q_values_by_count, q_values_at, MAX_UNROLLED_ACTIONS};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
 /// At the baseline vector level, the most parameters a dense trace sweep covers: larger tables
@@ -42,9 +42,6 @@ pub const DENSE_MAX_PARAMS: usize = 4096;
 /// per feature a single state can activate (and at most [`DENSE_MAX_PARAMS`]); else a list. A
 /// step extends the traces of one action only, so the rule counts parameters, not features.
 pub const DENSE_TRACE_RATIO: usize = 10;
-
-/// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
-const MAX_UNROLLED_ACTIONS: usize = 16;
 
 /// Values past the end of the Q table, so that the dense Q(s, ·) kernels read every rule's row
 /// as `W` ≥ actions lanes (the lanes past the row's own are never read back).

@@ -2,9 +2,11 @@
 //! a kernel per action count, and the dense sums over every rule of a small two-variable rule
 //! base ([`DenseView`]), which keep the sparse sums' order of additions bit for bit.
 
-use super::MAX_UNROLLED_ACTIONS;
 use crate::repr::DenseView;
 use crate::simd::dispatch;
+
+/// Action counts up to this get a Q(s, ·) kernel with every action's sum in registers.
+pub(super) const MAX_UNROLLED_ACTIONS: usize = 16;
 
 dispatch! {
     /// [`q_values_by_count`] at `simd`'s vector width (the same sums in the same order).

@@ -61,7 +61,7 @@ fn schedule(jobs: &[Job<'_>]) -> Vec<usize> {
 }
 
 /// One worker: runs the jobs `sched` hands it until none is left, the run stops, or the
-/// collector hangs up. With `lockstep`, crisp trials run several as lanes of one loop
+/// collector hangs up. With `lockstep`, crisp trials (and dense fuzzy ones) run several as lanes of one loop
 /// ([`lanes::run_lockstep`]); the rows are the same either way.
 fn work(
     jobs: &[Job<'_>],

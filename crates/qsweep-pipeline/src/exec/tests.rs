@@ -97,8 +97,14 @@ fn trials_that_run_alone_go_first_then_each_lockstep_group_together_longest_firs
     let mut configs = Vec::new();
     for sys in [SystemKind::MountainCar, SystemKind::BallBeam] {
         for alg in [Algorithm::Q0, Algorithm::QLambda] {
-            for (repr, actions) in [(ReprKind::Crisp, 3), (ReprKind::Fuzzy, 3), (ReprKind::Crisp, 9)] {
-                configs.push(TrialConfig::paper(sys, repr, alg, vec![3, 3], actions));
+            // Fuzzy 5×5 runs alone; fuzzy 3×3 takes the dense path, whose trials share loops.
+            for (repr, sets, actions) in [
+                (ReprKind::Crisp, 3, 3),
+                (ReprKind::Fuzzy, 5, 3),
+                (ReprKind::Crisp, 3, 9),
+                (ReprKind::Fuzzy, 3, 4),
+            ] {
+                configs.push(TrialConfig::paper(sys, repr, alg, vec![sets, sets], actions));
             }
         }
     }
@@ -106,11 +112,12 @@ fn trials_that_run_alone_go_first_then_each_lockstep_group_together_longest_firs
     let order: Vec<&Job<'_>> = schedule(&jobs).into_iter().map(|j| &jobs[j]).collect();
     let groups: Vec<_> = order.iter().map(|j| lanes::group(j.config)).collect();
     let alone = groups.iter().take_while(|g| g.is_none()).count();
-    assert_eq!(alone, jobs.iter().filter(|j| j.config.repr.kind == ReprKind::Fuzzy).count());
-    // Each group is one run of the order, its trials longest first.
+    assert_eq!(alone, jobs.iter().filter(|j| j.config.repr.resolution[0] == 5).count());
+    // Each group (system × representation × algorithm) is one run of the order, its trials
+    // longest first.
     let mut runs = groups.clone();
     runs.dedup();
-    assert_eq!(runs.len(), 1 + 4, "{runs:?}");
+    assert_eq!(runs.len(), 1 + 4 + 4, "{runs:?}");
     for w in order.windows(2) {
         if lanes::group(w[0].config) == lanes::group(w[1].config) {
             assert!(estimated_cost(w[0].config) >= estimated_cost(w[1].config));
