@@ -102,11 +102,8 @@ impl Store {
                 written.push(self.write_segment(chunk)?);
             }
             for path in read.iter().filter(|p| !written.contains(p)) {
-                match std::fs::remove_file(path) {
-                    // Another gc removed it first: its rows are in that gc's segments.
-                    Err(e) if e.kind() == ErrorKind::NotFound => {}
-                    r => r.map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", path.display()))?,
-                }
+                // Another gc removed it first: its rows are in that gc's segments.
+                self.remove_segment(path)?;
             }
         }
         report.bytes_after =

@@ -118,6 +118,9 @@ impl Drop for RunMark {
 
 /// The marks in `store` whose run is alive (or may be: its lease has not run out).
 pub fn live(store: &Store) -> std::io::Result<HashSet<String>> {
+    if let Some(remote) = store.remote() {
+        return super::bucket::live_runs(remote);
+    }
     let mut out = HashSet::new();
     visit(store, |name, liveness, _, _| {
         if liveness == Liveness::Live {
@@ -130,6 +133,9 @@ pub fn live(store: &Store) -> std::io::Result<HashSet<String>> {
 /// Remove the marks of dead runs (and a mark's temporary file a run killed while making it left).
 /// With `dry_run`, only count them.
 pub fn sweep(store: &Store, dry_run: bool) -> std::io::Result<Swept> {
+    if let Some(remote) = store.remote() {
+        return super::bucket::sweep_runs(remote, dry_run);
+    }
     let mut out = Swept::default();
     visit(store, |_, liveness, file, path| match liveness {
         Liveness::Live => out.live += 1,
