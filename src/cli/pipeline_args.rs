@@ -91,7 +91,7 @@ impl CacheArgs {
     /// and checked (it must exist: qsweep never creates a bucket).
     pub fn store(&self) -> anyhow::Result<Store> {
         if let Some(url) = self.bucket() {
-            return remote::open(&url);
+            return Store::open_bucket(&url);
         }
         let dir = self.dir();
         if dir.exists() && !dir.is_dir() {

@@ -448,3 +448,26 @@ fn push_then_pull_moves_each_trial_once_and_again_moves_nothing() {
     let again = stdout(server.qsweep(&sb.path("copies2")).args(["cache", "pull", url]).arg(&pulled));
     assert!(again.starts_with("pulled 0 trials"), "{again}");
 }
+
+#[test]
+fn a_program_pipeline_given_a_bucket_is_told_to_use_a_directory() {
+    let Some(server) = Server::start(&[]) else { return };
+    server.make_bucket("qsweep-programs");
+    let sb = Sandbox::new();
+    sb.write("prog.sh", "echo '{\"y\": 1}'\n");
+    let p = sb.write(
+        "p.yaml",
+        "name: e\nseeds: 1\nprogram:\n  command: [sh, prog.sh]\n  inputs: [prog.sh]\n  metrics: { y: int }\n\
+         params: { x: 1 }\nexperiments:\n  - { id: e, vary: { x: [1, 2] } }\n",
+    );
+    let err = fails_with(
+        server.qsweep(&sb.path("c")).current_dir(sb.dir.path()).args([
+            "run",
+            p.to_str().unwrap(),
+            "--cache",
+            "s3://qsweep-programs/x",
+        ]),
+        2,
+    );
+    assert!(err.contains("a bucket holds the trials of engine pipelines only"), "{err}");
+}

@@ -283,32 +283,6 @@ impl Store {
         }
     }
 
-    /// The segments `remote` lists, each copied into the directory unless a copy of its length is
-    /// there (a segment never changes, so a copy is never stale); fetched in parallel. A segment
-    /// listed and gone when fetched is [`Vanished`]: the reader lists again.
-    fn fetch_listed(&self, remote: &RemoteRef) -> anyhow::Result<Vec<PathBuf>> {
-        use rayon::prelude::*;
-        let listed: Vec<_> = remote
-            .list("")?
-            .into_iter()
-            .filter(|o| o.name.starts_with(SEGMENT_PREFIX) && o.name.ends_with(".parquet"))
-            .collect();
-        let mut out: Vec<PathBuf> = listed
-            .par_iter()
-            .map(|o| {
-                let path = self.dir.join(&o.name);
-                if std::fs::metadata(&path).is_ok_and(|m| m.len() == o.size) {
-                    return Ok(path);
-                }
-                let bytes = remote.get(&o.name)?.ok_or_else(|| Vanished(path.clone()))?;
-                write_atomic(&path, &bytes)?;
-                Ok(path)
-            })
-            .collect::<anyhow::Result<_>>()?;
-        out.sort();
-        Ok(out)
-    }
-
     /// Every stored key, reading only the `key` column of each segment (listed again when one
     /// vanishes meanwhile: see the module documentation).
     pub fn keys(&self) -> anyhow::Result<KeySet> {
@@ -448,5 +422,6 @@ fn segment_name(keys: &[Key], writer: Option<&str>) -> String {
     }
 }
 
+mod copy;
 #[cfg(test)]
 mod tests;

@@ -169,7 +169,12 @@ impl Store {
             let mut keys = std::collections::HashSet::new();
             for path in self.segments()? {
                 report.segments += 1;
-                match read_segment(&path, &|_| true).map_err(|e| vanished_or(&path, e)) {
+                let mut read = read_segment(&path, &|_| true);
+                // A bucket's segment is judged by the bucket's bytes, not by a damaged copy.
+                if read.is_err() && self.refetch(&path)? {
+                    read = read_segment(&path, &|_| true);
+                }
+                match read.map_err(|e| vanished_or(&path, e)) {
                     Ok(records) => {
                         let bad = records.iter().position(|r| {
                             let canonical = r.config_json();

@@ -19,7 +19,7 @@
 //! object it judged), which costs work, never a result: its rows are identical and one is read.
 
 use super::lease::{is_stale, Holder, HEARTBEAT, LEASE};
-use super::runs::{RUNS_DIR, RUN_PREFIX};
+use super::runs::{live_runs, RUNS_DIR, RUN_PREFIX};
 use super::{lock_ok, Swept, Take, LEASES_DIR};
 use crate::cache::remote::{join, RemoteRef};
 use crate::cache::rows::read_keys;
@@ -38,7 +38,7 @@ const OTHERS_EVERY: Duration = Duration::from_secs(1);
 /// Numbers this process's marks and probes.
 static MADE: AtomicU64 = AtomicU64::new(0);
 
-fn io(e: anyhow::Error) -> std::io::Error {
+pub(super) fn io(e: anyhow::Error) -> std::io::Error {
     std::io::Error::other(format!("{e:#}"))
 }
 
@@ -60,67 +60,6 @@ fn holder_of(body: &[u8]) -> Option<String> {
     let text = std::str::from_utf8(body).ok()?;
     let run = text.split_whitespace().next()?;
     run.starts_with(RUN_PREFIX).then(|| run.to_string())
-}
-
-/// The store's clock now, as it dates an object written now: a probe written, looked at and removed.
-pub fn store_now(remote: &RemoteRef) -> std::io::Result<SystemTime> {
-    let nanos = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
-    let n = MADE.fetch_add(1, Ordering::Relaxed);
-    let name =
-        join(RUNS_DIR, &format!("{}clock.{}.{nanos}.{n}", crate::atomic::TEMP_PREFIX, std::process::id()));
-    remote.put(&name, b"").map_err(io)?;
-    let made = remote.head(&name).map_err(io)?;
-    let _ = remote.delete(&name);
-    made.map(|m| m.modified)
-        .ok_or_else(|| std::io::Error::other(format!("{}: the clock probe {name} vanished", remote.url())))
-}
-
-/// The marks in the bucket with the time the store last wrote each (temporary probes left out).
-fn marks(remote: &RemoteRef) -> std::io::Result<HashMap<String, SystemTime>> {
-    Ok(remote
-        .list(RUNS_DIR)
-        .map_err(io)?
-        .into_iter()
-        .filter_map(|o| {
-            let name = o.name.rsplit('/').next()?.to_string();
-            name.starts_with(RUN_PREFIX).then_some((name, o.modified))
-        })
-        .collect())
-}
-
-/// The marks whose run is alive (written within a lease by the store's clock).
-pub fn live_runs(remote: &RemoteRef) -> std::io::Result<HashSet<String>> {
-    let marks = marks(remote)?;
-    if marks.is_empty() {
-        return Ok(HashSet::new());
-    }
-    let now = store_now(remote)?;
-    Ok(marks.into_iter().filter(|(_, at)| !is_stale(*at, now, LEASE)).map(|(n, _)| n).collect())
-}
-
-/// Remove the marks of dead runs and probes older than a lease; with `dry_run`, count them.
-pub fn sweep_runs(remote: &RemoteRef, dry_run: bool) -> std::io::Result<Swept> {
-    let listed = remote.list(RUNS_DIR).map_err(io)?;
-    let mut out = Swept::default();
-    if listed.is_empty() {
-        return Ok(out);
-    }
-    let now = store_now(remote)?;
-    for o in listed {
-        let name = o.name.rsplit('/').next().unwrap_or_default();
-        if !(name.starts_with(RUN_PREFIX) || name.starts_with(crate::atomic::TEMP_PREFIX)) {
-            continue;
-        }
-        if is_stale(o.modified, now, LEASE) {
-            out.removed += 1;
-            if !dry_run {
-                remote.delete(&o.name).map_err(io)?;
-            }
-        } else if name.starts_with(RUN_PREFIX) {
-            out.live += 1;
-        }
-    }
-    Ok(out)
 }
 
 /// Remove the leases whose mark is dead (or that name none); with `dry_run`, count them.
@@ -408,3 +347,7 @@ impl Drop for BucketLeases {
         let _ = sweep(&self.remote, false);
     }
 }
+
+#[cfg(test)]
+#[path = "bucket_tests.rs"]
+mod tests;

@@ -34,6 +34,10 @@ pub struct Bucket {
     url: String,
     bucket: String,
     runtime: tokio::runtime::Runtime,
+    /// Set by the first request that failed after all its retries: every later request fails at
+    /// once with it, so a run whose server went away ends with that error instead of retrying each
+    /// lease's release for as long again.
+    gone: std::sync::Mutex<Option<String>>,
 }
 
 impl Bucket {
@@ -89,8 +93,14 @@ impl Bucket {
             .thread_name("qsweep-s3")
             .enable_all()
             .build()?;
-        let bucket =
-            Self { store, prefix: address.prefix.clone(), url, bucket: address.bucket.clone(), runtime };
+        let bucket = Self {
+            store,
+            prefix: address.prefix.clone(),
+            url,
+            bucket: address.bucket.clone(),
+            runtime,
+            gone: std::sync::Mutex::new(None),
+        };
         bucket.check()?;
         Ok(bucket)
     }
@@ -134,14 +144,32 @@ impl Bucket {
         }
     }
 
-    /// An error of a request, naming the bucket and the object.
+    /// An error of a request, naming the bucket and the object; one the server did not answer
+    /// (after the retries) marks the bucket gone for the requests after it.
     fn failed(&self, what: &str, name: &str, e: object_store::Error) -> anyhow::Error {
+        if matches!(e, object_store::Error::Generic { .. }) {
+            let mut gone = self.gone.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            gone.get_or_insert_with(|| format!("{e}"));
+        }
         anyhow::anyhow!(
             "cache {}: cannot {what} `{name}` in the bucket `{}` at {}: {e} ",
             self.url,
             self.bucket,
             endpoint()
         )
+    }
+
+    /// Fail at once if an earlier request found the bucket gone.
+    fn alive(&self) -> anyhow::Result<()> {
+        match &*self.gone.lock().unwrap_or_else(std::sync::PoisonError::into_inner) {
+            Some(why) => Err(anyhow::anyhow!(
+                "cache {}: the bucket `{}` at {} stopped answering ({why})",
+                self.url,
+                self.bucket,
+                endpoint()
+            )),
+            None => Ok(()),
+        }
     }
 
     fn path(&self, name: &str) -> Option<ObjectPath> {
@@ -179,6 +207,7 @@ impl Remote for Bucket {
     }
 
     fn list(&self, dir: &str) -> anyhow::Result<Vec<Listed>> {
+        self.alive()?;
         let prefix = self.path(dir);
         // The folder alone (its sub-folders are not walked), every page of it.
         let got = self
@@ -191,6 +220,7 @@ impl Remote for Bucket {
     }
 
     fn get(&self, name: &str) -> anyhow::Result<Option<Vec<u8>>> {
+        self.alive()?;
         let path = self.object(name);
         let got = self.runtime.block_on(async {
             let r = self.store.get(&path).await?;
@@ -204,6 +234,7 @@ impl Remote for Bucket {
     }
 
     fn head(&self, name: &str) -> anyhow::Result<Option<Listed>> {
+        self.alive()?;
         match self.runtime.block_on(self.store.head(&self.object(name))) {
             Ok(m) => Ok(Some(self.listed(&m))),
             Err(object_store::Error::NotFound { .. }) => Ok(None),
@@ -212,6 +243,7 @@ impl Remote for Bucket {
     }
 
     fn create(&self, name: &str, body: &[u8]) -> anyhow::Result<bool> {
+        self.alive()?;
         let opts = PutOptions { mode: PutMode::Create, ..PutOptions::default() };
         let payload = PutPayload::from(body.to_vec());
         match self.runtime.block_on(self.store.put_opts(&self.object(name), payload, opts)) {
@@ -224,6 +256,7 @@ impl Remote for Bucket {
     }
 
     fn put(&self, name: &str, body: &[u8]) -> anyhow::Result<()> {
+        self.alive()?;
         let payload = PutPayload::from(body.to_vec());
         self.runtime
             .block_on(self.store.put(&self.object(name), payload))
@@ -232,6 +265,7 @@ impl Remote for Bucket {
     }
 
     fn delete(&self, name: &str) -> anyhow::Result<()> {
+        self.alive()?;
         match self.runtime.block_on(self.store.delete(&self.object(name))) {
             Ok(()) | Err(object_store::Error::NotFound { .. }) => Ok(()),
             Err(e) => Err(self.failed("remove", name, e)),

@@ -2,7 +2,7 @@
 //! storage backend of a cache in an object store (`--cache s3://BUCKET/PREFIX`,
 //! docs/cache-in-a-bucket.md).
 //!
-//! A cache directory is the backend of every cache today and stays exactly as it was: [`Store`]
+//! A cache directory is the backend of every cache today and stays exactly as it was: `Store`
 //! without a [`Remote`] reads and writes its directory alone. A store with a remote keeps the
 //! remote as the one truth and its directory as a **read-through copy** of it:
 //!
@@ -25,7 +25,6 @@ pub mod bucket;
 pub mod dir;
 pub mod transfer;
 
-use crate::cache::store::Store;
 use crate::error::user_error;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -140,24 +139,17 @@ pub fn copy_dir(address: &Address) -> PathBuf {
     dir
 }
 
-/// Open the cache in the bucket `url` (`s3://BUCKET/PREFIX`): connect, check that the bucket
-/// answers (a missing bucket or refused credentials is a usage error naming the bucket, exit 2),
-/// and open its read-through copy.
-pub fn open(url: &str) -> anyhow::Result<Store> {
-    let address = Address::parse(url)?;
-    let remote = connect(&address)?;
-    let dir = copy_dir(&address);
-    Store::open_remote(remote, &dir)
-        .map_err(|e| anyhow::anyhow!("cannot make the copy of {url} in {}: {e}", dir.display()))
-}
-
+/// Connect to the bucket of `address` and check that it answers (a missing bucket or refused
+/// credentials is a usage error naming the bucket, exit 2); [`crate::cache::Store::open_bucket`]
+/// opens the cache in it.
 #[cfg(feature = "s3")]
-fn connect(address: &Address) -> anyhow::Result<RemoteRef> {
+pub fn connect(address: &Address) -> anyhow::Result<RemoteRef> {
     Ok(Arc::new(bucket::Bucket::connect(address)?))
 }
 
+/// Without the `s3` feature: a usage error saying how to build a qsweep that has buckets.
 #[cfg(not(feature = "s3"))]
-fn connect(address: &Address) -> anyhow::Result<RemoteRef> {
+pub fn connect(address: &Address) -> anyhow::Result<RemoteRef> {
     Err(user_error(format!(
         "cache {}: this qsweep was built without buckets; build it with `cargo build --release \
          --features s3` (docs/cache-in-a-bucket.md), or give a directory with --cache DIR",
@@ -197,5 +189,15 @@ mod tests {
             assert!(e.is::<crate::error::UserError>(), "{bad}: {e}");
         }
         assert!(is_remote("s3://b") && !is_remote("cache") && !is_remote("./s3://x"));
+    }
+}
+
+#[cfg(all(test, not(feature = "s3")))]
+mod without_buckets {
+    #[test]
+    fn a_build_without_the_s3_feature_says_how_to_build_one_with_it() {
+        let e = super::connect(&super::Address::parse("s3://my-bucket/x").unwrap()).unwrap_err();
+        assert!(e.is::<crate::error::UserError>());
+        assert!(format!("{e}").contains("cargo build --release --features s3"), "{e}");
     }
 }
