@@ -218,8 +218,20 @@ impl BucketLeases {
         let body = lease_body(&self.mark.name, &self.me);
         // Each mark judged once per batch: a dead run usually held many of these keys.
         let mut judged: HashMap<String, bool> = HashMap::new();
-        let made: Vec<std::io::Result<bool>> =
-            keys.iter().map(|k| self.make(k, &body, &mut judged)).collect();
+        // Every lease of the batch created at once; only those found taken are looked at.
+        let objects: Vec<(String, Vec<u8>)> =
+            keys.iter().map(|k| (lease_name(k), body.clone().into_bytes())).collect();
+        let made: Vec<std::io::Result<bool>> = self
+            .remote
+            .create_each(&objects)
+            .into_iter()
+            .zip(keys)
+            .map(|(made, k)| match made {
+                Ok(true) => Ok(true),
+                Ok(false) => self.take_over(k, &body, &mut judged),
+                Err(e) => Err(io(e)),
+            })
+            .collect();
         let result = if made.iter().any(|m| matches!(m, Ok(true))) {
             // Whoever stored a key removed its lease after storing it: a key stored before this
             // lease was made shows in the segments listed now.
@@ -247,12 +259,12 @@ impl BucketLeases {
         result
     }
 
-    /// Make the lease of `key`: `true` when it is now this run's, `false` when a live run holds
-    /// it. A lease whose mark is dead (or that names none) is removed and made again.
-    fn make(&self, key: &Key, body: &str, judged: &mut HashMap<String, bool>) -> std::io::Result<bool> {
+    /// The lease of `key`, found taken: `true` when it is now this run's, `false` when a live run
+    /// holds it. A lease whose mark is dead (or that names none) is removed and made again.
+    fn take_over(&self, key: &Key, body: &str, judged: &mut HashMap<String, bool>) -> std::io::Result<bool> {
         let name = lease_name(key);
-        for _ in 0..3 {
-            if self.remote.create(&name, body.as_bytes()).map_err(io)? {
+        for attempt in 0..3 {
+            if attempt > 0 && self.remote.create(&name, body.as_bytes()).map_err(io)? {
                 return Ok(true);
             }
             let Some(found) = self.remote.get(&name).map_err(io)? else { continue };
@@ -299,19 +311,20 @@ impl BucketLeases {
         seen.keys.clone()
     }
 
+    /// Release the leases of `keys`: one multi-object delete for them all.
     pub fn release(&self, keys: &[Key]) {
         let mut held = lock_ok(&self.held);
-        for k in keys {
-            if held.remove(k) {
-                let _ = self.remote.delete(&lease_name(k));
-            }
+        let names: Vec<String> = keys.iter().filter(|k| held.remove(k)).map(lease_name).collect();
+        if !names.is_empty() {
+            let _ = self.remote.delete_each(&names);
         }
     }
 
     pub fn release_all(&self) {
         let mut held = lock_ok(&self.held);
-        for k in held.drain() {
-            let _ = self.remote.delete(&lease_name(&k));
+        let names: Vec<String> = held.drain().map(|k| lease_name(&k)).collect();
+        if !names.is_empty() {
+            let _ = self.remote.delete_each(&names);
         }
     }
 

@@ -264,6 +264,44 @@ impl Remote for Bucket {
             .map_err(|e| self.failed("write", name, e))
     }
 
+    fn create_each(&self, objects: &[(String, Vec<u8>)]) -> Vec<anyhow::Result<bool>> {
+        if let Err(e) = self.alive() {
+            let why = format!("{e:#}");
+            return objects.iter().map(|_| Err(anyhow::anyhow!("{why}"))).collect();
+        }
+        let answers = self.runtime.block_on(futures::future::join_all(objects.iter().map(|(name, body)| {
+            let opts = PutOptions { mode: PutMode::Create, ..PutOptions::default() };
+            let (path, payload) = (self.object(name), PutPayload::from(body.clone()));
+            async move { self.store.put_opts(&path, payload, opts).await }
+        })));
+        answers
+            .into_iter()
+            .zip(objects)
+            .map(|(answer, (name, _))| match answer {
+                Ok(_) => Ok(true),
+                Err(object_store::Error::AlreadyExists { .. } | object_store::Error::Precondition { .. }) => {
+                    Ok(false)
+                }
+                Err(e) => Err(self.failed("write", name, e)),
+            })
+            .collect()
+    }
+
+    fn delete_each(&self, names: &[String]) -> anyhow::Result<()> {
+        use futures::StreamExt;
+        self.alive()?;
+        let paths: Vec<object_store::Result<ObjectPath>> = names.iter().map(|n| Ok(self.object(n))).collect();
+        let gone = self.store.delete_stream(futures::stream::iter(paths).boxed());
+        let answers: Vec<object_store::Result<ObjectPath>> = self.runtime.block_on(gone.collect());
+        for answer in answers {
+            match answer {
+                Ok(_) | Err(object_store::Error::NotFound { .. }) => {}
+                Err(e) => return Err(self.failed("remove", &names.join(", "), e)),
+            }
+        }
+        Ok(())
+    }
+
     fn delete(&self, name: &str) -> anyhow::Result<()> {
         self.alive()?;
         match self.runtime.block_on(self.store.delete(&self.object(name))) {

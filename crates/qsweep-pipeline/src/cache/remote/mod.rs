@@ -59,6 +59,16 @@ pub trait Remote: Send + Sync + std::fmt::Debug {
     fn put(&self, name: &str, body: &[u8]) -> anyhow::Result<()>;
     /// Remove the object; an object already gone is no error.
     fn delete(&self, name: &str) -> anyhow::Result<()>;
+    /// [`Remote::create`] of each object, answered in order; a store that can sends them at once
+    /// (a batch of leases costs the time of one request, not of one per key).
+    fn create_each(&self, objects: &[(String, Vec<u8>)]) -> Vec<anyhow::Result<bool>> {
+        objects.iter().map(|(name, body)| self.create(name, body)).collect()
+    }
+    /// [`Remote::delete`] of each object; a store that can removes them in one request (S3's
+    /// multi-object delete, up to 1000 a request).
+    fn delete_each(&self, names: &[String]) -> anyhow::Result<()> {
+        names.iter().try_for_each(|n| self.delete(n))
+    }
 }
 
 /// A shared handle on a remote.
