@@ -1,5 +1,5 @@
 //! `qsweep cache push` / `pull`: copy the trials one cache lacks from another, by key
-//! (`qsweep_pipeline::cache::remote::transfer`).
+//! (`qsweep_pipeline::cache::remote::transfer`): a directory and a bucket, or two directories.
 
 use super::pipeline_args::CacheArgs;
 use clap::{Args, Subcommand};
@@ -19,20 +19,20 @@ pub struct CacheCommand {
 /// `qsweep cache`'s actions.
 #[derive(Debug, Subcommand)]
 pub enum Action {
-    /// Copy the trials a cache directory holds and a bucket lacks into the bucket.
+    /// Copy the trials a cache directory holds and a bucket (or another directory) lacks into it.
     Push {
-        /// The cache directory.
+        /// The cache directory, which must exist.
         dir: PathBuf,
-        /// The bucket cache, s3://BUCKET/PREFIX.
-        bucket: String,
+        /// Where to: a bucket cache, s3://BUCKET/PREFIX, or a cache directory (created if needed).
+        to: String,
         /// Count what would be copied; copy nothing.
         #[arg(long)]
         dry_run: bool,
     },
-    /// Copy the trials a bucket holds and a cache directory lacks into the directory.
+    /// Copy the trials a bucket (or another directory) holds and a cache directory lacks into it.
     Pull {
-        /// The bucket cache, s3://BUCKET/PREFIX.
-        bucket: String,
+        /// Where from: a bucket cache, s3://BUCKET/PREFIX, or a cache directory, which must exist.
+        from: String,
         /// The cache directory (created if needed).
         dir: PathBuf,
         /// Count what would be copied; copy nothing.
@@ -48,8 +48,8 @@ fn open(cache: PathBuf) -> CacheArgs {
 /// Run `qsweep cache`.
 pub fn run(a: CacheCommand) -> anyhow::Result<u8> {
     let (from, to, dry_run, verb): (Store, Store, bool, &str) = match a.action {
-        Action::Push { dir, bucket, dry_run } => {
-            let to = bucket_of(&bucket)?;
+        Action::Push { dir, to, dry_run } => {
+            let to = open(PathBuf::from(to));
             (
                 open(dir).required_store()?,
                 if dry_run { to.store()? } else { to.writable_store()? },
@@ -57,26 +57,19 @@ pub fn run(a: CacheCommand) -> anyhow::Result<u8> {
                 "pushed",
             )
         }
-        Action::Pull { bucket, dir, dry_run } => {
-            let from = bucket_of(&bucket)?;
+        Action::Pull { from, dir, dry_run } => {
             let to = open(dir);
-            (from.store()?, if dry_run { to.store()? } else { to.writable_store()? }, dry_run, "pulled")
+            (
+                open(PathBuf::from(from)).required_store()?,
+                if dry_run { to.store()? } else { to.writable_store()? },
+                dry_run,
+                "pulled",
+            )
         }
     };
     let c = copy(&from, &to, dry_run)?;
     print(&c, verb, dry_run, &to);
     Ok(exit::OK)
-}
-
-/// The bucket argument, which must name a bucket.
-fn bucket_of(url: &str) -> anyhow::Result<CacheArgs> {
-    let args = open(PathBuf::from(url));
-    if args.bucket().is_none() {
-        return Err(qsweep_pipeline::error::user_error(format!(
-            "{url} is not a bucket; write s3://BUCKET/PREFIX (a directory goes in the other place)"
-        )));
-    }
-    Ok(args)
 }
 
 fn print(c: &Copied, verb: &str, dry_run: bool, to: &Store) {

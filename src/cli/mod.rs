@@ -60,7 +60,7 @@ pub enum Command {
     Verify(verify::VerifyArgs),
     /// Compact the cache; with pipelines given, drop rows none of them references.
     Gc(gc::GcArgs),
-    /// Copy trials between a cache directory and a bucket, by key (push, pull).
+    /// Copy trials between a cache directory and a bucket (or another directory), by key.
     ///
     /// Only the trials the destination lacks are copied, each segment in one write, so a copy
     /// interrupted at any point is simply run again. Buckets need a build with `--features s3`.

@@ -471,3 +471,20 @@ fn a_program_pipeline_given_a_bucket_is_told_to_use_a_directory() {
     );
     assert!(err.contains("a bucket holds the trials of engine pipelines only"), "{err}");
 }
+
+#[test]
+fn slurm_given_a_bucket_passes_it_to_every_job_as_given() {
+    let Some(server) = Server::start(&[]) else { return };
+    server.make_bucket("qsweep-slurm");
+    let sb = Sandbox::new();
+    let script = stdout(server.qsweep(&sb.path("c")).args([
+        "slurm",
+        &quick(),
+        "--array",
+        "2",
+        "--cache",
+        "s3://qsweep-slurm/x",
+    ]));
+    assert!(script.contains("--cache s3://qsweep-slurm/x"), "{script}");
+    assert!(!script.contains(&format!("{}/s3:", sb.dir.path().display())), "not made a path: {script}");
+}
