@@ -173,7 +173,7 @@ pub fn run(a: CompareArgs) -> anyhow::Result<u8> {
         };
         eprintln!(
             "compare: the cache {} holds no trials of any of the {} matched cells (run both pipelines first: {}; {})",
-            a.cache.dir().display(),
+            a.cache.name(),
             c.missing.len(),
             run(&a.a),
             run(&a.b)

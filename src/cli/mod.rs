@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod cache;
 mod compare;
 mod feasible;
 mod gc;
@@ -61,6 +62,11 @@ pub enum Command {
     Verify(verify::VerifyArgs),
     /// Compact the cache; with pipelines given, drop rows none of them references.
     Gc(gc::GcArgs),
+    /// Copy trials between a cache directory and a bucket (or another directory), by key.
+    ///
+    /// Only the trials the destination lacks are copied, each segment in one write, so a copy
+    /// interrupted at any point is simply run again. Buckets need a build with `--features s3`.
+    Cache(cache::CacheCommand),
     /// Print a script that submits a pipeline to Slurm: a job array of shards, then a report job.
     Slurm(slurm::SlurmArgs),
     /// Compare two program pipelines cell by cell: did a change move the results beyond chance?
@@ -90,6 +96,7 @@ pub const GUIDE: &[(&str, &str)] = &[
     ("verify", "docs/reproducibility.md"),
     ("gc", "docs/commands.md"),
     ("slurm", "docs/cluster.md"),
+    ("cache", "docs/cache-in-a-bucket.md"),
     ("compare", "docs/programs.md#did-my-change-move-the-results"),
 ];
 
@@ -137,6 +144,7 @@ pub fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         Command::Verify(a) => verify::run(a),
         Command::Gc(a) => gc::run(a),
         Command::Slurm(a) => slurm::run(a),
+        Command::Cache(a) => cache::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Supervise(a) => supervise::run(a),
     }

@@ -1,8 +1,10 @@
 //! Arguments shared by the commands: the pipeline file, `--set` overrides and the size
 //! confirmation of the pipeline commands (`run`, `status`, `report`, `slurm`), and the cache
-//! directory of every command that reads or writes a cache (those, `bench`, `verify`, `gc`).
+//! directory of every command that reads or writes a cache (those, `bench`, `verify`, `gc`), or
+//! its bucket (`s3://BUCKET/PREFIX`, `qsweep_pipeline::cache::remote`).
 
 use clap::Args;
+use qsweep_pipeline::cache::remote;
 use qsweep_pipeline::cache::store::Store;
 use qsweep_pipeline::declared::{load, Override};
 use qsweep_pipeline::error::user_error;
@@ -47,13 +49,14 @@ impl PipelineArgs {
 /// `--cache DIR`, and how a command opens it.
 #[derive(Debug, Clone, Default, Args)]
 pub struct CacheArgs {
-    /// Cache directory [env: QSWEEP_CACHE; default: cache].
+    /// Cache directory, or a bucket as s3://BUCKET/PREFIX (a build with the `s3` feature)
+    /// [env: QSWEEP_CACHE; default: cache].
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
 }
 
 impl CacheArgs {
-    /// The cache directory: `--cache`, else `$QSWEEP_CACHE`, else `cache`.
+    /// The cache as given: `--cache`, else `$QSWEEP_CACHE`, else `cache`.
     pub fn dir(&self) -> PathBuf {
         self.cache
             .clone()
@@ -61,8 +64,35 @@ impl CacheArgs {
             .unwrap_or_else(|| PathBuf::from("cache"))
     }
 
-    /// Open the cache store, creating its directory if needed (`run`).
+    /// The bucket's address when the cache is one (`s3://…`).
+    pub fn bucket(&self) -> Option<String> {
+        let dir = self.dir();
+        dir.to_str().filter(|d| remote::is_remote(d)).map(str::to_string)
+    }
+
+    /// The cache as its user named it, for messages: the directory or the bucket.
+    pub fn name(&self) -> String {
+        self.bucket().unwrap_or_else(|| self.dir().display().to_string())
+    }
+
+    /// The cache directory of a program pipeline, whose rows live in `_programs/` of a directory:
+    /// a bucket holds engine pipelines only.
+    pub fn program_dir(&self) -> anyhow::Result<PathBuf> {
+        match self.bucket() {
+            Some(url) => Err(user_error(format!(
+                "cache {url}: a bucket holds the trials of engine pipelines only; give a program \
+                 pipeline a cache directory with --cache DIR (docs/cache-in-a-bucket.md)"
+            ))),
+            None => Ok(self.dir()),
+        }
+    }
+
+    /// Open the cache store, creating its directory if needed (`run`); a bucket is connected to
+    /// and checked (it must exist: qsweep never creates a bucket).
     pub fn store(&self) -> anyhow::Result<Store> {
+        if let Some(url) = self.bucket() {
+            return Store::open_bucket(&url);
+        }
         let dir = self.dir();
         if dir.exists() && !dir.is_dir() {
             return Err(user_error(format!(
@@ -77,6 +107,17 @@ impl CacheArgs {
     /// written is a usage error found before any trial runs, not an I/O error at the first flush.
     pub fn writable_store(&self) -> anyhow::Result<Store> {
         let store = self.store()?;
+        if let Some(remote) = store.remote() {
+            let probe = format!("{}probe.{}", qsweep_pipeline::atomic::TEMP_PREFIX, std::process::id());
+            remote.put(&probe, b"").map_err(|e| {
+                user_error(format!(
+                    "cache {}: cannot write to the bucket ({e:#}); check its permissions",
+                    remote.url()
+                ))
+            })?;
+            let _ = remote.delete(&probe);
+            return Ok(store);
+        }
         let probe =
             store.dir().join(format!("{}probe.{}", qsweep_pipeline::atomic::TEMP_PREFIX, std::process::id()));
         std::fs::File::create(&probe).map_err(|e| unwritable(store.dir(), &e))?;
@@ -87,12 +128,18 @@ impl CacheArgs {
     /// The cache if its directory exists, else `None` (treated as empty): the rule of the
     /// commands that only read a cache and never create one (`status`, `slurm`, `bench`).
     pub fn existing_store(&self) -> anyhow::Result<Option<Store>> {
+        if self.bucket().is_some() {
+            return self.store().map(Some);
+        }
         self.dir().is_dir().then(|| self.store()).transpose()
     }
 
     /// The cache, which must exist (a usage error otherwise, see [`require_cache`]): the rule of
     /// the commands that read or rewrite a cache an earlier run made (`report`, `verify`, `gc`).
     pub fn required_store(&self) -> anyhow::Result<Store> {
+        if self.bucket().is_some() {
+            return self.store();
+        }
         require_cache(&self.dir())?;
         self.store()
     }

@@ -69,7 +69,7 @@ fn runner_options() -> RunnerOptions {
 pub fn run(a: RunArgs) -> anyhow::Result<u8> {
     let start = Instant::now();
     let plan = plan(&a.pipeline)?;
-    let cache = a.pipeline.cache.dir();
+    let cache = a.pipeline.cache.program_dir()?;
     let store = qsweep_pipeline::program::run::store(&cache, &plan).map_err(|e| unwritable(&cache, &e))?;
     super::run::install_ctrlc("ending the running programs (they run next time)");
     let opts = ExecOptions {
@@ -175,8 +175,10 @@ pub fn existing_folder(
     cache: &CacheArgs,
     plan: &ProgramPlan,
 ) -> anyhow::Result<Option<qsweep_pipeline::cache::Store>> {
-    let dir =
-        qsweep_pipeline::program::rows::folder(&cache.dir(), &qsweep_pipeline::program::run::schema(plan));
+    let dir = qsweep_pipeline::program::rows::folder(
+        &cache.program_dir()?,
+        &qsweep_pipeline::program::run::schema(plan),
+    );
     dir.is_dir().then(|| qsweep_pipeline::cache::Store::open(&dir)).transpose().map_err(Into::into)
 }
 
@@ -216,7 +218,7 @@ pub fn report(a: ReportArgs) -> anyhow::Result<u8> {
 /// and missing, per experiment; with `--explain`, why each cell's trials are missing.
 pub fn status(a: StatusArgs) -> anyhow::Result<u8> {
     let plan = plan(&a.pipeline)?;
-    let cache = a.pipeline.cache.dir();
+    let cache = a.pipeline.cache.program_dir()?;
     let store = existing_folder(&a.pipeline.cache, &plan)?;
     let replayed = replayed(plan, store.as_ref())?;
     let plan = &replayed.plan;

@@ -113,7 +113,10 @@ pub(super) fn submission(
         sets: a.pipeline.set.clone(),
         variants: a.pipeline.variant.clone(),
         yes: a.pipeline.yes,
-        cache: abs(&a.pipeline.cache.dir())?,
+        cache: match a.pipeline.cache.bucket() {
+            Some(url) => PathBuf::from(url),
+            None => abs(&a.pipeline.cache.dir())?,
+        },
         report_dir: abs(&report_dir)?,
         report_page: report_page.to_string(),
         tasks: a.array,

@@ -64,7 +64,7 @@ pub fn run(a: StatusArgs) -> anyhow::Result<u8> {
                 0 => String::new(),
                 n => format!(", {n} of them running elsewhere (another run on this cache)"),
             },
-            a.pipeline.cache.dir().display(),
+            a.pipeline.cache.name(),
             if store.is_none() { ", does not exist yet" } else { "" }
         );
         if let Some(race) = &v.race {

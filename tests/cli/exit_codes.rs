@@ -108,6 +108,10 @@ fn every_subcommand_exits_with_the_documented_codes() {
     case("gc", ok, cached().args(["gc", "--dry-run"]));
     case("gc", usage, Test::new().args(["gc"]));
 
+    // Between two cache directories (a bucket needs a server: tests/cli/bucket.rs).
+    case("cache", ok, cached().args(["cache", "push", "cache", "merged"]));
+    case("cache", usage, Test::new().args(["cache", "push", "no-such-cache", "merged"]));
+
     case(
         "feasible",
         ok,

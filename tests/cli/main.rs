@@ -2,6 +2,8 @@
 
 mod bad_pipelines;
 mod bench;
+#[cfg(feature = "s3")]
+mod bucket;
 mod cache;
 mod causes;
 mod compare;

@@ -102,16 +102,38 @@ impl Store {
                 written.push(self.write_segment(chunk)?);
             }
             for path in read.iter().filter(|p| !written.contains(p)) {
-                match std::fs::remove_file(path) {
-                    // Another gc removed it first: its rows are in that gc's segments.
-                    Err(e) if e.kind() == ErrorKind::NotFound => {}
-                    r => r.map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", path.display()))?,
-                }
+                // Another gc removed it first: its rows are in that gc's segments.
+                self.remove_segment(path)?;
             }
         }
-        report.bytes_after =
-            self.segments()?.iter().map(|p| std::fs::metadata(p).map_or(0, |m| m.len())).sum();
+        let now = self.segments()?;
+        report.bytes_after = now.iter().map(|p| std::fs::metadata(p).map_or(0, |m| m.len())).sum();
+        self.prune_copies(&now)?;
         Ok(report)
+    }
+
+    /// In a bucket cache's copy, remove the copies of segments the bucket no longer lists
+    /// (compacted by this gc or another machine's): older than [`STALE_TEMP`], so a copy a run of
+    /// this machine has just written, of a segment uploaded since the listing, stays.
+    fn prune_copies(&self, listed: &[PathBuf]) -> anyhow::Result<()> {
+        if self.remote().is_none() {
+            return Ok(());
+        }
+        let listed: HashSet<&PathBuf> = listed.iter().collect();
+        for entry in std::fs::read_dir(self.dir())? {
+            let path = entry?.path();
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let segment = name.starts_with(super::store::SEGMENT_PREFIX) && name.ends_with(".parquet");
+            let old = || {
+                std::fs::metadata(&path)
+                    .and_then(|m| m.modified())
+                    .is_ok_and(|t| t.elapsed().is_ok_and(|a| a > STALE_TEMP))
+            };
+            if segment && !listed.contains(&path) && old() {
+                let _ = std::fs::remove_file(&path);
+            }
+        }
+        Ok(())
     }
 
     /// Remove (or, with `dry_run`, count) temp files left by killed writers.

@@ -4,6 +4,7 @@ pub mod gc;
 pub mod key;
 pub mod leases;
 pub mod record;
+pub mod remote;
 pub mod rows;
 pub mod store;
 pub mod verify;

@@ -20,9 +20,15 @@
 //! nothing until it happens; then one more listing and read of every segment's keys and of the
 //! rows wanted. No lock is taken, so the rule holds for any store that can list and read files
 //! (a bucket too: a listed object that is gone reads as "not found").
+//!
+//! A store may keep its segments in a [`Remote`] (a bucket, [`super::remote`]): then the remote
+//! lists them, each is fetched once into the directory (a read-through copy, never stale since a
+//! segment never changes), and a new one is uploaded with one create-only request before its copy
+//! is written. Everything that reads a segment reads the copy, exactly as it reads a local cache.
 
 use super::key::Key;
 use super::record::TrialRecord;
+use super::remote::{object_of, RemoteRef};
 use super::rows::{read_keys, read_outcome_rows, read_segment, to_batch, StoredTrial};
 use crate::atomic::write_atomic;
 use crate::parquet_io::to_parquet;
@@ -143,12 +149,14 @@ pub fn writer_of(path: &Path) -> Option<&str> {
     stem.split_once('.').map(|(_, run)| run).filter(|run| !run.is_empty())
 }
 
-/// A cache directory.
+/// A cache directory, or a cache in a [`super::remote::Remote`] with its read-through copy.
 #[derive(Debug, Clone)]
 pub struct Store {
     dir: PathBuf,
     /// The run whose segments this store writes ([`Store::writing_as`]).
     writer: Option<String>,
+    /// Where the segments live when not in `dir` alone; `dir` then holds their copies.
+    remote: Option<RemoteRef>,
 }
 
 impl Store {
@@ -158,7 +166,27 @@ impl Store {
         if !std::fs::metadata(dir)?.is_dir() {
             return Err(std::io::Error::other("not a directory"));
         }
-        Ok(Self { dir: dir.to_path_buf(), writer: None })
+        Ok(Self { dir: dir.to_path_buf(), writer: None, remote: None })
+    }
+
+    /// The cache in `remote`, its segments copied into `dir` (created if needed) as they are read.
+    pub fn open_remote(remote: RemoteRef, dir: &Path) -> std::io::Result<Self> {
+        let mut store = Self::open(dir)?;
+        store.remote = Some(remote);
+        Ok(store)
+    }
+
+    /// The remote holding this cache, if it is not a directory alone.
+    pub fn remote(&self) -> Option<&RemoteRef> {
+        self.remote.as_ref()
+    }
+
+    /// The cache as its user named it: the bucket's address, or the directory.
+    pub fn location(&self) -> String {
+        match &self.remote {
+            Some(r) => r.url().to_string(),
+            None => self.dir.display().to_string(),
+        }
     }
 
     /// This store, writing segments named for the run `writer` (its mark in `_runs/`,
@@ -173,8 +201,12 @@ impl Store {
         &self.dir
     }
 
-    /// Every segment file, sorted by name (so reads are deterministic).
+    /// Every segment file, sorted by name (so reads are deterministic). With a remote, the
+    /// segments it lists, each copied into the directory first if it is not there yet.
     pub fn segments(&self) -> anyhow::Result<Vec<PathBuf>> {
+        if let Some(remote) = &self.remote {
+            return self.fetch_listed(remote);
+        }
         let mut out = Vec::new();
         let entries = std::fs::read_dir(&self.dir)
             .map_err(|e| anyhow::anyhow!("cannot list cache {}: {e}", self.dir.display()))?;
@@ -207,11 +239,48 @@ impl Store {
         batch: &arrow::record_batch::RecordBatch,
     ) -> anyhow::Result<PathBuf> {
         anyhow::ensure!(!keys.is_empty(), "refusing to write an empty segment");
-        let path = self.dir.join(segment_name(keys, self.writer.as_deref()));
+        let name = segment_name(keys, self.writer.as_deref());
+        let path = self.dir.join(&name);
         to_parquet(batch)
-            .and_then(|bytes| write_atomic(&path, &bytes))
-            .map_err(|e| e.context(format!("cannot write cache segment in {}", self.dir.display())))?;
+            .and_then(|bytes| {
+                if let Some(remote) = &self.remote {
+                    // One create-only PUT under the final name: the segment is listed whole or not
+                    // at all. Its name is this writer's alone, so a refusal is never expected.
+                    anyhow::ensure!(remote.create(&name, &bytes)?, "segment {name} exists already");
+                }
+                write_atomic(&path, &bytes)
+            })
+            .map_err(|e| e.context(format!("cannot write cache segment in {}", self.location())))?;
         Ok(path)
+    }
+
+    /// Store `bytes`, a whole segment file named `name` elsewhere (`qsweep cache push`/`pull`),
+    /// under that name unless a segment of that name is here already: a name is never reused, so
+    /// it is the same segment. One create-only write in a bucket, an atomic one in a directory.
+    pub fn put_segment(&self, name: &str, bytes: &[u8]) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            name.starts_with(SEGMENT_PREFIX) && name.ends_with(".parquet") && !name.contains('/'),
+            "{name} is not a segment name"
+        );
+        let path = self.dir.join(name);
+        if let Some(remote) = &self.remote {
+            remote.create(name, bytes)?;
+        } else if path.exists() {
+            return Ok(());
+        }
+        write_atomic(&path, bytes)
+    }
+
+    /// Remove the segment at `path` (from the remote too, if any); one already gone is no error
+    /// (another gc removed it first: its rows are in that gc's segments).
+    pub fn remove_segment(&self, path: &Path) -> anyhow::Result<()> {
+        if let Some(remote) = &self.remote {
+            remote.delete(&object_of(path)?)?;
+        }
+        match std::fs::remove_file(path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            r => r.map_err(|e| anyhow::anyhow!("cannot remove {}: {e}", path.display())),
+        }
     }
 
     /// Every stored key, reading only the `key` column of each segment (listed again when one
@@ -353,5 +422,6 @@ fn segment_name(keys: &[Key], writer: Option<&str>) -> String {
     }
 }
 
+mod copy;
 #[cfg(test)]
 mod tests;

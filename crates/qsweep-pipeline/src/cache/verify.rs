@@ -169,7 +169,12 @@ impl Store {
             let mut keys = std::collections::HashSet::new();
             for path in self.segments()? {
                 report.segments += 1;
-                match read_segment(&path, &|_| true).map_err(|e| vanished_or(&path, e)) {
+                let mut read = read_segment(&path, &|_| true);
+                // A bucket's segment is judged by the bucket's bytes, not by a damaged copy.
+                if read.is_err() && self.refetch(&path)? {
+                    read = read_segment(&path, &|_| true);
+                }
+                match read.map_err(|e| vanished_or(&path, e)) {
                     Ok(records) => {
                         let bad = records.iter().position(|r| {
                             let canonical = r.config_json();
@@ -192,8 +197,26 @@ impl Store {
         })
     }
 
-    /// Move a damaged segment into the quarantine folder; returns where it went.
+    /// Move a damaged segment into the quarantine folder; returns where it went. In a bucket the
+    /// object is copied to `_quarantine/` there (created only if absent) before the segment is
+    /// removed, and the copy in the directory goes to the directory's `_quarantine/`; the bucket's
+    /// address is returned.
     pub fn quarantine(&self, segment: &std::path::Path) -> anyhow::Result<PathBuf> {
+        if let Some(remote) = self.remote() {
+            let name = super::remote::object_of(segment)?;
+            let kept = super::remote::join(QUARANTINE, &name);
+            let bytes = std::fs::read(segment)
+                .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", segment.display()))?;
+            remote.create(&kept, &bytes)?;
+            remote.delete(&name)?;
+            self.quarantine_copy(segment)?;
+            return Ok(PathBuf::from(super::remote::join(remote.url(), &kept)));
+        }
+        self.quarantine_copy(segment)
+    }
+
+    /// Move the segment file at `segment` into the directory's quarantine folder.
+    fn quarantine_copy(&self, segment: &std::path::Path) -> anyhow::Result<PathBuf> {
         let dir = self.dir().join(QUARANTINE);
         std::fs::create_dir_all(&dir)?;
         let name =

@@ -19,22 +19,26 @@
 //!
 //! A run also keeps a mark in the cache for its whole life ([`runs`]), which its segments name,
 //! so that `qsweep gc` never removes the rows of a run that is still alive.
+//!
+//! A cache in a bucket ([`crate::cache::remote`]) has neither links nor locks: there a lease is an
+//! object `_leases/<key>` made by a create-only PUT and naming the holder's run mark, and it is
+//! live while that mark is (`bucket.rs`): the rules above hold with the lease deciding alone.
 
 mod batch;
+mod bucket;
+mod files;
 pub mod lease;
 pub mod lock;
 pub mod runs;
 mod seen;
 
-use self::batch::Batch;
 use self::lease::{is_stale, process_alive, Holder, LEASE};
 use self::lock::{is_at, try_lock, Lock};
 use super::store::{KeySet, Store};
 use super::Key;
-use std::collections::HashMap;
 use std::fs::File;
 use std::io::{ErrorKind, Read};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::{Arc, Mutex, Weak};
 use std::time::SystemTime;
 
@@ -98,61 +102,47 @@ fn inspect(path: &Path, me: &Holder) -> std::io::Result<(File, Liveness)> {
     Ok((file, judge(lock, Holder::parse(&text).as_ref(), me, stale)))
 }
 
-/// This run's leases in one cache.
+/// This run's leases in one cache: files in a cache directory (`files.rs`), objects in a bucket
+/// (`bucket.rs`).
 #[derive(Debug)]
-pub struct Leases {
-    dir: PathBuf,
-    me: Holder,
-    /// The run's mark, which its segments carry ([`runs`]).
-    mark: runs::RunMark,
-    /// Each leased key's file; the keys of one batch share one file (one lock, one heartbeat),
-    /// closed, and so unlocked, once the last of them is released.
-    held: Mutex<HashMap<Key, Arc<File>>>,
-    /// Keys whose leases are being made (linked, not yet in `held`): [`Self::others_present`]
-    /// counts their files as this run's.
-    taking: std::sync::atomic::AtomicUsize,
-    seen: Mutex<Seen>,
+pub struct Leases(Kind);
+
+#[derive(Debug)]
+enum Kind {
+    Files(files::FileLeases),
+    Bucket(bucket::BucketLeases),
 }
 
-/// Counts keys as being taken for as long as it lives.
-struct Taking<'l>(&'l std::sync::atomic::AtomicUsize, usize);
-
-impl Drop for Taking<'_> {
-    fn drop(&mut self) {
-        self.0.fetch_sub(self.1, std::sync::atomic::Ordering::SeqCst);
-    }
+/// `$call` on the leases of either kind.
+macro_rules! either {
+    ($self:ident, $l:ident => $call:expr) => {
+        match &$self.0 {
+            Kind::Files($l) => $call,
+            Kind::Bucket($l) => $call,
+        }
+    };
 }
 
 impl Leases {
     /// The leases of a run on `store` (creating the leases folder), and the run's mark.
     pub fn open(store: &Store) -> std::io::Result<Arc<Self>> {
-        let dir = store.dir().join(LEASES_DIR);
-        std::fs::create_dir_all(&dir)?;
-        Ok(Arc::new(Self {
-            dir,
-            me: Holder::me(),
-            mark: runs::RunMark::register(store)?,
-            held: Mutex::new(HashMap::new()),
-            taking: std::sync::atomic::AtomicUsize::new(0),
-            seen: Mutex::new(Seen::from_scan(store.dir(), &KeySet::default(), false)),
-        }))
+        let kind = match store.remote() {
+            Some(_) => Kind::Bucket(bucket::BucketLeases::open(store)?),
+            None => Kind::Files(files::FileLeases::open(store)?),
+        };
+        Ok(Arc::new(Self(kind)))
     }
 
     /// Judge whether a key is stored against `scan` (the scan this execution planned from) and
     /// whatever is stored after it; with `force`, only against what is stored after it.
     pub fn reset_view(&self, scan: &KeySet, force: bool) {
-        let cache = self.dir.parent().unwrap_or(&self.dir).to_path_buf();
-        *lock_ok(&self.seen) = Seen::from_scan(&cache, scan, force);
-    }
-
-    fn path(&self, key: &Key) -> PathBuf {
-        self.dir.join(key.hex())
+        either!(self, l => l.reset_view(scan, force))
     }
 
     /// The run's mark: the segments it writes carry it ([`Store::writing_as`]), and `qsweep gc`
     /// leaves them alone while the run lives.
     pub fn run_mark(&self) -> &str {
-        self.mark.name()
+        either!(self, l => l.run_mark())
     }
 
     /// Lease `key`: [`Take::Taken`] when this run now holds it, [`Take::Busy`] when a live holder
@@ -162,150 +152,37 @@ impl Leases {
         self.try_take_batch(&[key]).pop().unwrap_or(Ok(Take::Busy))
     }
 
-    /// Lease each of `keys` (distinct), answering for each as [`Self::try_take`] does. The batch
-    /// costs one lease file, however many keys it leases: the file is made once and hard-linked
-    /// under each key's name (`batch.rs`), and what is stored is looked at once, after every link.
-    /// An error on one key (its lease could not be made) leaves the others leased.
+    /// Lease each of `keys` (distinct), answering for each as [`Self::try_take`] does; what is
+    /// stored is looked at once for the batch. An error on one key (its lease could not be made)
+    /// leaves the others leased.
     pub fn try_take_batch(&self, keys: &[Key]) -> Vec<std::io::Result<Take>> {
-        self.taking.fetch_add(keys.len(), std::sync::atomic::Ordering::SeqCst);
-        let _taking = Taking(&self.taking, keys.len());
-        let mut file = Batch::new(&self.dir, &self.me);
-        let linked: Vec<std::io::Result<Option<Arc<File>>>> =
-            keys.iter().map(|k| self.link(&self.path(k), &mut file)).collect();
-        drop(file);
-        if !linked.iter().any(|l| matches!(l, Ok(Some(_)))) {
-            return linked.into_iter().map(|l| l.map(|_| Take::Busy)).collect();
-        }
-        // Whoever stored a key removed its lease after storing it, so a key stored before its link
-        // here shows now: look once for the batch (a segment written since is read once).
-        let mut seen = lock_ok(&self.seen);
-        seen.refresh();
-        let mut held = lock_ok(&self.held);
-        keys.iter()
-            .zip(linked)
-            .map(|(key, l)| match l {
-                Ok(Some(file)) if seen.knows(key) => {
-                    remove_own(&file, &self.path(key));
-                    Ok(Take::Stored)
-                }
-                Ok(Some(file)) => {
-                    held.insert(*key, file);
-                    Ok(Take::Taken)
-                }
-                Ok(None) => Ok(Take::Busy),
-                Err(e) => Err(e),
-            })
-            .collect()
-    }
-
-    /// Put this batch's lease at `path`: the file when it is now ours, `None` when a live holder
-    /// has it. A dead holder's lease there is removed and replaced.
-    fn link(&self, path: &Path, batch: &mut Batch) -> std::io::Result<Option<Arc<File>>> {
-        for _ in 0..4 {
-            match batch.link(path) {
-                Ok(file) => return Ok(Some(file)),
-                Err(e) if e.kind() == ErrorKind::AlreadyExists => {}
-                Err(e) if e.kind() == ErrorKind::NotFound => {
-                    // Someone removed the folder (by hand), and the batch's file with it: make both
-                    // again.
-                    std::fs::create_dir_all(&self.dir)?;
-                    batch.forget();
-                    continue;
-                }
-                Err(e) => return Err(e),
-            }
-            let (file, liveness) = match inspect(path, &self.me) {
-                Ok(found) => found,
-                Err(e) if e.kind() == ErrorKind::NotFound => continue,
-                Err(e) => return Err(e),
-            };
-            if liveness == Liveness::Live {
-                return Ok(None);
-            }
-            // Take over: remove the dead lease (only if it is still the file judged) and make ours.
-            remove_own(&file, path);
-        }
-        // Others keep making and removing it: treat it as busy and look again later.
-        Ok(None)
+        either!(self, l => l.try_take_batch(keys))
     }
 
     /// Release the leases of `keys` (their trials are stored).
     pub fn release(&self, keys: &[Key]) {
-        let mut held = lock_ok(&self.held);
-        for k in keys {
-            if let Some(file) = held.remove(k) {
-                remove_own(&file, &self.path(k));
-            }
-        }
+        either!(self, l => l.release(keys))
     }
 
     /// Release every lease this run holds (the run ends, or was interrupted).
     pub fn release_all(&self) {
-        let mut held = lock_ok(&self.held);
-        for (k, file) in held.drain() {
-            remove_own(&file, &self.path(&k));
-        }
+        either!(self, l => l.release_all())
     }
 
-    /// Renew the lease of every lease held (call every [`lease::HEARTBEAT`]): once per batch,
-    /// since a batch's keys are links to one file and share its modification time.
+    /// Renew the leases held (call every [`lease::HEARTBEAT`]).
     pub fn heartbeat(&self) {
-        let now = SystemTime::now();
-        let held = lock_ok(&self.held);
-        let mut files: Vec<&Arc<File>> = held.values().collect();
-        files.sort_by_key(|f| Arc::as_ptr(f));
-        files.dedup_by_key(|f| Arc::as_ptr(f));
-        for file in files {
-            let _ = file.set_modified(now);
-        }
+        either!(self, l => l.heartbeat())
     }
 
     /// Whether another run holds leases in this cache now (live or not): someone may be waiting
     /// for this run's trials.
-    ///
-    /// The folder is listed under the lock of the leases held, so no lease of this run is
-    /// released between the listing and the count; the files of leases being made count as this
-    /// run's (`taking`). Without both, the tail of a lone run mistook its own leases for another
-    /// run's now and then and flushed an early batch: two segments where one was due.
     pub fn others_present(&self) -> bool {
-        let held = lock_ok(&self.held);
-        let Ok(entries) = std::fs::read_dir(&self.dir) else { return false };
-        let files = entries
-            .flatten()
-            .filter(|e| !e.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX))
-            .count();
-        files > held.len() + self.taking.load(std::sync::atomic::Ordering::SeqCst)
-    }
-
-    /// Remove every lease in the folder whose holder is dead (debris: see [`judge`]); a live
-    /// holder's lease, and a file being made, are left alone.
-    fn sweep_dead(&self) {
-        let Ok(entries) = std::fs::read_dir(&self.dir) else { return };
-        for e in entries.flatten() {
-            if e.file_name().to_string_lossy().starts_with(crate::atomic::TEMP_PREFIX) {
-                continue;
-            }
-            if let Ok((file, Liveness::Dead)) = inspect(&e.path(), &self.me) {
-                remove_own(&file, &e.path());
-            }
-        }
+        either!(self, l => l.others_present())
     }
 
     /// How many leases this run holds.
     pub fn held(&self) -> usize {
-        lock_ok(&self.held).len()
-    }
-}
-
-impl Drop for Leases {
-    fn drop(&mut self) {
-        self.release_all();
-        // A run killed between storing a segment and releasing its leases leaves leases of stored
-        // keys that no later run needs to take over; the last run to see them dead removes them.
-        self.sweep_dead();
-        // The cache looks as before once no run is on it; a run that just made the folder and
-        // meets it gone makes it again (see `try_take`). Fails harmlessly while others use it.
-        let _ = std::fs::remove_dir(&self.dir);
+        either!(self, l => l.held())
     }
 }
 
@@ -341,6 +218,9 @@ pub fn release_registered() {
 /// Of `keys`, how many another run is computing now (a live lease): `status`'s
 /// `running_elsewhere`. Reads the leases folder once.
 pub fn running_elsewhere<'a>(store: &Store, keys: impl IntoIterator<Item = &'a Key>) -> usize {
+    if let Some(remote) = store.remote() {
+        return bucket::running_elsewhere(remote, keys);
+    }
     let dir = store.dir().join(LEASES_DIR);
     let Ok(entries) = std::fs::read_dir(&dir) else { return 0 };
     let leased: std::collections::HashSet<Key> =
@@ -368,6 +248,9 @@ pub struct Swept {
 /// Remove the leases folder's debris: leases whose holder is dead, and temporary files left by
 /// a holder killed while making a lease. With `dry_run`, only count them.
 pub fn sweep(store: &Store, dry_run: bool) -> std::io::Result<Swept> {
+    if let Some(remote) = store.remote() {
+        return bucket::sweep(remote, dry_run);
+    }
     let dir = store.dir().join(LEASES_DIR);
     let mut out = Swept::default();
     let entries = match std::fs::read_dir(&dir) {

@@ -14,12 +14,17 @@
 //! segments are ordinary segments again. The rule needs no lock to hold: where locks do not reach
 //! (a `nolock` mount, an object store) the mark's lease decides, as for leases, so a bucket store
 //! keeps the same rule by rewriting the mark object every [`HEARTBEAT`] and judging it by its age.
+//!
+//! In a bucket ([`crate::cache::remote`]) a mark is the object `_runs/run-<16 hex>`, judged by the
+//! time the store last wrote it against the store's own clock ([`store_now`]): [`live_runs`] and
+//! [`sweep_runs`]; the run's side (writing it every beat) is the bucket's leases'.
 
-use super::lease::{Holder, HEARTBEAT};
+use super::lease::{is_stale, Holder, HEARTBEAT, LEASE};
 use super::lock::{is_at, try_lock};
 use super::{inspect, Liveness, Swept};
+use crate::cache::remote::{join, RemoteRef};
 use crate::cache::store::Store;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::fs::File;
 use std::io::{ErrorKind, Write};
 use std::path::{Path, PathBuf};
@@ -118,6 +123,9 @@ impl Drop for RunMark {
 
 /// The marks in `store` whose run is alive (or may be: its lease has not run out).
 pub fn live(store: &Store) -> std::io::Result<HashSet<String>> {
+    if let Some(remote) = store.remote() {
+        return live_runs(remote);
+    }
     let mut out = HashSet::new();
     visit(store, |name, liveness, _, _| {
         if liveness == Liveness::Live {
@@ -130,6 +138,9 @@ pub fn live(store: &Store) -> std::io::Result<HashSet<String>> {
 /// Remove the marks of dead runs (and a mark's temporary file a run killed while making it left).
 /// With `dry_run`, only count them.
 pub fn sweep(store: &Store, dry_run: bool) -> std::io::Result<Swept> {
+    if let Some(remote) = store.remote() {
+        return sweep_runs(remote, dry_run);
+    }
     let mut out = Swept::default();
     visit(store, |_, liveness, file, path| match liveness {
         Liveness::Live => out.live += 1,
@@ -174,6 +185,72 @@ fn visit(store: &Store, mut f: impl FnMut(&str, Liveness, Option<&File>, &Path))
         }
     }
     Ok(())
+}
+
+/// An error of the bucket, as the I/O error the marks' functions return.
+fn bucket_io(e: anyhow::Error) -> std::io::Error {
+    std::io::Error::other(format!("{e:#}"))
+}
+
+/// The store's clock now, as it dates an object written now: a probe written, looked at and removed.
+pub fn store_now(remote: &RemoteRef) -> std::io::Result<SystemTime> {
+    let nanos = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    let n = MADE.fetch_add(1, Ordering::Relaxed);
+    let name =
+        join(RUNS_DIR, &format!("{}clock.{}.{nanos}.{n}", crate::atomic::TEMP_PREFIX, std::process::id()));
+    remote.put(&name, b"").map_err(bucket_io)?;
+    let made = remote.head(&name).map_err(bucket_io)?;
+    let _ = remote.delete(&name);
+    made.map(|m| m.modified)
+        .ok_or_else(|| std::io::Error::other(format!("{}: the clock probe {name} vanished", remote.url())))
+}
+
+/// The marks in the bucket with the time the store last wrote each (temporary probes left out).
+fn marks(remote: &RemoteRef) -> std::io::Result<HashMap<String, SystemTime>> {
+    Ok(remote
+        .list(RUNS_DIR)
+        .map_err(bucket_io)?
+        .into_iter()
+        .filter_map(|o| {
+            let name = o.name.rsplit('/').next()?.to_string();
+            name.starts_with(RUN_PREFIX).then_some((name, o.modified))
+        })
+        .collect())
+}
+
+/// The marks whose run is alive (written within a lease by the store's clock).
+pub fn live_runs(remote: &RemoteRef) -> std::io::Result<HashSet<String>> {
+    let marks = marks(remote)?;
+    if marks.is_empty() {
+        return Ok(HashSet::new());
+    }
+    let now = store_now(remote)?;
+    Ok(marks.into_iter().filter(|(_, at)| !is_stale(*at, now, LEASE)).map(|(n, _)| n).collect())
+}
+
+/// Remove the marks of dead runs and probes older than a lease; with `dry_run`, count them.
+pub fn sweep_runs(remote: &RemoteRef, dry_run: bool) -> std::io::Result<Swept> {
+    let listed = remote.list(RUNS_DIR).map_err(bucket_io)?;
+    let mut out = Swept::default();
+    if listed.is_empty() {
+        return Ok(out);
+    }
+    let now = store_now(remote)?;
+    for o in listed {
+        let name = o.name.rsplit('/').next().unwrap_or_default();
+        if !(name.starts_with(RUN_PREFIX) || name.starts_with(crate::atomic::TEMP_PREFIX)) {
+            continue;
+        }
+        if is_stale(o.modified, now, LEASE) {
+            out.removed += 1;
+            if !dry_run {
+                remote.delete(&o.name).map_err(bucket_io)?;
+            }
+        } else if name.starts_with(RUN_PREFIX) {
+            out.live += 1;
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ use qsweep_engine::config::TrialConfig;
 use qsweep_engine::env::SystemKind;
 use qsweep_engine::repr::ReprKind;
 use qsweep_engine::{run_trial, Algorithm};
+use std::path::PathBuf;
 use std::time::Duration;
 
 fn key(i: u8) -> Key {

@@ -135,7 +135,7 @@ fn a_segment_in_the_previous_layout_still_reads() {
     }
     assert_eq!(again.column_by_name("cpu_seconds").unwrap().null_count(), 30);
     // Its outcomes read through the report's projected read too.
-    let store = Store { dir: path.parent().unwrap().to_path_buf(), writer: None };
+    let store = Store { dir: path.parent().unwrap().to_path_buf(), writer: None, remote: None };
     let scan =
         KeySet { segments: vec![(path.clone(), recs.iter().map(|r| r.key).collect())], ..KeySet::default() };
     let wanted: HashSet<Key> = recs.iter().map(|r| r.key).collect();
