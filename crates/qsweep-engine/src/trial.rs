@@ -93,7 +93,7 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
         ReprKind::Fuzzy => {
             let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
             if takes_dense_path(cfg) {
-                run_fuzzy(cfg, seed, env, repr, simd, true)
+                run_dense(cfg, seed, env, DenseFuzzy::new(repr), simd).0
             } else {
                 run(cfg, seed, env, repr, simd)
             }
@@ -125,19 +125,8 @@ pub fn takes_dense_path(cfg: &TrialConfig) -> bool {
     cfg.repr.kind == ReprKind::Fuzzy && dense_enabled() && dense_pays(&cfg.repr.resolution, cfg.actions)
 }
 
-/// A fuzzy trial through the dense path (`dense`, where its rule base fits) or the windowed one.
-fn run_fuzzy<E: Environment>(
-    cfg: &TrialConfig,
-    seed: u64,
-    env: E,
-    repr: Fuzzy,
-    simd: Simd,
-    dense: bool,
-) -> Outcome {
-    dense_or_windowed(cfg, seed, env, repr, simd, dense).0
-}
-
-/// [`run_fuzzy`] with the final Q parameters.
+/// A fuzzy trial's outcome and final Q parameters through the dense path (`dense`, where its rule
+/// base fits) or the windowed one.
 fn dense_or_windowed<E: Environment>(
     cfg: &TrialConfig,
     seed: u64,

@@ -184,39 +184,36 @@ impl Learner {
     pub fn update<F: Features>(&mut self, phi: &F, action: usize, delta: f64) {
         let step = self.alpha * delta;
         self.last_step = step;
-        let n = self.n_params();
-        let (q, na, rule, simd) = (&mut self.q[..n], self.n_actions, self.rule, self.simd);
         if F::DENSE {
             let v = phi.dense();
-            let weight = v.weight;
+            let n = self.n_params();
+            let (q, na, rule, simd) = (&mut self.q[..n], self.n_actions, self.rule, self.simd);
             match &mut self.traces {
                 // Adding step·0 to a rule outside the windows is exact (up to a zero's sign, which
                 // no sum sees) while the step is finite; an overflowing α·δ takes the literal list.
-                Traces::None if step.is_finite() => dense_q0_update(q, na, weight, action, step),
+                Traces::None if step.is_finite() => return dense_q0_update(q, na, v.weight, action, step),
                 Traces::Dense(t) if step.is_finite() => {
-                    t.update_every_rule(q, na, rule, weight, action, step, simd)
+                    return t.update_every_rule(q, na, rule, v.weight, action, step, simd)
                 }
-                traces => {
-                    let (n, index, weight) = v.sparse();
-                    match traces {
-                        Traces::None => q0_update_at(simd, q, na, &index[..n], &weight[..n], action, step),
-                        Traces::Dense(t) => {
-                            t.update(q, na, rule, (&index[..n], &weight[..n]), action, step, simd)
-                        }
-                        Traces::Sparse(t) => t.update(q, na, rule, (&index[..n], &weight[..n]), action, step),
-                        Traces::Chunked(t) => {
-                            t.update(q, na, rule, (&index[..n], &weight[..n]), action, step, simd)
-                        }
-                    }
-                }
+                _ => {}
             }
-            return;
+            let (count, index, weight) = v.sparse();
+            return self.update_rules(&index[..count], &weight[..count], false, action, step);
         }
         let (index, weight) = phi.rules();
+        self.update_rules(index, weight, F::ONE_HOT, action, step)
+    }
+
+    /// [`update`](Self::update) over a list of active rules and their weights (`one_hot`: one
+    /// rule of weight 1, a constant where it is inlined), with `step` = α·δ.
+    #[inline(always)]
+    fn update_rules(&mut self, index: &[u32], weight: &[f64], one_hot: bool, action: usize, step: f64) {
+        let n = self.n_params();
+        let (q, na, rule, simd) = (&mut self.q[..n], self.n_actions, self.rule, self.simd);
         match &mut self.traces {
             // Q(0): the trace of this step is extend(0, w) = w (weights are never negative).
             // A crisp row is one addition, cheaper inline than through a kernel call.
-            Traces::None if F::ONE_HOT => q[index[0] as usize * na + action] += step * weight[0],
+            Traces::None if one_hot => q[index[0] as usize * na + action] += step * weight[0],
             Traces::None => q0_update_at(simd, q, na, index, weight, action, step),
             Traces::Dense(t) => t.update(q, na, rule, (index, weight), action, step, simd),
             Traces::Sparse(t) => t.update(q, na, rule, (index, weight), action, step),

@@ -43,9 +43,9 @@ pub struct DenseFuzzy<const P: usize> {
 
 /// A state's activation in dense form: per variable its normalised memberships over every set (0
 /// outside the window) and its window, and every rule's weight.
-#[derive(Debug, Clone)]
 ///
 /// The arrays are boxed so that the trial loop's swap of φ(s) and φ(s′) moves two pointers.
+#[derive(Debug, Clone)]
 pub struct DenseActive<const P: usize> {
     mu: Box<[[f64; P]; 2]>,
     first: [u32; 2],
