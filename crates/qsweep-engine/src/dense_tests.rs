@@ -4,7 +4,7 @@
 
 use super::config::{Algorithm, Success, TraceKind, TrialConfig};
 use super::env::SystemKind;
-use super::repr::{DenseFuzzy, ReprKind};
+use super::repr::{DenseFuzzy, Fuzzy, ReprKind};
 use super::simd::Simd;
 use super::trial::run_fuzzy_with_q;
 
@@ -25,9 +25,11 @@ fn config(system: SystemKind, algorithm: Algorithm, sets: [u32; 2], actions: u32
 }
 
 /// The dense path's outcome and parameters equal the windowed path's (at the baseline level) at
-/// every level.
-fn same_bits(label: &str, c: &mut TrialConfig, seed: u64) {
-    assert!(DenseFuzzy::<4>::fits(&c.repr.resolution), "{label}: the dense path does not take it");
+/// every level; `dense`: whether the dense path takes the rule base (else both runs are windowed).
+fn same_bits(label: &str, c: &mut TrialConfig, seed: u64, dense: bool) {
+    let r = &c.repr;
+    let fits = DenseFuzzy::fits(&Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune));
+    assert_eq!(fits, dense, "{label}: whether the dense path takes it");
     c.normalize();
     c.validate().expect("valid test case");
     let (want_outcome, want_q) = run_fuzzy_with_q(c, seed, Simd::Baseline, false);
@@ -41,48 +43,50 @@ fn same_bits(label: &str, c: &mut TrialConfig, seed: u64) {
     }
 }
 
-/// Every rule base of two variables the dense path takes (up to its rule limit; one set a variable
-/// included), under Q(0) and Q(λ), on Mountain Car and Ball-Beam.
+/// Every rule base of two variables of the study's sizes and more (one set a variable included),
+/// under Q(0) and Q(λ), on Mountain Car and Ball-Beam.
 #[test]
 fn dense_fuzzy_path_gives_the_windowed_paths_bits_for_every_size() {
     let mut sizes = 0;
-    for n0 in 1..=4u32 {
-        for n1 in 1..=4u32 {
+    for n0 in 1..=12u32 {
+        for n1 in 1..=12u32 {
             sizes += 1;
             for (i, algorithm) in [Algorithm::Q0, Algorithm::QLambda].into_iter().enumerate() {
                 let system = if (n0 + n1) % 2 == 0 { SystemKind::MountainCar } else { SystemKind::BallBeam };
-                let actions = [3, 2, 5, 4, 7, 10][(n0 * n1 + i as u32) as usize % 6];
+                let actions = [3, 2, 5, 4, 7, 10, 6, 16, 9][(n0 * n1 + i as u32) as usize % 9];
                 let mut c = config(system, algorithm, [n0, n1], actions, 3_000);
                 same_bits(
                     &format!("{system} {n0}x{n1} {} {actions}a", algorithm.name()),
                     &mut c,
-                    u64::from(n0 * 11 + n1),
+                    u64::from(n0 * 13 + n1),
+                    true,
                 );
             }
         }
     }
-    assert_eq!(sizes, 16);
+    assert_eq!(sizes, 144);
 }
 
-/// The study's standard cells, long: 4², 3² and 2×4 with 3 actions, under both algorithms and both
-/// systems, 100,000 steps.
+/// The study's standard cells, long: 4², 3², 2×4, 2×5 and 9×3 with 3 actions, under both
+/// algorithms and both systems, 100,000 steps.
 #[test]
 fn dense_fuzzy_path_gives_the_windowed_paths_bits_over_long_trials() {
     for system in [SystemKind::MountainCar, SystemKind::BallBeam] {
         for algorithm in [Algorithm::Q0, Algorithm::QLambda] {
-            for sets in [[4, 4], [3, 3], [2, 4]] {
+            for sets in [[4, 4], [3, 3], [2, 4], [2, 5], [9, 3]] {
                 let mut c = config(system, algorithm, sets, 3, 100_000);
-                same_bits(&format!("{system} {sets:?} {}", algorithm.name()), &mut c, 7);
+                same_bits(&format!("{system} {sets:?} {}", algorithm.name()), &mut c, 7, true);
             }
         }
     }
 }
 
-/// The settings that reach the fallbacks and the windows' own rules: no prune (every set in the
-/// window), a tiny width (empty windows, memberships that underflow to a zero normaliser), a wide
-/// width, replacing traces with Watkins's cut, a zero cutoff, and a step size that overflows α·δ
-/// (a non-finite step: the literal per-trace pass, then infinite parameters outside the windows,
-/// whose Q(s, ·) the dense sums would make NaN).
+/// The settings that reach the fallbacks and the windows' own rules: a tiny width (empty windows),
+/// a narrow one (windows of one or two sets), replacing traces with Watkins's cut, a zero cutoff,
+/// and a step size that overflows α·δ (a non-finite step: the literal per-trace pass, then
+/// infinite parameters outside the windows, whose Q(s, ·) the grid sums would make NaN); and the
+/// rule bases the dense path leaves to the windowed one: no prune (every set in the window, and
+/// memberships that underflow to a zero normaliser) and wide sets (windows of more than four).
 #[test]
 fn dense_fuzzy_path_gives_the_windowed_paths_bits_in_every_fallback() {
     for system in [SystemKind::MountainCar, SystemKind::BallBeam] {
@@ -90,27 +94,30 @@ fn dense_fuzzy_path_gives_the_windowed_paths_bits_in_every_fallback() {
             let base = || config(system, algorithm, [4, 3], 3, 8_000);
             let mut c = base();
             c.repr.prune = 0.0;
-            same_bits("no prune", &mut c, 1);
+            same_bits("no prune", &mut c, 1, false);
             let mut c = base();
             c.repr.width = 0.02;
-            same_bits("tiny width", &mut c, 2);
+            same_bits("tiny width", &mut c, 2, true);
+            let mut c = base();
+            c.repr.width = 0.25;
+            same_bits("narrow width", &mut c, 2, true);
             let mut c = base();
             c.repr.width = 1e-4;
             c.repr.prune = 0.0;
-            same_bits("underflowing memberships", &mut c, 3);
+            same_bits("underflowing memberships", &mut c, 3, false);
             let mut c = base();
             c.repr.width = 3.0;
-            same_bits("wide sets", &mut c, 4);
+            same_bits("wide sets", &mut c, 4, false);
             let mut c = base();
             c.learner.traces = TraceKind::Replacing;
             c.learner.watkins_cut = true;
             c.learner.epsilon = 0.2;
             c.learner.trace_cutoff = 0.0;
-            same_bits("replacing, watkins, no cutoff", &mut c, 5);
+            same_bits("replacing, watkins, no cutoff", &mut c, 5, true);
             let mut c = base();
             c.learner.alpha = 1e300;
             c.learner.q_init = 1e300;
-            same_bits("overflowing step", &mut c, 6);
+            same_bits("overflowing step", &mut c, 6, true);
         }
     }
 }

@@ -105,9 +105,9 @@ impl LaneKind for Crisp {
     }
 }
 
-impl LaneKind for DenseFuzzy<4> {
-    type Repr = DenseFuzzy<4>;
-    fn run<'c, E: FromParams>(cfg: &'c TrialConfig, seed: u64) -> Option<TrialRun<'c, DenseFuzzy<4>>> {
+impl LaneKind for DenseFuzzy {
+    type Repr = DenseFuzzy;
+    fn run<'c, E: FromParams>(cfg: &'c TrialConfig, seed: u64) -> Option<TrialRun<'c, DenseFuzzy>> {
         TrialRun::dense::<E>(cfg, seed)
     }
 }
@@ -127,14 +127,14 @@ fn dense_at_level<'c, E: FromParams>(
             next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
             done: impl FnMut(usize, Outcome),
         ) {
-            lockstep::<E, DenseFuzzy<4>>(next, done)
+            lockstep::<E, DenseFuzzy>(next, done)
         }
         #[target_feature(enable = "avx512f")]
         unsafe fn avx512<'c, E: FromParams>(
             next: impl FnMut() -> Option<(usize, &'c TrialConfig, u64)>,
             done: impl FnMut(usize, Outcome),
         ) {
-            lockstep::<E, DenseFuzzy<4>>(next, done)
+            lockstep::<E, DenseFuzzy>(next, done)
         }
         match level.capped() {
             // SAFETY: capped by what the CPU has.
@@ -143,7 +143,7 @@ fn dense_at_level<'c, E: FromParams>(
             Simd::Baseline => {}
         }
     }
-    lockstep::<E, DenseFuzzy<4>>(next, done)
+    lockstep::<E, DenseFuzzy>(next, done)
 }
 
 /// One lane's trial.

@@ -380,3 +380,6 @@ pub fn ln(x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod x86;

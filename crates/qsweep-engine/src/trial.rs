@@ -4,9 +4,9 @@
 //! pure function of its inputs, on any thread.
 
 use super::actions::action_set;
-use super::config::{Success, TieBreak, TrialConfig, Truncation};
+use super::config::{LearnerConfig, Success, TieBreak, TrialConfig, Truncation};
 use super::env::{with_env, EnvParams, Environment, StartKind, State, TaskKind, Transition};
-use super::learner::Learner;
+use super::learner::{grid_row_len, Learner};
 use super::repr::{Crisp, DenseFuzzy, Encode, Fuzzy, ReprKind, Representation};
 use super::rng::TrialRng;
 use super::simd::{self, Simd};
@@ -92,8 +92,8 @@ fn with_repr<E: Environment>(cfg: &TrialConfig, seed: u64, env: E, simd: Simd) -
         }
         ReprKind::Fuzzy => {
             let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
-            if takes_dense_path(cfg) {
-                run_dense(cfg, seed, env, DenseFuzzy::new(repr), simd).0
+            if dense_enabled() && dense_pays(&repr, cfg.actions, &cfg.learner) {
+                run_dense(cfg, seed, env, DenseFuzzy::new(repr, grid_row_len(cfg.actions as usize)), simd).0
             } else {
                 run(cfg, seed, env, repr, simd)
             }
@@ -111,18 +111,31 @@ pub fn dense_enabled() -> bool {
     })
 }
 
-/// Whether a fuzzy rule base of `sets` per variable takes the dense path ([`DenseFuzzy`]): two
-/// variables of at most four sets each, where it measured fewer instructions a step than the
-/// windowed activation under both algorithms; with more sets (eight lanes a variable) it measured
-/// more (docs/speed.md); and at most 16 actions (its Q(s, ·) kernels are unrolled up to that many).
-/// Either path gives the same bits.
-fn dense_pays(sets: &[u32], actions: u32) -> bool {
-    actions <= 16 && DenseFuzzy::<4>::fits(sets)
+/// Whether a fuzzy rule base takes the dense path ([`DenseFuzzy`]) under `learner` with
+/// `actions`: two variables whose prune windows hold at most four sets (the default width and
+/// prune, whatever the number of sets), at most 16 actions (its Q(s, ·) kernels are unrolled up to
+/// that many), and with eligibility traces a table of at most [`DENSE_SWEEP_MAX_PARAMS`]
+/// parameters. That is where it measured less time a step than the windowed path (docs/speed.md);
+/// either path gives the same bits.
+fn dense_pays(fuzzy: &Fuzzy, actions: u32, learner: &LearnerConfig) -> bool {
+    let traces = learner.gamma * learner.lambda != 0.0;
+    let params = fuzzy.n_features() * grid_row_len(actions as usize);
+    actions <= 16 && DenseFuzzy::fits(fuzzy) && (!traces || params <= DENSE_SWEEP_MAX_PARAMS)
 }
+
+/// The most parameters (rules × [`grid_row_len`]) of a dense trial with eligibility traces, all
+/// of which each step sweeps: past it (Mountain Car Q(λ) 9² and 10² with three actions, four
+/// values a row) the windowed path, which sweeps only where traces live, measured as fast or
+/// faster.
+const DENSE_SWEEP_MAX_PARAMS: usize = 256;
 
 /// Whether trial `cfg` takes the dense fuzzy path ([`DenseFuzzy`]) when it runs.
 pub fn takes_dense_path(cfg: &TrialConfig) -> bool {
-    cfg.repr.kind == ReprKind::Fuzzy && dense_enabled() && dense_pays(&cfg.repr.resolution, cfg.actions)
+    let r = &cfg.repr;
+    r.kind == ReprKind::Fuzzy
+        && dense_enabled()
+        && r.resolution.len() == 2
+        && dense_pays(&Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune), cfg.actions, &cfg.learner)
 }
 
 /// A fuzzy trial's outcome and final Q parameters through the dense path (`dense`, where its rule
@@ -135,8 +148,8 @@ fn dense_or_windowed<E: Environment>(
     simd: Simd,
     dense: bool,
 ) -> (Outcome, Learner) {
-    if dense && dense_pays(&cfg.repr.resolution, cfg.actions) {
-        run_dense(cfg, seed, env, DenseFuzzy::<4>::new(repr), simd)
+    if dense && dense_pays(&repr, cfg.actions, &cfg.learner) {
+        run_dense(cfg, seed, env, DenseFuzzy::new(repr, grid_row_len(cfg.actions as usize)), simd)
     } else {
         let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
             .with_simd(simd);
@@ -148,7 +161,7 @@ fn run_dense<E: Environment>(
     cfg: &TrialConfig,
     seed: u64,
     env: E,
-    repr: DenseFuzzy<4>,
+    repr: DenseFuzzy,
     simd: Simd,
 ) -> (Outcome, Learner) {
     episodes_at(simd, env, TrialRun::dense_with::<E>(cfg, seed, repr, simd))
@@ -193,7 +206,9 @@ pub fn run_fuzzy_with_q(cfg: &TrialConfig, seed: u64, simd: Simd, dense: bool) -
         assert_eq!(r.kind, ReprKind::Fuzzy);
         let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
         let (o, learner) = dense_or_windowed(cfg, seed, env, repr, simd.capped(), dense);
-        (o, learner.params().to_vec())
+        // Each rule's actions, without a grid learner's values past them.
+        let q = learner.params().chunks(learner.row_len()).flat_map(|r| &r[..cfg.actions as usize]);
+        (o, q.copied().collect())
     }
     with_env!(&cfg.env, |env: E| go(cfg, seed, env, simd, dense))
 }
@@ -282,7 +297,8 @@ pub(crate) struct TrialRun<'c, R: Encode> {
     /// φ(s_t), and scratch for φ(s_{t+1}).
     phi: R::Active,
     phi_next: R::Active,
-    /// Q(s_t, ·), and scratch for Q(s_{t+1}, ·).
+    /// Q(s_t, ·), and scratch for Q(s_{t+1}, ·) (each with room for the learner's whole vectors,
+    /// [`Learner::q_out_len`]; the values past the actions are scratch).
     qs: Vec<f64>,
     qs_next: Vec<f64>,
     cap: u64,
@@ -309,7 +325,7 @@ impl<'c> TrialRun<'c, Crisp> {
     }
 }
 
-impl<'c> TrialRun<'c, DenseFuzzy<4>> {
+impl<'c> TrialRun<'c, DenseFuzzy> {
     /// The fuzzy trial `cfg` with `seed` on system `E` through the dense path, if it takes it
     /// ([`takes_dense_path`]), with its kernels at the process's vector level.
     pub(crate) fn dense<E: Environment>(cfg: &'c TrialConfig, seed: u64) -> Option<Self> {
@@ -318,11 +334,18 @@ impl<'c> TrialRun<'c, DenseFuzzy<4>> {
         }
         let (r, simd) = (&cfg.repr, simd::level());
         let repr = Fuzzy::new(&r.resolution, &r.ranges, r.width, r.prune).with_simd(simd);
-        Some(Self::dense_with::<E>(cfg, seed, DenseFuzzy::new(repr), simd))
+        Some(Self::dense_with::<E>(
+            cfg,
+            seed,
+            DenseFuzzy::new(repr, grid_row_len(cfg.actions as usize)),
+            simd,
+        ))
     }
 
-    fn dense_with<E: Environment>(cfg: &'c TrialConfig, seed: u64, repr: DenseFuzzy<4>, simd: Simd) -> Self {
-        let learner = Learner::new(repr.n_features(), cfg.actions as usize, repr.max_active(), &cfg.learner)
+    fn dense_with<E: Environment>(cfg: &'c TrialConfig, seed: u64, repr: DenseFuzzy, simd: Simd) -> Self {
+        // Rows of whole vectors: the actions, then values no action reads (`grid_row_len`).
+        let row = grid_row_len(cfg.actions as usize);
+        let learner = Learner::new(repr.n_features(), row, repr.max_active(), &cfg.learner)
             .with_simd(simd)
             .with_dense_traces();
         Self::new::<E>(cfg, seed, repr, learner)
@@ -333,7 +356,7 @@ impl<'c, R: Encode> TrialRun<'c, R> {
     /// The trial `cfg` with `seed` on system `E`, before its first episode.
     pub(crate) fn new<E: Environment>(cfg: &'c TrialConfig, seed: u64, repr: R, learner: Learner) -> Self {
         let actions = action_set(cfg.env.action_max(), cfg.actions);
-        let na = actions.len();
+        let out = learner.q_out_len();
         let window = match cfg.limits.success {
             Success::Solved { window, mean_length, .. } => {
                 Some(SolvedWindow::new(window, mean_length, E::TASK))
@@ -350,8 +373,8 @@ impl<'c, R: Encode> TrialRun<'c, R> {
             rng: TrialRng::new(seed),
             phi: R::Active::default(),
             phi_next: R::Active::default(),
-            qs: vec![0.0; na],
-            qs_next: vec![0.0; na],
+            qs: vec![0.0; out],
+            qs_next: vec![0.0; out],
             cap: cfg.limits.episode_cap(),
             lengths: Vec::new(),
             total_steps: 0,
@@ -386,7 +409,7 @@ impl<'c, R: Encode> TrialRun<'c, R> {
     #[inline(always)]
     pub(crate) fn choose(&mut self) -> f64 {
         let l = &self.cfg.learner;
-        let (a, greedy) = select(&self.qs, l.epsilon, l.tie_break, &mut self.rng);
+        let (a, greedy) = select(&self.qs[..self.actions.len()], l.epsilon, l.tie_break, &mut self.rng);
         if l.watkins_cut && !greedy {
             self.learner.clear_traces();
         }
@@ -408,7 +431,7 @@ impl<'c, R: Encode> TrialRun<'c, R> {
         } else {
             self.repr.encode(s, &mut self.phi_next);
             self.learner.q_values(&self.phi_next, &mut self.qs_next);
-            t.reward + l.gamma * greatest(&self.qs_next)
+            t.reward + l.gamma * greatest(&self.qs_next[..self.actions.len()])
         };
         let delta = target - self.qs[a];
         if !delta.is_finite() || !s[..E::DIM].iter().all(|v| v.is_finite()) {

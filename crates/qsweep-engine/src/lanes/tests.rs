@@ -160,7 +160,7 @@ fn dense_fuzzy_trials_in_lockstep_are_the_trials_alone() {
                 c.limits.max_episodes = 6;
                 c.limits.max_total_steps = 4_000 + 1_000 * i as u64;
                 match (2 * i + j) % 5 {
-                    1 => c.repr.prune = 0.0,
+                    1 => c.repr.width = 0.25,
                     2 => c.repr.width = 0.02,
                     3 => (c.learner.watkins_cut, c.learner.traces) = (true, TraceKind::Replacing),
                     4 if i == 2 => (c.learner.alpha, c.learner.q_init) = (1e300, 1e300),

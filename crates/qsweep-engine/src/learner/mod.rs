@@ -25,13 +25,17 @@
 //! Every operation is a fixed sequence of IEEE-754 additions and multiplications, so the results
 //! are the same on every machine.
 
+#[cfg(target_arch = "x86_64")]
+mod grid_x86;
 mod sums;
 mod traces;
 
 use super::config::LearnerConfig;
 use super::repr::Features;
 use super::simd::{dispatch, Simd};
-use sums::{dense_q_values_by_count, q_values_at, MAX_UNROLLED_ACTIONS};
+use crate::repr::{GridView, GRID};
+pub use sums::grid_row_len;
+use sums::{grid_q_values_by_count, q_values_at, MAX_UNROLLED_ACTIONS};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
 
 /// At the baseline vector level, the most parameters a dense trace sweep covers: larger tables
@@ -43,9 +47,10 @@ pub const DENSE_MAX_PARAMS: usize = 4096;
 /// step extends the traces of one action only, so the rule counts parameters, not features.
 pub const DENSE_TRACE_RATIO: usize = 10;
 
-/// Values past the end of the Q table, so that the dense Q(s, ·) kernels read every rule's row
-/// as `W` ≥ actions lanes (the lanes past the row's own are never read back).
-const Q_PAD: usize = MAX_UNROLLED_ACTIONS;
+/// Values past the end of the Q table, so that the grid kernels can read and update any slot
+/// (up to [`GRID`] − 1 rules past the last) and read every rule's row as a whole vector (the
+/// lanes past the row's own are never read back, and the slots past the last rule weigh 0).
+const Q_PAD: usize = (GRID - 1) * MAX_UNROLLED_ACTIONS + MAX_UNROLLED_ACTIONS;
 
 /// Q parameters and eligibility traces of one trial.
 #[derive(Debug, Clone)]
@@ -95,7 +100,7 @@ impl Traces {
             Self::Sparse(SparseTraces::new(n))
         } else if simd == Simd::Baseline {
             if n <= DENSE_MAX_PARAMS && n <= DENSE_TRACE_RATIO * max_active {
-                Self::Dense(DenseTraces::new(n))
+                Self::Dense(DenseTraces::padded(n, Q_PAD))
             } else {
                 Self::Sparse(SparseTraces::new(n))
             }
@@ -130,21 +135,33 @@ impl Learner {
     }
 
     /// The same learner with one trace per parameter swept in full every step, whatever the
-    /// vector level (the layouts give the same bits): the layout of the dense fuzzy path, whose
-    /// activation extends every rule's trace. Only before the first update.
+    /// vector level (the layouts give the same bits): for a small table on the grid path, whose
+    /// traces it extends slot by slot (padded as the table is). Only before the first update.
     pub fn with_dense_traces(mut self) -> Self {
         if self.rule.decay != 0.0 {
-            self.traces = Traces::Dense(DenseTraces::new(self.n_params()));
+            self.traces = Traces::Dense(DenseTraces::padded(self.n_params(), Q_PAD));
         }
         self
+    }
+
+    /// Values a rule's row holds (its actions', then for a grid learner values that no action
+    /// reads, [`grid_row_len`]).
+    pub fn row_len(&self) -> usize {
+        self.n_actions
+    }
+
+    /// How many values a Q(s, ·) buffer for this learner holds: at least one per action, and
+    /// room for the grid kernels' whole vectors (the values past the actions are scratch).
+    pub fn q_out_len(&self) -> usize {
+        sums::grid_out_len(self.n_actions)
     }
 
     /// Q(s, ·) for the activations of s, eq. (18), written into `out` (one value per action).
     #[inline(always)]
     pub fn q_values<F: Features>(&self, phi: &F, out: &mut [f64]) {
-        if F::DENSE {
-            // Not dispatched: a dense trial's whole loop is compiled for its level (trial.rs).
-            return dense_q_values_by_count(&self.q, self.n_actions, phi.dense(), out);
+        if F::GRID {
+            // Not dispatched: a grid trial's whole loop is compiled for its level (trial.rs).
+            return grid_q_values_by_count(&self.q, self.n_actions, phi.grid(), out, self.simd);
         }
         let (index, weight) = phi.rules();
         if F::ONE_HOT {
@@ -184,20 +201,23 @@ impl Learner {
     pub fn update<F: Features>(&mut self, phi: &F, action: usize, delta: f64) {
         let step = self.alpha * delta;
         self.last_step = step;
-        if F::DENSE {
-            let v = phi.dense();
+        if F::GRID {
+            let v = phi.grid();
             let n = self.n_params();
-            let (q, na, rule, simd) = (&mut self.q[..n], self.n_actions, self.rule, self.simd);
+            // The slots past the table's last rule write into its padding.
+            let (q, rule, na) = (&mut self.q[..], self.rule, self.n_actions);
+            // The AVX2 row updates where rows are whole vectors (`simd` is capped by the CPU).
+            let rows = cfg!(target_arch = "x86_64") && self.simd != Simd::Baseline && na % 4 == 0;
             match &mut self.traces {
-                // Adding step·0 to a rule outside the windows is exact (up to a zero's sign, which
+                // Adding step·0 to a slot outside the windows is exact (up to a zero's sign, which
                 // no sum sees) while the step is finite; an overflowing α·δ takes the literal list.
-                Traces::None if step.is_finite() => return dense_q0_update(q, na, v.weight, action, step),
+                Traces::None if step.is_finite() => return grid_q0_update(q, v, action, step, rows),
                 Traces::Dense(t) if step.is_finite() => {
-                    return t.update_every_rule(q, na, rule, v.weight, action, step, simd)
+                    return t.update_grid(&mut q[..n], rule, v, action, step, rows);
                 }
                 _ => {}
             }
-            let (count, index, weight) = v.sparse();
+            let (count, index, weight) = v.sparse(self.n_actions);
             return self.update_rules(&index[..count], &weight[..count], false, action, step);
         }
         let (index, weight) = phi.rules();
@@ -298,13 +318,27 @@ fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], a
     unrolled!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
 }
 
-/// The Q(0) update over every rule of a dense activation: q[r·na + action] += step·wᵣ (the rules
-/// outside the windows weigh 0).
+/// The Q(0) update over a window grid's slots: q[r·na + action] += step·w (the slots outside the
+/// windows weigh 0; `q` is the padded table).
 #[inline(always)]
-fn dense_q0_update(q: &mut [f64], na: usize, weight: &[f64], action: usize, step: f64) {
-    // Indexed, not `chunks_exact_mut(na)`, whose count is a division.
-    for (r, &w) in weight.iter().enumerate() {
-        q[r * na + action] += step * w;
+fn grid_q0_update(q: &mut [f64], v: GridView<'_>, action: usize, step: f64, rows: bool) {
+    // Checked once: every slot's row starts at most at the last one's.
+    assert!(
+        v.at[GRID - 1][GRID - 1] as usize + action / 4 * 4 + 4 <= q.len(),
+        "grid slots past the padded table"
+    );
+    #[cfg(target_arch = "x86_64")]
+    if rows {
+        // SAFETY: AVX2 (the caller's `rows`), and the bound checked above.
+        return unsafe { grid_x86::q0_update(q, v, action, step) };
+    }
+    let _ = rows;
+    // The slot rows past variable 0's window weigh 0: skipped.
+    for i0 in 0..(v.len[0] as usize).min(GRID) {
+        for i1 in 0..GRID {
+            // SAFETY: checked above.
+            *unsafe { q.get_unchecked_mut(v.at[i0][i1] as usize + action) } += step * v.weight[i0][i1];
+        }
     }
 }
 

@@ -9,6 +9,7 @@
 //! on nothing learned at step t+1, so it is done in the same pass that applies step t's update.
 
 use crate::config::{LearnerConfig, TraceKind};
+use crate::repr::{GridView, GRID};
 use crate::simd::{dispatch, Simd};
 
 /// How traces decay and grow (eqs. 7 and 20 with the cutoff), shared by every layout.
@@ -70,12 +71,21 @@ impl TraceRule {
 /// One trace per parameter (0 where none is live).
 #[derive(Debug, Clone)]
 pub(super) struct DenseTraces {
+    /// The traces, then padding that stays 0 ([`padded`](Self::padded)).
     e: Vec<f64>,
+    /// Parameters in the table.
+    n: usize,
 }
 
 impl DenseTraces {
     pub(super) fn new(n: usize) -> Self {
-        Self { e: vec![0.0; n] }
+        Self::padded(n, 0)
+    }
+
+    /// Traces for `n` parameters, then `pad` more that a grid update extends by 0
+    /// ([`update_grid`](Self::update_grid)).
+    pub(super) fn padded(n: usize, pad: usize) -> Self {
+        Self { e: vec![0.0; n + pad], n }
     }
 
     pub(super) fn clear(&mut self) {
@@ -84,7 +94,7 @@ impl DenseTraces {
 
     /// Every trace as it enters the next update.
     pub(super) fn values(&self) -> Vec<f64> {
-        self.e.clone()
+        self.e[..self.n].to_vec()
     }
 
     /// Extend the activation's traces, then sweep every parameter: q ← q + step·e and decay e.
@@ -106,36 +116,58 @@ impl DenseTraces {
         self.sweep_all(q, na, rule, index, action, step, simd);
     }
 
-    /// [`update`](Self::update) for an activation over every rule (`weight[r]` for rule r, 0
-    /// outside the windows) and a finite step: extending a trace by 0 leaves it as it is (traces
-    /// are never negative, so e + 0 and max(e, 0) are e), and the sweep is the same.
+    /// [`update`](Self::update) for a window grid and a finite step: each slot's trace extended
+    /// by its weight (a slot outside the windows by 0, which leaves a trace as it is: traces are
+    /// never negative, so e + 0 and max(e, 0) are e; the slots past the last rule extend the
+    /// padding), then the same sweep of the table's `q.len()` parameters. `rows`: with AVX2 row
+    /// vectors (rows of whole vectors).
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)] // update's signature
-    pub(super) fn update_every_rule(
+    pub(super) fn update_grid(
         &mut self,
         q: &mut [f64],
-        na: usize,
         rule: TraceRule,
-        weight: &[f64],
+        v: GridView<'_>,
         action: usize,
         step: f64,
-        simd: Simd,
+        rows: bool,
     ) {
         debug_assert!(step.is_finite());
-        // The rule's kind chosen once, not per trace; indexed rows (no division for a count).
+        // The slot rows past variable 0's window weigh 0: skipped. Checked once: every slot's
+        // row starts at most at the last one's.
         let e = &mut self.e[..];
+        assert!(
+            v.at[GRID - 1][GRID - 1] as usize + action / 4 * 4 + 4 <= e.len(),
+            "grid slots past the padded traces"
+        );
+        #[cfg(target_arch = "x86_64")]
+        if rows {
+            // SAFETY: AVX2 (the caller's `rows`), and the bound checked above.
+            unsafe { super::grid_x86::extend_traces(e, v, action, rule.replacing) };
+            let n = q.len();
+            return sweep(q, &mut self.e[..n], rule, step);
+        }
+        let _ = rows;
+        let rows = (v.len[0] as usize).min(GRID);
+        // The rule's kind chosen once, not per trace.
         if rule.replacing {
-            for (r, &w) in weight.iter().enumerate() {
-                e[r * na + action] = e[r * na + action].max(w);
+            for i0 in 0..rows {
+                for i1 in 0..GRID {
+                    // SAFETY: checked above.
+                    let t = unsafe { e.get_unchecked_mut(v.at[i0][i1] as usize + action) };
+                    *t = t.max(v.weight[i0][i1]);
+                }
             }
         } else {
-            for (r, &w) in weight.iter().enumerate() {
-                e[r * na + action] += w;
+            for i0 in 0..rows {
+                for i1 in 0..GRID {
+                    // SAFETY: checked above.
+                    *unsafe { e.get_unchecked_mut(v.at[i0][i1] as usize + action) } += v.weight[i0][i1];
+                }
             }
         }
-        // Not dispatched: a dense trial's whole loop is compiled for its level (trial.rs).
-        let _ = simd;
-        sweep(q, &mut self.e, rule, step);
+        // Not dispatched: a grid trial's whole loop is compiled for its level (trial.rs).
+        let n = q.len();
+        sweep(q, &mut self.e[..n], rule, step);
     }
 
     /// The pass of [`update`](Self::update) after the extension of `index`'s traces for `action`.

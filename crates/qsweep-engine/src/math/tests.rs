@@ -269,3 +269,43 @@ fn exp_lanes_gives_the_bits_of_exp_at_every_level() {
         }
     }
 }
+
+/// The AVX2 exp of four lanes is exp, bit for bit, wherever it applies (every lane within
+/// ±EXP_LANE_BOUND, its edges included), and it applies exactly there.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn avx2_exp_of_four_lanes_gives_the_bits_of_exp() {
+    use std::arch::x86_64::{_mm256_loadu_pd, _mm256_storeu_pd};
+    if crate::simd::Simd::Avx2.capped() == crate::simd::Simd::Baseline {
+        return;
+    }
+    let mut inputs: Vec<f64> = (0..40_000).map(|i| -EXP_LANE_BOUND + f64::from(i) * 0.0350019).collect();
+    inputs.extend((0..4000).map(|i| -f64::from(i) * 1e-3 / 3.0));
+    inputs.extend([0.0, -0.0, 1e-300, -1e-300, EXP_LANE_BOUND, -EXP_LANE_BOUND, -3.7e-5, 2.5e-9]);
+    let special = [f64::NAN, f64::INFINITY, 709.9, -708.5, 700.000001, -700.000001];
+    let (mut applied, mut refused) = (0, 0);
+    for (c, chunk) in inputs.chunks_exact(4).enumerate() {
+        let mut lanes: [f64; 4] = chunk.try_into().unwrap();
+        if c % 11 == 0 {
+            lanes[c % 4] = special[c / 11 % special.len()];
+        }
+        let within = lanes.iter().all(|v| (-EXP_LANE_BOUND..=EXP_LANE_BOUND).contains(v));
+        // SAFETY: the CPU has AVX2 (checked above); the lanes are four values.
+        let (applies, got) = unsafe {
+            let x = _mm256_loadu_pd(lanes.as_ptr());
+            let mut got = [0.0; 4];
+            _mm256_storeu_pd(got.as_mut_ptr(), super::x86::exp4(x));
+            (super::x86::exp4_applies(x), got)
+        };
+        assert_eq!(applies, within, "{lanes:?}");
+        if !applies {
+            refused += 1;
+            continue;
+        }
+        applied += 1;
+        for (g, &x) in got.iter().zip(&lanes) {
+            assert_eq!(g.to_bits(), exp(x).to_bits(), "exp({x:e}): {g:e} vs {:e}", exp(x));
+        }
+    }
+    assert!(applied > 10_000 && refused > 100, "{applied} applied, {refused} refused");
+}

@@ -109,97 +109,41 @@ pub(crate) fn strides(counts: &[u32]) -> Vec<u32> {
     s
 }
 
-/// A two-variable rule base's activation over every rule, in rule order (`k0 · n1 + k1`): the
-/// windows' rules weigh what the sparse list gives them, every other rule exactly 0. The sparse
-/// list is the window's rules in the same order (variable 0's window outer), so the learner can
-/// rebuild it ([`DenseView::sparse`]) for the rare cases that need the literal list.
+/// Slots per variable of a [`GridView`]: the most sets a two-variable rule base's prune window
+/// may hold to take the grid form (`DenseFuzzy::fits`).
+pub const GRID: usize = 4;
+
+/// A two-variable rule base's activation as a fixed grid of [`GRID`] × [`GRID`] slots over its
+/// windows: slot (i0, i1) is rule (first₀ + i0, first₁ + i1), whose row starts at `at[i0][i1]`, and
+/// weighs what the sparse list gives that rule where both lie inside their windows, exactly 0
+/// elsewhere (a slot past a window may name any rule, up to [`GRID`] − 1 past the table's last:
+/// the learner's table is padded for it). The sparse list is the windows' slots in the same order
+/// (variable 0's window outer), so the learner can rebuild it ([`GridView::sparse`]) for the rare
+/// cases that need the literal list.
 #[derive(Debug, Clone, Copy)]
-pub struct DenseView<'a> {
-    /// One weight per rule (`n0 · n1` of them).
-    pub weight: &'a [f64],
-    /// Sets of the first variable (the rows).
-    pub n0: u32,
-    /// Sets of the last variable (the row length).
-    pub n1: u32,
-    /// Each variable's window: its first set and its length.
-    pub first: [u32; 2],
-    /// See `first`.
+pub struct GridView<'a> {
+    /// Each slot's weight, μ₀[i0]·μ₁[i1].
+    pub weight: &'a [[f64; GRID]; GRID],
+    /// Where each slot's row starts in the learner's table: its rule, (first₀ + i0)·n₁ + first₁ +
+    /// i1, times the actions, with first₀ + i0 clamped to the last set of variable 0 (past its
+    /// window, where the slots weigh 0). The last slot's is the greatest.
+    pub at: &'a [[u32; GRID]; GRID],
+    /// Each variable's window length.
     pub len: [u32; 2],
-    /// The rules in the order Q(s, ·)'s two partial sums take them (for its window's length).
-    pub order: &'a PairOrder,
+    /// All ones when the last variable's window is odd: Q(s, ·)'s two interleaved partial sums
+    /// then trade places from one slot row to the next.
+    pub swap: u64,
 }
 
-/// The rules of a two-variable rule base in the order that Q(s, ·)'s two interleaved partial sums
-/// take them, for one parity of the last variable's window length: rule (k0, k1) sits at position
-/// j = (k0 − first₀)·len₁ + (k1 − first₁) of the windows' list and goes to partial sum j mod 2,
-/// which is (k0·len₁ + k1) mod 2 up to a constant that only exchanges the two sums (their final
-/// addition cannot tell). Pairs first (one rule for each sum), then the longer sum's rest.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PairOrder {
-    /// Rule indices: `pairs` pairs (first sum, second sum), then the first sum's remaining rules;
-    /// each rule of the base once (a kernel relies on it to skip bounds checks).
-    rules: [u8; DENSE_MAX_RULES],
-    /// How many pairs lead `rules`.
-    pairs: u8,
-    /// How many rules `rules` holds (every rule of the base).
-    len: u8,
-}
-
-impl PairOrder {
-    /// The order for `n0 × n1` rules (at most [`DENSE_MAX_RULES`]) and a window length of the
-    /// last variable whose parity is `odd`.
-    pub fn new(n0: usize, n1: usize, odd: bool) -> Self {
-        assert!(n0 * n1 <= DENSE_MAX_RULES, "{n0}×{n1} rules");
-        let p = usize::from(odd);
-        let (mut even, mut other) = (Vec::new(), Vec::new());
-        for k0 in 0..n0 {
-            for k1 in 0..n1 {
-                let list = if (k0 * p + k1) % 2 == 0 { &mut even } else { &mut other };
-                list.push((k0 * n1 + k1) as u8);
-            }
-        }
-        // The sums' names do not matter (their addition commutes): the longer one is "first".
-        let (first, second) = if even.len() >= other.len() { (even, other) } else { (other, even) };
-        let mut rules = [0u8; DENSE_MAX_RULES];
-        let mut at = 0;
-        for (&a, &b) in first.iter().zip(&second) {
-            (rules[at], rules[at + 1]) = (a, b);
-            at += 2;
-        }
-        for &a in &first[second.len()..] {
-            rules[at] = a;
-            at += 1;
-        }
-        Self { rules, pairs: second.len() as u8, len: at as u8 }
-    }
-
-    /// The pairs (first sum's rule, second sum's rule), then the first sum's remaining rules: a
-    /// permutation of `0..self.rules()`.
-    #[inline(always)]
-    pub fn split(&self) -> (&[[u8; 2]], &[u8]) {
-        let (pairs, rest) = self.rules[..self.len as usize].split_at(2 * self.pairs as usize);
-        (pairs.as_chunks::<2>().0, rest)
-    }
-
-    /// How many rules the order holds (every rule of its base).
-    #[inline(always)]
-    pub fn rules(&self) -> usize {
-        self.len as usize
-    }
-}
-
-/// Most rules a [`DenseView`] holds.
-pub const DENSE_MAX_RULES: usize = 36;
-
-impl DenseView<'_> {
-    /// The sparse list of the windows' rules in activation order: (count, indices, weights).
-    pub fn sparse(&self) -> (usize, [u32; DENSE_MAX_RULES], [f64; DENSE_MAX_RULES]) {
-        let (mut index, mut weight) = ([0u32; DENSE_MAX_RULES], [0.0f64; DENSE_MAX_RULES]);
+impl GridView<'_> {
+    /// The sparse list of the windows' rules in activation order, for `actions` actions (the
+    /// table's row length): (count, indices, weights).
+    pub fn sparse(&self, actions: usize) -> (usize, [u32; GRID * GRID], [f64; GRID * GRID]) {
+        let (mut index, mut weight) = ([0u32; GRID * GRID], [0.0f64; GRID * GRID]);
         let mut n = 0;
-        for k0 in self.first[0]..self.first[0] + self.len[0] {
-            for k1 in self.first[1]..self.first[1] + self.len[1] {
-                let i = k0 * self.n1 + k1;
-                (index[n], weight[n]) = (i, self.weight[i as usize]);
+        for i0 in 0..self.len[0] as usize {
+            for i1 in 0..self.len[1] as usize {
+                (index[n], weight[n]) = (self.at[i0][i1] / actions as u32, self.weight[i0][i1]);
                 n += 1;
             }
         }
@@ -212,14 +156,14 @@ impl DenseView<'_> {
 pub trait Features {
     /// Whether this is always one feature of weight 1 (lets the learner skip the sum).
     const ONE_HOT: bool;
-    /// Whether this is a two-variable rule base's weight over every rule ([`DenseView`]), which
-    /// the learner reads through [`dense`](Self::dense) instead of [`rules`](Self::rules).
-    const DENSE: bool = false;
-    /// The active features and their weights, in activation order (not for a `DENSE` form).
+    /// Whether this is a two-variable rule base's window grid ([`GridView`]), which the learner
+    /// reads through [`grid`](Self::grid) instead of [`rules`](Self::rules).
+    const GRID: bool = false;
+    /// The active features and their weights, in activation order (not for a `GRID` form).
     fn rules(&self) -> (&[u32], &[f64]);
-    /// The weights of every rule (only for a `DENSE` form).
-    fn dense(&self) -> DenseView<'_> {
-        unreachable!("only a dense activation has a dense view")
+    /// The window grid (only for a `GRID` form).
+    fn grid(&self) -> GridView<'_> {
+        unreachable!("only a grid activation has a grid view")
     }
     /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate.
     fn overlap(&self, other: &Self) -> f64;

@@ -1,148 +1,142 @@
-//! The dense form of a small two-variable fuzzy rule base (Mountain Car, Ball-Beam): every set of
-//! both variables in fixed-size arrays padded to `P` lanes, the prune window a branch-free mask,
-//! so the activation has no per-step list bookkeeping and the learner's sums run over every rule.
+//! The grid form of a two-variable fuzzy rule base (Mountain Car, Ball-Beam): each variable's
+//! prune window as [`GRID`] fixed slots (the default width and prune give windows of 3–4 sets,
+//! whatever the number of sets), the memberships a vector of [`GRID`] lanes with the window a
+//! branch-free mask, every slot's weight a product, so the activation and the learner's sums run
+//! over fixed-size arrays with no per-step list bookkeeping.
 //!
 //! The same bits as [`Fuzzy`]'s windowed activation: each membership inside the window is the
 //! same exponential of the same argument ([`math::exp_lanes`] is `exp` lane by lane), the
-//! normaliser the same sum in window order (the masked sets add +0, which changes no sum: a sum
+//! normaliser the same sum in window order (the masked lanes add +0, which changes no sum: a sum
 //! of non-negative terms started at +0 is never −0), each rule's weight the same product
-//! `μ₀·μ₁`; every set outside the window weighs exactly 0. An empty window (the nearest set) and
+//! `μ₀·μ₁`; every slot outside the windows weighs exactly 0. An empty window (the nearest set) and
 //! a zero normaliser (the nearest set takes it all) are the windowed path's own rules.
 
-use super::activation::{
-    Activations, DenseView, Encode, Features, PairOrder, Representation, DENSE_MAX_RULES,
-};
+use super::activation::{Activations, Encode, Features, GridView, Representation, GRID};
 use super::fuzzy::{Fuzzy, Variable};
 use crate::math;
+use crate::simd::Simd;
 
-/// Most lanes a variable is padded to.
-const MAX_LANES: usize = 16;
+/// A variable's memberships as the grid keeps them: [`GRID`] zeros, the window's [`GRID`] lanes
+/// (0 past its length), [`GRID`] zeros; the zeros let two activations' windows be lined up by a
+/// shift of at most [`GRID`] ([`Features::overlap`]).
+type Lanes = [f64; 3 * GRID];
 
-/// The weights' length: a weight a rule, then room for a row of [`MAX_LANES`] past the last.
-const WEIGHTS: usize = DENSE_MAX_RULES + MAX_LANES;
-
-/// Memberships whose exponentials are computed together, as the windowed activation does.
-const EXP_LANES: usize = 4;
-
-/// One variable's sets padded to `P` lanes (the centres past `n` are never unmasked).
+/// One variable with its centres padded by [`GRID`] − 1 past the last (never unmasked), so that
+/// a window's [`GRID`] lanes always read centres.
 #[derive(Debug, Clone)]
-struct Padded<const P: usize> {
+struct Padded {
     var: Variable,
-    centres: [f64; P],
+    centres: Vec<f64>,
 }
 
-/// A two-variable fuzzy rule base of at most [`DENSE_MAX_RULES`] rules and `P` sets a variable,
-/// activated densely ([`DenseActive`]); built from the windowed [`Fuzzy`] it mirrors bit for bit.
+/// A two-variable fuzzy rule base whose prune windows hold at most [`GRID`] sets, activated as a
+/// grid ([`DenseActive`]); built from the windowed [`Fuzzy`] it mirrors bit for bit.
 #[derive(Debug, Clone)]
-pub struct DenseFuzzy<const P: usize> {
-    vars: [Padded<P>; 2],
-    /// Q(s, ·)'s order of the rules for an even and an odd window length of the last variable.
-    orders: [PairOrder; 2],
+pub struct DenseFuzzy {
+    vars: [Padded; 2],
+    /// The learner's actions: a rule's row starts at rule · actions.
+    actions: u32,
+    /// Where a slot's row starts past its slot row's first: i1 · actions.
+    steps: [u32; GRID],
+    /// A row of rules' length in the table: n₁ · actions.
+    stride: u32,
+    /// Where the last row of rules starts: (n₀ − 1) · stride.
+    last_row: u32,
     windowed: Fuzzy,
 }
 
-/// A state's activation in dense form: per variable its normalised memberships over every set (0
-/// outside the window) and its window, and every rule's weight.
+/// A state's activation in grid form ([`GridView`]), and each variable's memberships ([`Lanes`]).
 ///
-/// The arrays are boxed so that the trial loop's swap of φ(s) and φ(s′) moves two pointers.
-#[derive(Debug, Clone)]
-pub struct DenseActive<const P: usize> {
-    mu: Box<[[f64; P]; 2]>,
+/// Boxed so that the trial loop's swap of φ(s) and φ(s′) moves a pointer.
+#[derive(Debug, Clone, Default)]
+pub struct DenseActive(Box<Grid>);
+
+#[derive(Debug, Clone, Default)]
+struct Grid {
+    mu: [Lanes; 2],
     first: [u32; 2],
     len: [u32; 2],
-    n0: u32,
-    n1: u32,
-    /// One weight a rule, then spare lanes for a whole row's store past the last rule.
-    weight: Box<[f64; WEIGHTS]>,
-    order: PairOrder,
+    weight: [[f64; GRID]; GRID],
+    at: [[u32; GRID]; GRID],
+    swap: u64,
 }
 
-impl<const P: usize> Default for DenseActive<P> {
-    fn default() -> Self {
-        Self {
-            mu: Box::new([[0.0; P]; 2]),
-            first: [0; 2],
-            len: [0; 2],
-            n0: 1,
-            n1: 1,
-            weight: Box::new([0.0; WEIGHTS]),
-            order: PairOrder::new(1, 1, false),
-        }
-    }
-}
-
-impl<const P: usize> DenseFuzzy<P> {
-    /// Whether `sets` (per variable) fit the dense form with `P` lanes.
-    pub fn fits(sets: &[u32]) -> bool {
-        sets.len() == 2
-            && sets.iter().all(|&n| n as usize <= P)
-            && sets.iter().map(|&n| n as usize).product::<usize>() <= DENSE_MAX_RULES
+impl DenseFuzzy {
+    /// Whether `fuzzy` fits the grid form: two variables, each of one set or of a window that
+    /// never holds more than [`GRID`] sets. A window spans the sets within ±reach of a point, at
+    /// most ⌊2·reach⌋ + 1 of them; 2·reach ≤ 3.5 leaves room for the rounding of its edges.
+    pub fn fits(fuzzy: &Fuzzy) -> bool {
+        const _: () = assert!(GRID == 4);
+        fuzzy.vars.len() == 2 && fuzzy.vars.iter().all(|v| v.n == 1 || 2.0 * v.reach <= 3.5)
     }
 
-    /// The dense form of `fuzzy`, which must [`fit`](Self::fits).
-    pub fn new(fuzzy: Fuzzy) -> Self {
-        const { assert!(P.is_multiple_of(EXP_LANES) && P <= MAX_LANES) };
-        let sets: Vec<u32> = fuzzy.vars.iter().map(|v| v.n as u32).collect();
-        assert!(Self::fits(&sets), "{sets:?} does not fit {P} lanes");
+    /// The grid form of `fuzzy`, which must [`fit`](Self::fits), for a learner of `actions`.
+    pub fn new(fuzzy: Fuzzy, actions: usize) -> Self {
+        assert!(Self::fits(&fuzzy), "the rule base does not fit the grid form");
         let pad = |j: usize| {
             let var = fuzzy.vars[j].clone();
-            let mut centres = [0.0; P];
-            centres[..var.n].copy_from_slice(&var.centres);
+            let mut centres = var.centres.clone();
+            centres.resize(var.n + GRID - 1, 0.0);
             Padded { var, centres }
         };
-        let (n0, n1) = (sets[0] as usize, sets[1] as usize);
-        let orders = [PairOrder::new(n0, n1, false), PairOrder::new(n0, n1, true)];
-        Self { vars: [pad(0), pad(1)], orders, windowed: fuzzy }
+        let rows = fuzzy.n_features() + GRID;
+        assert!(rows * actions <= u32::MAX as usize, "a table of {rows} rules × {actions} actions");
+        let steps = std::array::from_fn(|i1| (i1 * actions) as u32);
+        let stride = (fuzzy.vars[1].n * actions) as u32;
+        let last_row = (fuzzy.vars[0].n as u32 - 1) * stride;
+        Self { vars: [pad(0), pad(1)], actions: actions as u32, steps, stride, last_row, windowed: fuzzy }
     }
 
-    /// Variable `j`'s normalised memberships over all `P` lanes at `value` (0 outside its window),
-    /// and its window (first set, length), as [`Fuzzy`]'s `memberships` gives them.
+    /// Variable `j`'s normalised memberships at `value` as [`Lanes`], and its window (first set,
+    /// length), as [`Fuzzy`]'s `memberships` gives them.
     #[inline(always)]
-    fn memberships(&self, j: usize, value: f64, mu: &mut [f64; P]) -> (usize, usize) {
+    fn memberships(&self, j: usize, value: f64, out: &mut Lanes) -> (usize, usize) {
         let Padded { var: v, centres } = &self.vars[j];
+        *out = [0.0; 3 * GRID];
         if v.n == 1 {
-            *mu = [0.0; P];
-            mu[0] = 1.0;
+            out[GRID] = 1.0;
             return (0, 1);
         }
+        #[cfg(target_arch = "x86_64")]
+        if self.windowed.simd != Simd::Baseline {
+            // SAFETY: the level is capped by what the CPU has (AVX-512 includes AVX2), and the
+            // centres are padded.
+            return unsafe { super::dense_x86::memberships(v, centres, value, out) };
+        }
         let (x, pos, first, last) = v.window(value);
-        // Set k is inside the window when k − first (wrapping) is at most its span: one
-        // comparison a lane, as a mask of all ones or zeros that clears a lane's bits (+0).
-        let span = (last - first) as u64;
-        let mask: [u64; P] = std::array::from_fn(|k| {
-            0u64.wrapping_sub(u64::from((k as u64).wrapping_sub(first as u64) <= span))
-        });
+        let len = last + 1 - first;
+        debug_assert!(len <= GRID, "a window of {len} sets");
+        // Lane k is inside the window when k < len: a mask of all ones or zeros a lane, which
+        // clears an outside lane's bits (+0).
+        let mask: [u64; GRID] = std::array::from_fn(|k| 0u64.wrapping_sub(u64::from(k < len)));
         let keep = |v: f64, k: usize| f64::from_bits(v.to_bits() & mask[k]);
-        let mut raw = [0.0; P];
-        for k in 0..P {
-            let d = x - centres[k];
+        let c: &[f64; GRID] = centres[first..first + GRID].try_into().expect("padded centres");
+        let mut raw = [0.0; GRID];
+        for k in 0..GRID {
+            let d = x - c[k];
             // Outside the window exp(+0) (its fast path), masked again below.
             raw[k] = keep(-(d * d) * v.inv_two_sigma_sq, k);
         }
-        for chunk in raw.as_chunks_mut::<EXP_LANES>().0 {
-            math::exp_lanes(chunk);
-        }
+        math::exp_lanes(&mut raw);
         let mut sum = 0.0;
         for (k, r) in raw.iter_mut().enumerate() {
             *r = keep(*r, k);
             sum += *r;
         }
         if sum.is_nan() || sum <= 0.0 {
-            let nearest = v.nearest(pos);
-            *mu = [0.0; P];
-            mu[nearest] = 1.0;
-            return (nearest, 1);
+            out[GRID] = 1.0;
+            return (v.nearest(pos), 1);
         }
         let inv = 1.0 / sum;
-        for k in 0..P {
+        for k in 0..GRID {
             // Masked after the product too: 0·inv is NaN when the sum is subnormal.
-            mu[k] = keep(raw[k] * inv, k);
+            out[GRID + k] = keep(raw[k] * inv, k);
         }
-        (first, last + 1 - first)
+        (first, len)
     }
 }
 
-impl<const P: usize> Representation for DenseFuzzy<P> {
+impl Representation for DenseFuzzy {
     fn n_features(&self) -> usize {
         self.windowed.n_features()
     }
@@ -156,63 +150,65 @@ impl<const P: usize> Representation for DenseFuzzy<P> {
     }
 }
 
-impl<const P: usize> Encode for DenseFuzzy<P> {
-    type Active = DenseActive<P>;
+impl Encode for DenseFuzzy {
+    type Active = DenseActive;
 
     #[inline(always)]
-    fn encode(&self, state: &[f64], out: &mut DenseActive<P>) {
-        let mu = &mut *out.mu;
-        for j in 0..2 {
-            let (first, len) = self.memberships(j, state[j], &mut mu[j]);
-            out.first[j] = first as u32;
-            out.len[j] = len as u32;
+    fn encode(&self, state: &[f64], out: &mut DenseActive) {
+        let g = &mut *out.0;
+        for (j, &value) in state[..2].iter().enumerate() {
+            let (first, len) = self.memberships(j, value, &mut g.mu[j]);
+            g.first[j] = first as u32;
+            g.len[j] = len as u32;
         }
-        let (n0, n1) = (self.vars[0].var.n, self.vars[1].var.n);
-        (out.n0, out.n1) = (n0 as u32, n1 as u32);
-        out.order = self.orders[out.len[1] as usize & 1];
-        // Each rule's weight μ₀·μ₁, as the windowed activation multiplies it: a row of `P` products
-        // at a time, each row written over the last one's lanes past n1 (products with sets that
-        // do not exist, +0 as μ₁ is there), the last row's into the weights' spare lanes.
-        let weight = &mut *out.weight;
-        for (k0, &m0) in mu[0][..n0].iter().enumerate() {
-            let row: &mut [f64; P] = (&mut weight[k0 * n1..][..P]).try_into().expect("P lanes");
-            for k1 in 0..P {
-                row[k1] = m0 * mu[1][k1];
+        // Each slot's weight μ₀·μ₁, as the windowed activation multiplies it (outside a window
+        // one factor is +0, and so is the product).
+        let (mu0, mu1) = (&g.mu[0][GRID..2 * GRID], &g.mu[1][GRID..2 * GRID]);
+        for (row, &m0) in g.weight.iter_mut().zip(mu0) {
+            for (w, &m1) in row.iter_mut().zip(mu1) {
+                *w = m0 * m1;
             }
         }
+        // Slot row i0 starts at rule (first₀ + i0)·n₁ + first₁, clamped to the last row of sets.
+        let base = g.first[0] * self.stride + g.first[1] * self.actions;
+        let last = self.last_row + g.first[1] * self.actions;
+        for i0 in 0..GRID {
+            let at = (base + i0 as u32 * self.stride).min(last);
+            g.at[i0] = std::array::from_fn(|i1| at + self.steps[i1]);
+        }
+        g.swap = 0u64.wrapping_sub(u64::from(g.len[1] & 1));
     }
 }
 
-impl<const P: usize> Features for DenseActive<P> {
+impl Features for DenseActive {
     const ONE_HOT: bool = false;
-    const DENSE: bool = true;
+    const GRID: bool = true;
 
     fn rules(&self) -> (&[u32], &[f64]) {
-        unreachable!("a dense activation is read through `dense`")
+        unreachable!("a grid activation is read through `grid`")
     }
 
     #[inline(always)]
-    fn dense(&self) -> DenseView<'_> {
-        let rules = (self.n0 * self.n1) as usize;
-        DenseView {
-            weight: &self.weight[..rules],
-            n0: self.n0,
-            n1: self.n1,
-            first: self.first,
-            len: self.len,
-            order: &self.order,
-        }
+    fn grid(&self) -> GridView<'_> {
+        let g = &*self.0;
+        GridView { weight: &g.weight, at: &g.at, len: g.len, swap: g.swap }
     }
 
-    /// The windowed activation's factorised overlap, each variable's dot over every set: the sets
-    /// outside either window add +0, which changes no sum of non-negative terms.
+    /// The windowed activation's factorised overlap, each variable's dot over the two windows'
+    /// common sets in set order: this window's lanes against the other's shifted to the same
+    /// sets, where the sets outside either window add +0, which changes no sum of non-negative
+    /// terms (windows more than [`GRID`] sets apart meet only zeros).
     #[inline(always)]
     fn overlap(&self, other: &Self) -> f64 {
+        let (a, b) = (&*self.0, &*other.0);
         let mut product = 1.0;
         for j in 0..2 {
+            let shift = (i64::from(a.first[j]) - i64::from(b.first[j])).clamp(-(GRID as i64), GRID as i64);
+            let at = (GRID as i64 + shift) as usize;
+            let theirs: &[f64; GRID] = b.mu[j][at..at + GRID].try_into().expect("in the lanes");
             let mut dot = 0.0;
-            for k in 0..P {
-                dot += self.mu[j][k] * other.mu[j][k];
+            for (mine, theirs) in a.mu[j][GRID..2 * GRID].iter().zip(theirs) {
+                dot += mine * theirs;
             }
             product *= dot;
         }

@@ -92,7 +92,7 @@ pub struct Fuzzy {
     /// Largest window of any variable.
     max_window: usize,
     /// The vector instructions the activation uses (never changes a result; [`crate::simd`]).
-    simd: Simd,
+    pub(super) simd: Simd,
 }
 
 impl Fuzzy {

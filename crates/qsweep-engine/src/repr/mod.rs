@@ -5,12 +5,12 @@
 mod activation;
 mod crisp;
 mod dense;
+#[cfg(target_arch = "x86_64")]
+mod dense_x86;
 mod fuzzy;
 
 pub(crate) use activation::strides;
-pub use activation::{
-    Activations, DenseView, Encode, Features, OneHot, PairOrder, Representation, DENSE_MAX_RULES,
-};
+pub use activation::{Activations, Encode, Features, GridView, OneHot, Representation, GRID};
 pub use crisp::{Binning, Crisp};
 pub use dense::{DenseActive, DenseFuzzy};
 pub use fuzzy::{Fuzzy, HALF_CROSSING_WIDTH, MAX_SETS};
