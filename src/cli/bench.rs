@@ -82,8 +82,8 @@ pub fn run(a: BenchArgs) -> anyhow::Result<u8> {
     Ok(qsweep_pipeline::error::exit::OK)
 }
 
-/// The table's last line: which vector kernels ran, and whether small fuzzy rule bases took the
-/// dense path.
+/// The table's last line: which vector kernels ran, and whether two-variable fuzzy rule bases took
+/// the dense path.
 fn simd_line() -> String {
     format!(
         "vector kernels: {} (QSWEEP_SIMD: off, avx2, avx512 or auto); dense fuzzy path: {} (QSWEEP_DENSE)",

@@ -109,12 +109,15 @@ fn cell_of(rec: &qsweep_pipeline::cache::TrialRecord) -> qsweep_pipeline::plan::
     }
 }
 
-/// `QSWEEP_DENSE` picks the path a small fuzzy rule base takes, never its outcome: `qsweep trial`
-/// gives the same outcome (every episode's length) with it on and off, under both algorithms and
-/// on both two-variable systems; the bench table says which path ran.
+/// `QSWEEP_DENSE` picks the path a two-variable fuzzy rule base takes, never its outcome: `qsweep
+/// trial` gives the same outcome (every episode's length) with it on and off, under both
+/// algorithms, on both two-variable systems, small and large rule bases; the bench table says
+/// which path ran.
 #[test]
 fn dense_fuzzy_path_switch_changes_no_outcome() {
-    for (env, algorithm) in [("mountain-car", "q-lambda"), ("ball-beam", "q0")] {
+    for (env, algorithm, sets) in
+        [("mountain-car", "q-lambda", "3,4"), ("ball-beam", "q0", "3,4"), ("mountain-car", "q0", "7,9")]
+    {
         let args = [
             "trial",
             "--env",
@@ -122,7 +125,7 @@ fn dense_fuzzy_path_switch_changes_no_outcome() {
             "--repr",
             "fuzzy",
             "--resolution",
-            "3,4",
+            sets,
             "--actions",
             "3",
             "--algorithm",
@@ -141,7 +144,7 @@ fn dense_fuzzy_path_switch_changes_no_outcome() {
         };
         let on = outcome("on");
         assert!(on["episodes"].as_u64().unwrap() > 1, "{on}");
-        assert_eq!(on, outcome("off"), "{env} {algorithm}");
+        assert_eq!(on, outcome("off"), "{env} {algorithm} {sets}");
     }
     let bench = ["bench", "--steps", "2000", "--repeat", "1", "--filter", "mountain-car/fuzzy/q0/2^2"];
     for (dense, says) in [("on", "dense fuzzy path: on"), ("off", "dense fuzzy path: off")] {

@@ -1,6 +1,6 @@
-//! Trials in lockstep: several crisp trials of one system, or several small fuzzy rule bases of
-//! one system on the dense path, stepped as lanes of one loop, each lane taking the next trial
-//! when its own stops.
+//! Trials in lockstep: several crisp trials of one system, or several two-variable fuzzy rule
+//! bases of one system on the dense path, stepped as lanes of one loop, each lane taking the next
+//! trial when its own stops.
 //!
 //! A crisp step is one trial's chain of dependent operations (dynamics → bin → greedy choice →
 //! update), and the core idles behind it; Mountain Car's cos(3x) alone is about half of it. With

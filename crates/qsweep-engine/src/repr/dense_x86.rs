@@ -3,8 +3,8 @@
 //! exponentials by [`math::x86::exp4`], the bits of `exp`), so the same bits. Left to the
 //! compiler, the portable code's masks and table lookups cost about three times the instructions.
 
+use super::activation::GRID;
 use super::fuzzy::Variable;
-use super::GRID;
 use crate::math;
 use std::arch::x86_64::{
     _mm256_and_pd, _mm256_castsi256_pd, _mm256_cmpgt_epi64, _mm256_loadu_pd, _mm256_mul_pd,
