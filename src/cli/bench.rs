@@ -88,7 +88,7 @@ fn simd_line() -> String {
     format!(
         "vector kernels: {} (QSWEEP_SIMD: off, avx2, avx512 or auto); dense fuzzy path: {} (QSWEEP_DENSE)",
         qsweep_engine::simd::level().name(),
-        if qsweep_engine::trial::dense_enabled() { "on" } else { "off" }
+        if qsweep_engine::dense_path::dense_enabled() { "on" } else { "off" }
     )
 }
 

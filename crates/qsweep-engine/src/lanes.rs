@@ -17,10 +17,11 @@
 //! (`tests::a_trial_in_lockstep_is_the_trial_alone`).
 
 use super::config::{Algorithm, TrialConfig};
+use super::dense_path::takes_dense_path;
 use super::env::{with_env_type, FromParams, SystemKind, Transition};
 use super::repr::{Crisp, DenseFuzzy, Encode, ReprKind};
 use super::simd::{self, Simd};
-use super::trial::{run_trial, takes_dense_path, Outcome, TrialRun};
+use super::trial::{run_trial, Outcome, TrialRun};
 
 /// Trials one lockstep loop steps at once.
 pub const LANES: usize = crate::env::LANES;

@@ -12,6 +12,7 @@
 
 pub mod actions;
 pub mod config;
+pub mod dense_path;
 pub mod env;
 pub mod feasible;
 pub mod lanes;
