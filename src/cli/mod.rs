@@ -50,10 +50,10 @@ pub enum Command {
     /// Run a pipeline's missing trials in parallel, store them in the cache, then write the report.
     ///
     /// Each thread runs crisp trials four at a time, as lanes of one loop, and so fuzzy rule bases
-    /// of two variables whose prune windows hold at most 4 sets (the default width and prune),
-    /// which take a dense step; `QSWEEP_LOCKSTEP=off` runs every trial alone, `QSWEEP_DENSE=off`
-    /// takes the windowed fuzzy step. Either way every trial's row is the same, only the speed
-    /// differs.
+    /// of two variables whose prune windows hold at most 4 sets (the default width and prune;
+    /// under Q(λ), tables of up to 256 values), which take a dense step; `QSWEEP_LOCKSTEP=off`
+    /// runs every trial alone, `QSWEEP_DENSE=off` takes the windowed fuzzy step. Either way every
+    /// trial's row is the same, only the speed differs.
     Run(run::RunArgs),
     /// Show how many of a pipeline's trials are cached and missing, without running anything.
     Status(status::StatusArgs),
