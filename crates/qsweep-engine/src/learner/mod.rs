@@ -322,22 +322,34 @@ fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], a
 /// windows weigh 0; `q` is the padded table).
 #[inline(always)]
 fn grid_q0_update(q: &mut [f64], v: GridView<'_>, action: usize, step: f64, rows: bool) {
-    // Checked once: every slot's row starts at most at the last one's.
-    assert!(
-        v.at[GRID - 1][GRID - 1] as usize + action / 4 * 4 + 4 <= q.len(),
-        "grid slots past the padded table"
-    );
     #[cfg(target_arch = "x86_64")]
     if rows {
+        check_slots(q, v, action);
         // SAFETY: AVX2 (the caller's `rows`), and the bound checked above.
         return unsafe { grid_x86::q0_update(q, v, action, step) };
     }
     let _ = rows;
-    // The slot rows past variable 0's window weigh 0: skipped.
+    each_slot(q, v, action, |q, w| *q += step * w);
+}
+
+/// That every slot's value for `action` in `x` (a padded table), and the whole vector of four
+/// holding it, lies inside `x`: checked once an update, since every slot's row starts at most at
+/// the last one's.
+#[inline(always)]
+fn check_slots(x: &[f64], v: GridView<'_>, action: usize) {
+    let last = v.at[GRID - 1][GRID - 1] as usize + action / 4 * 4 + 4;
+    assert!(last <= x.len(), "grid slots past the padded table");
+}
+
+/// `f(x[at + action], w)` for each slot of the windows' slot rows (the rows past variable 0's
+/// window weigh 0: skipped), in slot order.
+#[inline(always)]
+fn each_slot(x: &mut [f64], v: GridView<'_>, action: usize, mut f: impl FnMut(&mut f64, f64)) {
+    check_slots(x, v, action);
     for i0 in 0..(v.len[0] as usize).min(GRID) {
         for i1 in 0..GRID {
             // SAFETY: checked above.
-            *unsafe { q.get_unchecked_mut(v.at[i0][i1] as usize + action) } += step * v.weight[i0][i1];
+            f(unsafe { x.get_unchecked_mut(v.at[i0][i1] as usize + action) }, v.weight[i0][i1]);
         }
     }
 }

@@ -9,7 +9,7 @@
 //! on nothing learned at step t+1, so it is done in the same pass that applies step t's update.
 
 use crate::config::{LearnerConfig, TraceKind};
-use crate::repr::{GridView, GRID};
+use crate::repr::GridView;
 use crate::simd::{dispatch, Simd};
 
 /// How traces decay and grow (eqs. 7 and 20 with the cutoff), shared by every layout.
@@ -132,38 +132,19 @@ impl DenseTraces {
         rows: bool,
     ) {
         debug_assert!(step.is_finite());
-        // The slot rows past variable 0's window weigh 0: skipped. Checked once: every slot's
-        // row starts at most at the last one's.
         let e = &mut self.e[..];
-        assert!(
-            v.at[GRID - 1][GRID - 1] as usize + action / 4 * 4 + 4 <= e.len(),
-            "grid slots past the padded traces"
-        );
-        #[cfg(target_arch = "x86_64")]
-        if rows {
-            // SAFETY: AVX2 (the caller's `rows`), and the bound checked above.
-            unsafe { super::grid_x86::extend_traces(e, v, action, rule.replacing) };
-            let n = q.len();
-            return sweep(q, &mut self.e[..n], rule, step);
-        }
-        let _ = rows;
-        let rows = (v.len[0] as usize).min(GRID);
         // The rule's kind chosen once, not per trace.
-        if rule.replacing {
-            for i0 in 0..rows {
-                for i1 in 0..GRID {
-                    // SAFETY: checked above.
-                    let t = unsafe { e.get_unchecked_mut(v.at[i0][i1] as usize + action) };
-                    *t = t.max(v.weight[i0][i1]);
-                }
-            }
+        if cfg!(target_arch = "x86_64") && rows {
+            super::check_slots(e, v, action);
+            // SAFETY: AVX2 (the caller's `rows`), and the bound checked above.
+            #[cfg(target_arch = "x86_64")]
+            unsafe {
+                super::grid_x86::extend_traces(e, v, action, rule.replacing)
+            };
+        } else if rule.replacing {
+            super::each_slot(e, v, action, |t, w| *t = t.max(w));
         } else {
-            for i0 in 0..rows {
-                for i1 in 0..GRID {
-                    // SAFETY: checked above.
-                    *unsafe { e.get_unchecked_mut(v.at[i0][i1] as usize + action) } += v.weight[i0][i1];
-                }
-            }
+            super::each_slot(e, v, action, |t, w| *t += w);
         }
         // Not dispatched: a grid trial's whole loop is compiled for its level (trial.rs).
         let n = q.len();

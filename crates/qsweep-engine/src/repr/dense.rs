@@ -36,8 +36,6 @@ pub struct DenseFuzzy {
     vars: [Padded; 2],
     /// The learner's actions: a rule's row starts at rule · actions.
     actions: u32,
-    /// Where a slot's row starts past its slot row's first: i1 · actions.
-    steps: [u32; GRID],
     /// A row of rules' length in the table: n₁ · actions.
     stride: u32,
     /// Where the last row of rules starts: (n₀ − 1) · stride.
@@ -81,10 +79,9 @@ impl DenseFuzzy {
         };
         let rows = fuzzy.n_features() + GRID;
         assert!(rows * actions <= u32::MAX as usize, "a table of {rows} rules × {actions} actions");
-        let steps = std::array::from_fn(|i1| (i1 * actions) as u32);
         let stride = (fuzzy.vars[1].n * actions) as u32;
         let last_row = (fuzzy.vars[0].n as u32 - 1) * stride;
-        Self { vars: [pad(0), pad(1)], actions: actions as u32, steps, stride, last_row, windowed: fuzzy }
+        Self { vars: [pad(0), pad(1)], actions: actions as u32, stride, last_row, windowed: fuzzy }
     }
 
     /// Variable `j`'s normalised memberships at `value` as [`Lanes`], and its window (first set,
@@ -174,7 +171,7 @@ impl Encode for DenseFuzzy {
         let last = self.last_row + g.first[1] * self.actions;
         for i0 in 0..GRID {
             let at = (base + i0 as u32 * self.stride).min(last);
-            g.at[i0] = std::array::from_fn(|i1| at + self.steps[i1]);
+            g.at[i0] = std::array::from_fn(|i1| at + i1 as u32 * self.actions);
         }
         g.swap = 0u64.wrapping_sub(u64::from(g.len[1] & 1));
     }
