@@ -27,6 +27,7 @@
 
 #[cfg(target_arch = "x86_64")]
 mod grid_x86;
+mod slots;
 mod sums;
 mod traces;
 
@@ -34,6 +35,7 @@ use super::config::LearnerConfig;
 use super::repr::Features;
 use super::simd::{dispatch, Simd};
 use crate::repr::{GridView, GRID};
+use slots::{check_slots, each_slot};
 pub use sums::grid_row_len;
 use sums::{grid_q_values_by_count, q_values_at, MAX_UNROLLED_ACTIONS};
 use traces::{ChunkTraces, DenseTraces, SparseTraces, TraceRule};
@@ -330,28 +332,6 @@ fn grid_q0_update(q: &mut [f64], v: GridView<'_>, action: usize, step: f64, rows
     }
     let _ = rows;
     each_slot(q, v, action, |q, w| *q += step * w);
-}
-
-/// That every slot's value for `action` in `x` (a padded table), and the whole vector of four
-/// holding it, lies inside `x`: checked once an update, since every slot's row starts at most at
-/// the last one's.
-#[inline(always)]
-fn check_slots(x: &[f64], v: GridView<'_>, action: usize) {
-    let last = v.at[GRID - 1][GRID - 1] as usize + action / 4 * 4 + 4;
-    assert!(last <= x.len(), "grid slots past the padded table");
-}
-
-/// `f(x[at + action], w)` for each slot of the windows' slot rows (the rows past variable 0's
-/// window weigh 0: skipped), in slot order.
-#[inline(always)]
-fn each_slot(x: &mut [f64], v: GridView<'_>, action: usize, mut f: impl FnMut(&mut f64, f64)) {
-    check_slots(x, v, action);
-    for i0 in 0..(v.len[0] as usize).min(GRID) {
-        for i1 in 0..GRID {
-            // SAFETY: checked above.
-            f(unsafe { x.get_unchecked_mut(v.at[i0][i1] as usize + action) }, v.weight[i0][i1]);
-        }
-    }
 }
 
 #[cfg(test)]

@@ -135,16 +135,16 @@ impl DenseTraces {
         let e = &mut self.e[..];
         // The rule's kind chosen once, not per trace.
         if cfg!(target_arch = "x86_64") && rows {
-            super::check_slots(e, v, action);
+            super::slots::check_slots(e, v, action);
             // SAFETY: AVX2 (the caller's `rows`), and the bound checked above.
             #[cfg(target_arch = "x86_64")]
             unsafe {
                 super::grid_x86::extend_traces(e, v, action, rule.replacing)
             };
         } else if rule.replacing {
-            super::each_slot(e, v, action, |t, w| *t = t.max(w));
+            super::slots::each_slot(e, v, action, |t, w| *t = t.max(w));
         } else {
-            super::each_slot(e, v, action, |t, w| *t += w);
+            super::slots::each_slot(e, v, action, |t, w| *t += w);
         }
         // Not dispatched: a grid trial's whole loop is compiled for its level (trial.rs).
         let n = q.len();
