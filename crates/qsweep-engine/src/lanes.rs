@@ -169,6 +169,7 @@ fn lockstep<'c, E: FromParams, K: LaneKind>(
     let mut more = n == LANES;
     let mut actions = vec![0.0; n];
     let mut steps = vec![Transition { reward: 0.0, terminal: false }; n];
+    let (mut bootstraps, mut targets) = (vec![false; n], vec![0.0; n]);
     while lanes.iter().any(Option::is_some) {
         for (lane, a) in lanes.iter_mut().zip(&mut actions) {
             // An idle lane's system keeps stepping with its last action; nothing reads it.
@@ -177,9 +178,22 @@ fn lockstep<'c, E: FromParams, K: LaneKind>(
             }
         }
         E::step_each(&mut envs, &actions, &mut steps);
-        for ((slot, env), &t) in lanes.iter_mut().zip(&mut envs).zip(&steps) {
+        // Each part of every lane's step before the next part of any: the lanes' chains of
+        // dependent operations (the activation, Q(s′, ·), the update) lie side by side for the CPU.
+        for (((slot, env), &t), boots) in lanes.iter_mut().zip(&envs).zip(&steps).zip(&mut bootstraps) {
+            if let Some(lane) = slot {
+                *boots = lane.run.encode_next(env, t);
+            }
+        }
+        for (((slot, &t), &boots), target) in lanes.iter_mut().zip(&steps).zip(&bootstraps).zip(&mut targets)
+        {
+            if let Some(lane) = slot {
+                *target = lane.run.target_of(t, boots);
+            }
+        }
+        for (((slot, env), &t), &target) in lanes.iter_mut().zip(&mut envs).zip(&steps).zip(&targets) {
             let Some(lane) = slot else { continue };
-            let Some(o) = lane.run.learn(env, t) else { continue };
+            let Some(o) = lane.run.learn_toward(env, t, target) else { continue };
             done(lane.id, o);
             *slot = None;
             if more {

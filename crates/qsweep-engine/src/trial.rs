@@ -181,6 +181,24 @@ pub fn run_fuzzy_with_q(cfg: &TrialConfig, seed: u64, simd: Simd, dense: bool) -
 /// values (NaN never is one) the first, or a uniform pick by `tie`.
 #[inline(always)]
 fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize, bool) {
+    // The study's usual action counts with the length a constant, so that the loops unroll.
+    match q.len() {
+        2 => select_in(fixed::<2>(q), epsilon, tie, rng),
+        3 => select_in(fixed::<3>(q), epsilon, tie, rng),
+        4 => select_in(fixed::<4>(q), epsilon, tie, rng),
+        _ => select_in(q, epsilon, tie, rng),
+    }
+}
+
+/// `q` (of `N` values) as a slice whose length the compiler knows.
+#[inline(always)]
+fn fixed<const N: usize>(q: &[f64]) -> &[f64] {
+    q.first_chunk::<N>().expect("N values").as_slice()
+}
+
+/// [`select`]'s rule.
+#[inline(always)]
+fn select_in(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize, bool) {
     // Without a branch per action (which way it goes changes from step to step, and a wrong guess
     // costs more than the few actions): the greatest value, then how many equal it and the first.
     let best = greatest(q);
@@ -208,7 +226,14 @@ fn select(q: &[f64], epsilon: f64, tie: TieBreak, rng: &mut TrialRng) -> (usize,
 /// 23–25): one comparison per value, without `max`'s NaN handling.
 #[inline(always)]
 fn greatest(q: &[f64]) -> f64 {
-    q.iter().fold(f64::NEG_INFINITY, |m, &v| if v > m { v } else { m })
+    let fold = |q: &[f64]| q.iter().fold(f64::NEG_INFINITY, |m, &v| if v > m { v } else { m });
+    // As `select`: the usual action counts unrolled.
+    match q.len() {
+        2 => fold(fixed::<2>(q)),
+        3 => fold(fixed::<3>(q)),
+        4 => fold(fixed::<4>(q)),
+        _ => fold(q),
+    }
 }
 
 fn run<E: Environment, R: Encode>(cfg: &TrialConfig, seed: u64, env: E, repr: R, simd: Simd) -> Outcome {
@@ -385,18 +410,56 @@ impl<'c, R: Encode> TrialRun<'c, R> {
     /// episode's end, judge it and begin the next. Returns the outcome once the trial stops.
     #[inline(always)]
     pub(crate) fn learn<E: Environment>(&mut self, env: &mut E, t: Transition) -> Option<Outcome> {
-        let l = &self.cfg.learner;
-        let a = self.action;
+        let target = self.target(env, t);
+        self.learn_toward(env, t, target)
+    }
+
+    /// [`learn`](Self::learn)'s first half: the TD target of the step `env` just took (which
+    /// returned `t`), with φ(s_{t+1}) and Q(s_{t+1}, ·) where it needs them.
+    #[inline(always)]
+    pub(crate) fn target<E: Environment>(&mut self, env: &E, t: Transition) -> f64 {
+        let bootstraps = self.encode_next(env, t);
+        self.target_of(t, bootstraps)
+    }
+
+    /// The target's first part: counts the step and, where the target bootstraps (returned),
+    /// encodes φ(s_{t+1}). Lockstep runs each part for every lane before the next part, so that
+    /// the lanes' chains of dependent operations lie side by side for the CPU.
+    #[inline(always)]
+    pub(crate) fn encode_next<E: Environment>(&mut self, env: &E, t: Transition) -> bool {
         self.len += 1;
-        let s = env.state();
         // At the episode step limit, `terminal` truncation learns as if the task ended there.
-        let target = if t.terminal || (self.cut_is_terminal && self.len >= self.cap) {
-            t.reward
-        } else {
-            self.repr.encode(s, &mut self.phi_next);
+        let bootstraps = !(t.terminal || (self.cut_is_terminal && self.len >= self.cap));
+        if bootstraps {
+            self.repr.encode(env.state(), &mut self.phi_next);
+        }
+        bootstraps
+    }
+
+    /// The target's second part, after [`encode_next`](Self::encode_next): r, or
+    /// r + γ·max Q(s_{t+1}, ·) where it bootstraps.
+    #[inline(always)]
+    pub(crate) fn target_of(&mut self, t: Transition, bootstraps: bool) -> f64 {
+        if bootstraps {
             self.learner.q_values(&self.phi_next, &mut self.qs_next);
-            t.reward + l.gamma * greatest(&self.qs_next[..self.actions.len()])
-        };
+            t.reward + self.cfg.learner.gamma * greatest(&self.qs_next[..self.actions.len()])
+        } else {
+            t.reward
+        }
+    }
+
+    /// [`learn`](Self::learn)'s second half, toward the [`target`](Self::target) of the same
+    /// step: the update (eqs. 20–21), then the episode's end, or s_{t+1} becomes s_t with
+    /// Q(s_t, ·) as the update left it.
+    #[inline(always)]
+    pub(crate) fn learn_toward<E: Environment>(
+        &mut self,
+        env: &mut E,
+        t: Transition,
+        target: f64,
+    ) -> Option<Outcome> {
+        let a = self.action;
+        let s = env.state();
         let delta = target - self.qs[a];
         if !delta.is_finite() || !s[..E::DIM].iter().all(|v| v.is_finite()) {
             return Some(self.diverged::<E>(delta, *s));

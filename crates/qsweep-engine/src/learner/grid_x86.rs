@@ -22,7 +22,7 @@ use std::arch::x86_64::{
 unsafe fn add_slot<const N: usize, const K: usize>(
     acc: &mut [__m256d; K],
     row0: *const f64,
-    v: GridView<'_>,
+    v: &GridView,
     i0: usize,
     i1: usize,
 ) {
@@ -46,10 +46,10 @@ unsafe fn add_slot<const N: usize, const K: usize>(
 /// additions).
 ///
 /// # Safety
-/// AVX2, and `v.at[GRID − 1][GRID − 1] + 4 ≤ q.len()`.
+/// AVX2, and `v.last_at() + 4 ≤ q.len()`.
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn pair_sums<const N: usize>(q: &[f64], v: GridView<'_>, out: &mut [f64; 4]) -> bool {
+pub(super) unsafe fn pair_sums<const N: usize>(q: &[f64], v: &GridView, out: &mut [f64; 4]) -> bool {
     const { assert!(GRID == 4) };
     let q = q.as_ptr();
     let (mut x, mut y) = (_mm256_setzero_pd(), _mm256_setzero_pd());
@@ -57,7 +57,7 @@ pub(super) unsafe fn pair_sums<const N: usize>(q: &[f64], v: GridView<'_>, out: 
     // The slot rows past variable 0's window weigh 0: skipped, which shortens the sums' chains.
     for i0 in 0..(v.len[0] as usize).min(GRID) {
         // SAFETY: the caller's bound (a slot row's slots are consecutive rules).
-        let row0 = unsafe { q.add(v.at[i0][0] as usize) };
+        let row0 = unsafe { q.add(v.row[i0] as usize) };
         // SAFETY: as above.
         let term = |i1: usize| unsafe {
             _mm256_mul_pd(_mm256_broadcast_sd(&v.weight[i0][i1]), _mm256_loadu_pd(row0.add(i1 * N)))
@@ -91,21 +91,17 @@ fn nan_in<const N: usize>(s: __m256d, k: usize) -> bool {
 /// of four (five to sixteen actions), written into `out[..4·K]`; whether one of the `N` is NaN.
 ///
 /// # Safety
-/// AVX2, `out` holds `4·K` values, and `v.at[GRID − 1][GRID − 1] + 4·K ≤ q.len()`.
+/// AVX2, `out` holds `4·K` values, and `v.last_at() + 4·K ≤ q.len()`.
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn sum<const N: usize, const K: usize>(
-    q: &[f64],
-    v: GridView<'_>,
-    out: &mut [f64],
-) -> bool {
+pub(super) unsafe fn sum<const N: usize, const K: usize>(q: &[f64], v: &GridView, out: &mut [f64]) -> bool {
     debug_assert!(out.len() >= 4 * K);
     let q = q.as_ptr();
     let mut acc = [_mm256_setzero_pd(); K];
     // The slot rows past variable 0's window weigh 0: skipped, which shortens the sum's chain.
     for i0 in 0..(v.len[0] as usize).min(GRID) {
         // SAFETY: the caller's bound.
-        let row0 = unsafe { q.add(v.at[i0][0] as usize) };
+        let row0 = unsafe { q.add(v.row[i0] as usize) };
         for i1 in 0..GRID {
             // SAFETY: the caller's bound.
             unsafe { add_slot::<N, K>(&mut acc, row0, v, i0, i1) };
@@ -134,12 +130,12 @@ fn lane_mask(action: usize) -> __m256d {
 /// of it takes the value from the store (a read that spans a narrower store waits for it).
 ///
 /// # Safety
-/// AVX2, and `v.at[GRID − 1][GRID − 1] + 4·⌊action / 4⌋ + 4 ≤ x.len()`.
+/// AVX2, and `v.last_at() + 4·⌊action / 4⌋ + 4 ≤ x.len()`.
 #[inline]
 #[target_feature(enable = "avx2")]
 unsafe fn each_slot_row(
     x: &mut [f64],
-    v: GridView<'_>,
+    v: &GridView,
     action: usize,
     s: f64,
     f: impl Fn(__m256d, __m256d) -> __m256d,
@@ -152,7 +148,7 @@ unsafe fn each_slot_row(
             let w = _mm256_and_pd(_mm256_mul_pd(s, _mm256_broadcast_sd(&v.weight[i0][i1])), mask);
             // SAFETY: the caller's bound.
             unsafe {
-                let p = x.add(v.at[i0][i1] as usize + at);
+                let p = x.add(v.at(i0, i1) + at);
                 _mm256_storeu_pd(p, f(_mm256_loadu_pd(p), w));
             }
         }
@@ -167,7 +163,7 @@ unsafe fn each_slot_row(
 /// As [`each_slot_row`]'s.
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn extend_traces(e: &mut [f64], v: GridView<'_>, action: usize, replacing: bool) {
+pub(super) unsafe fn extend_traces(e: &mut [f64], v: &GridView, action: usize, replacing: bool) {
     // SAFETY: the caller's.
     unsafe {
         if replacing {
@@ -185,7 +181,7 @@ pub(super) unsafe fn extend_traces(e: &mut [f64], v: GridView<'_>, action: usize
 /// As [`each_slot_row`]'s.
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn q0_update(q: &mut [f64], v: GridView<'_>, action: usize, step: f64) {
+pub(super) unsafe fn q0_update(q: &mut [f64], v: &GridView, action: usize, step: f64) {
     // SAFETY: the caller's.
     unsafe { each_slot_row(q, v, action, step, |q, w| _mm256_add_pd(q, w)) };
 }

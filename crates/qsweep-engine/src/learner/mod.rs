@@ -323,7 +323,7 @@ fn q0_update_by_count(q: &mut [f64], na: usize, index: &[u32], weight: &[f64], a
 /// The Q(0) update over a window grid's slots: q[r·na + action] += step·w (the slots outside the
 /// windows weigh 0; `q` is the padded table).
 #[inline(always)]
-fn grid_q0_update(q: &mut [f64], v: GridView<'_>, action: usize, step: f64, rows: bool) {
+fn grid_q0_update(q: &mut [f64], v: &GridView, action: usize, step: f64, rows: bool) {
     #[cfg(target_arch = "x86_64")]
     if rows {
         check_slots(q, v, action);

@@ -35,7 +35,7 @@ pub(super) fn q_values_by_count(q: &[f64], na: usize, index: &[u32], weight: &[f
 /// one is never −0) unless q is infinite or NaN there: a NaN result is recomputed from the sparse
 /// list. `out` holds [`grid_out_len`] values; those past the actions are scratch.
 #[inline(always)]
-pub(super) fn grid_q_values_by_count(q: &[f64], na: usize, v: GridView<'_>, out: &mut [f64], simd: Simd) {
+pub(super) fn grid_q_values_by_count(q: &[f64], na: usize, v: &GridView, out: &mut [f64], simd: Simd) {
     macro_rules! unrolled {
         ($($n:literal)*) => {
             match na {
@@ -87,7 +87,7 @@ pub(super) const fn grid_out_len(na: usize) -> usize {
 
 /// [`grid_q_values_by_count`] for `N` actions; whether a value came out NaN (to be recomputed).
 #[inline(always)]
-fn grid_q_values_fixed<const N: usize>(q: &[f64], v: GridView<'_>, out: &mut [f64], simd: Simd) -> bool {
+fn grid_q_values_fixed<const N: usize>(q: &[f64], v: &GridView, out: &mut [f64], simd: Simd) -> bool {
     #[cfg(target_arch = "x86_64")]
     if simd != Simd::Baseline && N >= 3 {
         // The same sums in AVX2 vectors (`simd` is capped by what the CPU has).
@@ -134,25 +134,25 @@ fn grid_q_values_fixed<const N: usize>(q: &[f64], v: GridView<'_>, out: &mut [f6
 /// past it, which go into lanes that are never read back.
 ///
 /// # Safety
-/// `v.at[GRID − 1][GRID − 1] + W ≤ q.len()` ([`check_rows`]).
+/// `v.last_at() + W ≤ q.len()` ([`check_rows`]).
 #[inline(always)]
 unsafe fn slot<'q, const N: usize, const W: usize>(
     q: &'q [f64],
-    v: GridView<'_>,
+    v: &GridView,
     i0: usize,
     i1: usize,
 ) -> (f64, &'q [f64; W]) {
     // Read from the activation, so that the compiler sees each slot's row on its own (it knows
     // nothing of how one slot's row lies to the next's, and reads each as one whole vector).
-    let at = v.at[i0][i1] as usize;
+    let at = v.at(i0, i1);
     // SAFETY: the last slot's row is the greatest (the caller's bound).
     (v.weight[i0][i1], unsafe { &*(q.as_ptr().add(at) as *const [f64; W]) })
 }
 
 /// Checked once a sum, so that its slots read `width` values of their rows without a check each.
 #[inline(always)]
-fn check_rows(q: &[f64], v: GridView<'_>, width: usize) {
-    assert!(v.at[GRID - 1][GRID - 1] as usize + width <= q.len(), "grid rows past the padded table");
+fn check_rows(q: &[f64], v: &GridView, width: usize) {
+    assert!(v.last_at() + width <= q.len(), "grid rows past the padded table");
 }
 
 /// Q(s, ·) with two interleaved partial sums over the grid's slots, row by row: in each row the
@@ -160,7 +160,7 @@ fn check_rows(q: &[f64], v: GridView<'_>, width: usize) {
 /// sum, so the sums trade places between rows ([`GridView::swap`], a bit blend: the values' bits
 /// are moved, never computed). The two are added at the end, which cannot tell which is which.
 #[inline(always)]
-fn grid_pair_sums<const N: usize, const W: usize>(q: &[f64], v: GridView<'_>) -> [[f64; W]; 2] {
+fn grid_pair_sums<const N: usize, const W: usize>(q: &[f64], v: &GridView) -> [[f64; W]; 2] {
     const { assert!(GRID.is_multiple_of(2)) };
     check_rows(q, v, W);
     let (mut x, mut y) = ([0.0f64; W], [0.0f64; W]);
@@ -189,7 +189,7 @@ fn grid_pair_sums<const N: usize, const W: usize>(q: &[f64], v: GridView<'_>) ->
 /// `W` lanes: the sparse list's sum with a +0 (w·q = ±0) between its terms where a slot lies
 /// outside the windows.
 #[inline(always)]
-fn grid_sum<const N: usize, const W: usize>(q: &[f64], v: GridView<'_>) -> [f64; W] {
+fn grid_sum<const N: usize, const W: usize>(q: &[f64], v: &GridView) -> [f64; W] {
     check_rows(q, v, W);
     let mut acc = [0.0f64; W];
     for i0 in 0..GRID {
@@ -210,7 +210,7 @@ fn grid_sum<const N: usize, const W: usize>(q: &[f64], v: GridView<'_>) -> [f64;
 /// meets the sum its position names. Four rows rotate by 4·len₁ ≡ 0 in all, which leaves every
 /// sum in its place for the final additions.
 #[inline(always)]
-fn grid_lane_sums<const N: usize>(q: &[f64], v: GridView<'_>) -> [[f64; N]; 4] {
+fn grid_lane_sums<const N: usize>(q: &[f64], v: &GridView) -> [[f64; N]; 4] {
     const { assert!(GRID == 4) };
     check_rows(q, v, N);
     let mut acc = [[0.0f64; N]; 4];

@@ -126,7 +126,7 @@ impl DenseTraces {
         &mut self,
         q: &mut [f64],
         rule: TraceRule,
-        v: GridView<'_>,
+        v: &GridView,
         action: usize,
         step: f64,
         rows: bool,

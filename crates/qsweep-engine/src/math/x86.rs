@@ -7,20 +7,19 @@ use std::arch::x86_64::{
     __m256d, _mm256_add_epi64, _mm256_add_pd, _mm256_and_si256, _mm256_castpd_si256, _mm256_castsi256_pd,
     _mm256_cmp_pd, _mm256_i64gather_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_epi64x,
     _mm256_set1_pd, _mm256_slli_epi64, _mm256_srli_epi64, _mm256_sub_epi64, _mm256_sub_pd, _CMP_GE_OQ,
-    _CMP_LE_OQ,
 };
 
-/// Whether every lane of `x` lies within ±[`EXP_LANE_BOUND`] (NaN does not), where [`exp4`]
-/// applies.
+/// Whether every lane of `x` lies at or above −[`EXP_LANE_BOUND`] (NaN does not): where [`exp4`]
+/// applies for lanes that are never above 0, as a membership's argument −d²/(2σ²) is (one
+/// comparison, where the whole range ±[`EXP_LANE_BOUND`] takes two).
 ///
 /// # Safety
 /// AVX2.
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(crate) unsafe fn exp4_applies(x: __m256d) -> bool {
+pub(crate) unsafe fn exp4_applies_at_most_zero(x: __m256d) -> bool {
     let lo = _mm256_cmp_pd::<_CMP_GE_OQ>(x, _mm256_set1_pd(-EXP_LANE_BOUND));
-    let hi = _mm256_cmp_pd::<_CMP_LE_OQ>(x, _mm256_set1_pd(EXP_LANE_BOUND));
-    _mm256_movemask_pd(lo) & _mm256_movemask_pd(hi) == 0b1111
+    _mm256_movemask_pd(lo) == 0b1111
 }
 
 /// e^x in every lane, for lanes within ±[`EXP_LANE_BOUND`] ([`exp4_applies`]): the bits of

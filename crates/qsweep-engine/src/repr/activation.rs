@@ -114,20 +114,25 @@ pub(crate) fn strides(counts: &[u32]) -> Vec<u32> {
 pub const GRID: usize = 4;
 
 /// A two-variable rule base's activation as a fixed grid of [`GRID`] × [`GRID`] slots over its
-/// windows: slot (i0, i1) is rule (first₀ + i0, first₁ + i1), whose row starts at `at[i0][i1]`, and
-/// weighs what the sparse list gives that rule where both lie inside their windows, exactly 0
-/// elsewhere (a slot past a window may name any rule, up to [`GRID`] − 1 past the table's last:
-/// the learner's table is padded for it). The sparse list is the windows' slots in the same order
-/// (variable 0's window outer), so the learner can rebuild it ([`GridView::sparse`]) for the rare
-/// cases that need the literal list.
-#[derive(Debug, Clone, Copy)]
-pub struct GridView<'a> {
+/// windows: slot (i0, i1) is rule (first₀ + i0, first₁ + i1), whose row starts at
+/// [`at`](Self::at)`(i0, i1)`, and weighs what the sparse list gives that rule where both lie
+/// inside their windows, exactly 0 elsewhere (a slot past a window may name any rule, up to
+/// [`GRID`] − 1 past the table's last: the learner's table is padded for it). The sparse list is
+/// the windows' slots in the same order (variable 0's window outer), so the learner can rebuild it
+/// ([`GridView::sparse`]) for the rare cases that need the literal list.
+///
+/// Read by reference ([`Features::grid`]): the learner's kernels take one pointer.
+#[derive(Debug, Clone, Default)]
+pub struct GridView {
     /// Each slot's weight, μ₀[i0]·μ₁[i1].
-    pub weight: &'a [[f64; GRID]; GRID],
-    /// Where each slot's row starts in the learner's table: its rule, (first₀ + i0)·n₁ + first₁ +
-    /// i1, times the actions, with first₀ + i0 clamped to the last set of variable 0 (past its
-    /// window, where the slots weigh 0). The last slot's is the greatest.
-    pub at: &'a [[u32; GRID]; GRID],
+    pub weight: [[f64; GRID]; GRID],
+    /// Where slot row i0's first slot's row starts in the learner's table: rule
+    /// (first₀ + i0)·n₁ + first₁ times the row length, with first₀ + i0 clamped to the last set of
+    /// variable 0 (past its window, where the slots weigh 0). The last is the greatest.
+    pub row: [u32; GRID],
+    /// A rule's row length in the learner's table: slot (i0, i1)'s row starts `i1` rows past
+    /// `row[i0]`.
+    pub rule_len: u32,
     /// Each variable's window length.
     pub len: [u32; 2],
     /// All ones when the last variable's window is odd: Q(s, ·)'s two interleaved partial sums
@@ -135,7 +140,19 @@ pub struct GridView<'a> {
     pub swap: u64,
 }
 
-impl GridView<'_> {
+impl GridView {
+    /// Where slot (i0, i1)'s row starts in the learner's table.
+    #[inline(always)]
+    pub fn at(&self, i0: usize, i1: usize) -> usize {
+        self.row[i0] as usize + i1 * self.rule_len as usize
+    }
+
+    /// Where the last slot's row starts: the greatest of any slot's.
+    #[inline(always)]
+    pub fn last_at(&self) -> usize {
+        self.at(GRID - 1, GRID - 1)
+    }
+
     /// The sparse list of the windows' rules in activation order, for `actions` actions (the
     /// table's row length): (count, indices, weights).
     pub fn sparse(&self, actions: usize) -> (usize, [u32; GRID * GRID], [f64; GRID * GRID]) {
@@ -143,7 +160,7 @@ impl GridView<'_> {
         let mut n = 0;
         for i0 in 0..self.len[0] as usize {
             for i1 in 0..self.len[1] as usize {
-                (index[n], weight[n]) = (self.at[i0][i1] / actions as u32, self.weight[i0][i1]);
+                (index[n], weight[n]) = ((self.at(i0, i1) / actions) as u32, self.weight[i0][i1]);
                 n += 1;
             }
         }
@@ -162,7 +179,7 @@ pub trait Features {
     /// The active features and their weights, in activation order (not for a `GRID` form).
     fn rules(&self) -> (&[u32], &[f64]);
     /// The window grid (only for a `GRID` form).
-    fn grid(&self) -> GridView<'_> {
+    fn grid(&self) -> &GridView {
         unreachable!("only a grid activation has a grid view")
     }
     /// Σᵢ wᵢ(self)·wᵢ(other) over the features both activate.

@@ -53,10 +53,7 @@ pub struct DenseActive(Box<Grid>);
 struct Grid {
     mu: [Lanes; 2],
     first: [u32; 2],
-    len: [u32; 2],
-    weight: [[f64; GRID]; GRID],
-    at: [[u32; GRID]; GRID],
-    swap: u64,
+    view: GridView,
 }
 
 impl DenseFuzzy {
@@ -84,21 +81,22 @@ impl DenseFuzzy {
         Self { vars: [pad(0), pad(1)], actions: actions as u32, stride, last_row, windowed: fuzzy }
     }
 
-    /// Variable `j`'s normalised memberships at `value` as [`Lanes`], and its window (first set,
-    /// length), as [`Fuzzy`]'s `memberships` gives them.
+    /// Variable `j`'s normalised memberships at `value` into the window's lanes of its [`Lanes`]
+    /// (whose zeros on either side stay), and its window (first set, length), as [`Fuzzy`]'s
+    /// `memberships` gives them.
     #[inline(always)]
     fn memberships(&self, j: usize, value: f64, out: &mut Lanes) -> (usize, usize) {
         let Padded { var: v, centres } = &self.vars[j];
-        *out = [0.0; 3 * GRID];
+        let mid: &mut [f64; GRID] = (&mut out[GRID..2 * GRID]).try_into().expect("the window's lanes");
         if v.n == 1 {
-            out[GRID] = 1.0;
+            *mid = [1.0, 0.0, 0.0, 0.0];
             return (0, 1);
         }
         #[cfg(target_arch = "x86_64")]
         if self.windowed.simd != Simd::Baseline {
-            // SAFETY: the level is capped by what the CPU has (AVX-512 includes AVX2), and the
-            // centres are padded.
-            return unsafe { super::dense_x86::memberships(v, centres, value, out) };
+            // SAFETY: the level is capped by what the CPU has (AVX-512 includes AVX2), the reach
+            // fits (`fits`) and the centres are padded.
+            return unsafe { super::dense_x86::memberships(v, centres, value, mid) };
         }
         let (x, pos, first, last) = v.window(value);
         let len = last + 1 - first;
@@ -121,13 +119,13 @@ impl DenseFuzzy {
             sum += *r;
         }
         if sum.is_nan() || sum <= 0.0 {
-            out[GRID] = 1.0;
+            *mid = [1.0, 0.0, 0.0, 0.0];
             return (v.nearest(pos), 1);
         }
         let inv = 1.0 / sum;
-        for k in 0..GRID {
+        for (k, m) in mid.iter_mut().enumerate() {
             // Masked after the product too: 0·inv is NaN when the sum is subnormal.
-            out[GRID + k] = keep(raw[k] * inv, k);
+            *m = keep(raw[k] * inv, k);
         }
         (first, len)
     }
@@ -156,12 +154,12 @@ impl Encode for DenseFuzzy {
         for (j, &value) in state[..2].iter().enumerate() {
             let (first, len) = self.memberships(j, value, &mut g.mu[j]);
             g.first[j] = first as u32;
-            g.len[j] = len as u32;
+            g.view.len[j] = len as u32;
         }
         // Each slot's weight μ₀·μ₁, as the windowed activation multiplies it (outside a window
         // one factor is +0, and so is the product).
         let (mu0, mu1) = (&g.mu[0][GRID..2 * GRID], &g.mu[1][GRID..2 * GRID]);
-        for (row, &m0) in g.weight.iter_mut().zip(mu0) {
+        for (row, &m0) in g.view.weight.iter_mut().zip(mu0) {
             for (w, &m1) in row.iter_mut().zip(mu1) {
                 *w = m0 * m1;
             }
@@ -169,11 +167,9 @@ impl Encode for DenseFuzzy {
         // Slot row i0 starts at rule (first₀ + i0)·n₁ + first₁, clamped to the last row of sets.
         let base = g.first[0] * self.stride + g.first[1] * self.actions;
         let last = self.last_row + g.first[1] * self.actions;
-        for i0 in 0..GRID {
-            let at = (base + i0 as u32 * self.stride).min(last);
-            g.at[i0] = std::array::from_fn(|i1| at + i1 as u32 * self.actions);
-        }
-        g.swap = 0u64.wrapping_sub(u64::from(g.len[1] & 1));
+        g.view.row = std::array::from_fn(|i0| (base + i0 as u32 * self.stride).min(last));
+        g.view.rule_len = self.actions;
+        g.view.swap = 0u64.wrapping_sub(u64::from(g.view.len[1] & 1));
     }
 }
 
@@ -186,9 +182,8 @@ impl Features for DenseActive {
     }
 
     #[inline(always)]
-    fn grid(&self) -> GridView<'_> {
-        let g = &*self.0;
-        GridView { weight: &g.weight, at: &g.at, len: g.len, swap: g.swap }
+    fn grid(&self) -> &GridView {
+        &self.0.view
     }
 
     /// The windowed activation's factorised overlap, each variable's dot over the two windows'
@@ -210,5 +205,59 @@ impl Features for DenseActive {
             product *= dot;
         }
         product
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::fuzzy::HALF_CROSSING_WIDTH;
+    use super::*;
+
+    /// Each variable's memberships and window at every vector level equal the portable code's,
+    /// bit for bit, and the windowed activation's window: across the range, at its edges, past
+    /// them, at the window edges' rounding, and at ±∞ and NaN (where a step's state stops being
+    /// finite and the trial ends, the window must still lie inside the table).
+    #[test]
+    fn memberships_and_windows_agree_at_every_level_for_any_value() {
+        let mut checked = 0;
+        for (sets, prune) in [([2, 3], 1e-3), ([4, 4], 1e-3), ([7, 10], 1e-3), ([12, 5], 1e-2), ([3, 9], 0.3)]
+        {
+            let ranges = [[-1.2, 0.6], [-0.07, 0.07]];
+            let fuzzy = |simd| Fuzzy::new(&sets, &ranges, HALF_CROSSING_WIDTH, prune).with_simd(simd);
+            if !DenseFuzzy::fits(&fuzzy(Simd::Baseline)) {
+                continue;
+            }
+            let portable = DenseFuzzy::new(fuzzy(Simd::Baseline), 4);
+            for (j, [lo, hi]) in ranges.into_iter().enumerate() {
+                let spacing = (hi - lo) / f64::from(sets[j] - 1);
+                let mut values: Vec<f64> =
+                    (0..=4000).map(|i| lo - 0.1 + f64::from(i) * (hi - lo + 0.2) / 4000.0).collect();
+                // The window edges' rounding: each centre ± reach, and a step either side.
+                let reach = portable.vars[j].var.reach;
+                for k in 0..sets[j] {
+                    let edge = lo + (f64::from(k) + reach) * spacing;
+                    values.extend([edge, edge.next_up(), edge.next_down(), edge - 2.0 * reach * spacing]);
+                }
+                values.extend([lo, hi, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, f64::MAX, -f64::MAX]);
+                for simd in Simd::available() {
+                    let dense = DenseFuzzy::new(fuzzy(simd), 4);
+                    for &x in &values {
+                        let (mut want, mut got) = ([7.0; 3 * GRID], [7.0; 3 * GRID]);
+                        let w = portable.memberships(j, x, &mut want);
+                        let g = dense.memberships(j, x, &mut got);
+                        assert_eq!(g, w, "{sets:?} variable {j} at {x:e}, {simd:?}: window");
+                        let bits = |l: &Lanes| l.map(f64::to_bits);
+                        assert_eq!(bits(&got), bits(&want), "{sets:?} variable {j} at {x:e}, {simd:?}");
+                        let (_, _, first, last) = portable.vars[j].var.window(x);
+                        if x.is_finite() {
+                            assert_eq!((first, last + 1 - first), w, "the windowed path's window at {x:e}");
+                        }
+                        assert!(w.0 + GRID <= portable.vars[j].centres.len(), "inside the padding");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 20_000, "{checked}");
     }
 }

@@ -9,27 +9,39 @@ use crate::math;
 use std::arch::x86_64::{
     _mm256_and_pd, _mm256_castsi256_pd, _mm256_cmpgt_epi64, _mm256_loadu_pd, _mm256_mul_pd,
     _mm256_set1_epi64x, _mm256_set1_pd, _mm256_set_epi64x, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd,
+    _mm_cvttsd_si64, _mm_set_sd,
 };
 
-/// Variable `v`'s normalised memberships at `value` into `out[GRID..2·GRID]` (`out` zeroed by the
-/// caller), and its window (first set, length): the portable `DenseFuzzy::memberships` for a
-/// variable of several sets.
+/// Variable `v`'s normalised memberships at `value` into `mid` (the [`GRID`] lanes of its window,
+/// 0 past its length), and its window (first set, length): the portable `DenseFuzzy::memberships`
+/// for a variable of several sets.
+///
+/// The window is [`Variable::window`]'s for every value the grid form meets (its reach is at most
+/// 1.75, so the window's edges lie within −2 … n + 1): the truncations by `cvttsd2si`, which gives
+/// i64::MIN for NaN, where the portable casts saturate. For NaN both give the first set alone.
 ///
 /// Not compiled for AVX2 itself (a function that is cannot be inlined without fail): inlined into
 /// a caller that is, its intrinsics are too.
 ///
 /// # Safety
-/// AVX2, and `centres` holds `v`'s centres and [`GRID`] − 1 more.
+/// AVX2, `2·reach ≤ 3.5`, and `centres` holds `v`'s centres and [`GRID`] − 1 more.
 #[inline(always)]
 pub(super) unsafe fn memberships(
     v: &Variable,
     centres: &[f64],
     value: f64,
-    out: &mut [f64; 3 * GRID],
+    mid: &mut [f64; GRID],
 ) -> (usize, usize) {
     const { assert!(GRID == 4) };
-    let (x, pos, first, last) = v.window(value);
-    let len = last + 1 - first;
+    debug_assert!(2.0 * v.reach <= 3.5);
+    let x = value.clamp(v.lo, v.hi);
+    let pos = (x - v.lo) * v.inv_spacing;
+    let y = pos - v.reach;
+    let t = _mm_cvttsd_si64(_mm_set_sd(y));
+    let first = (t + i64::from((t as f64) < y)).max(0);
+    let last = _mm_cvttsd_si64(_mm_set_sd(pos + v.reach)).min(v.n as i64 - 1);
+    let (first, len) =
+        if first > last { (v.nearest(pos), 1) } else { (first as usize, (last + 1 - first) as usize) };
     debug_assert!(len <= GRID && first + GRID <= centres.len());
     // Lane k is inside the window when k < len: all ones or zeros.
     let mask = _mm256_castsi256_pd(_mm256_cmpgt_epi64(
@@ -42,8 +54,8 @@ pub(super) unsafe fn memberships(
     // −(d·d)·(1/2σ²), the negation a flip of the sign bit as `-` is; +0 outside the window.
     let neg = _mm256_xor_pd(_mm256_mul_pd(d, d), _mm256_set1_pd(-0.0));
     let raw = _mm256_and_pd(_mm256_mul_pd(neg, _mm256_set1_pd(v.inv_two_sigma_sq)), mask);
-    // SAFETY: AVX2 (this function's).
-    let e = if unsafe { math::x86::exp4_applies(raw) } {
+    // SAFETY: AVX2 (this function's); −d²·(1/2σ²) is never above 0.
+    let e = if unsafe { math::x86::exp4_applies_at_most_zero(raw) } {
         unsafe { math::x86::exp4(raw) }
     } else {
         let mut lanes = [0.0; GRID];
@@ -57,18 +69,16 @@ pub(super) unsafe fn memberships(
     let mut lanes = [0.0; GRID];
     // SAFETY: four values.
     unsafe { _mm256_storeu_pd(lanes.as_mut_ptr(), e) };
-    // The normaliser in window order from +0 (the masked lanes add +0).
-    let mut sum = 0.0;
-    for l in lanes {
-        sum += l;
-    }
+    // The normaliser in window order; the portable sum starts at +0, which adds nothing here (no
+    // lane is −0: an exponential is +0 or more, a masked lane +0).
+    let sum = lanes[0] + lanes[1] + lanes[2] + lanes[3];
     if sum.is_nan() || sum <= 0.0 {
-        out[GRID] = 1.0;
+        *mid = [1.0, 0.0, 0.0, 0.0];
         return (v.nearest(pos), 1);
     }
     // Masked after the product too: 0·(1/sum) is NaN when the sum is subnormal.
     let mu = _mm256_and_pd(_mm256_mul_pd(e, _mm256_set1_pd(1.0 / sum)), mask);
-    // SAFETY: out[GRID..2·GRID] is four values.
-    unsafe { _mm256_storeu_pd(out.as_mut_ptr().add(GRID), mu) };
+    // SAFETY: `mid` is four values.
+    unsafe { _mm256_storeu_pd(mid.as_mut_ptr(), mu) };
     (first, len)
 }
