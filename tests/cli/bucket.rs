@@ -262,6 +262,8 @@ fn a_run_killed_mid_write_strands_nothing_and_the_next_run_finishes_it() {
     let status = stdout(server.qsweep(&sb.path("b")).args(["status", &quick(), "--cache", url]));
     assert!(status.contains("total: 144 trials"), "{status}");
     // The next run takes the dead run's leases over (after at most the lease, 30 s) and finishes.
+    // The bound only catches a run that waits on dead leases without end: its own trials and
+    // report take most of a minute on a loaded 2-core machine (93 s once, beside a build).
     let start = Instant::now();
     let done = json(&stdout(
         server
@@ -269,7 +271,7 @@ fn a_run_killed_mid_write_strands_nothing_and_the_next_run_finishes_it() {
             .args(["run", &quick(), "--json", "--formats", "md", "--cache", url, "--out"])
             .arg(sb.path("rb")),
     ));
-    assert!(start.elapsed() < Duration::from_secs(90), "waited {:?}", start.elapsed());
+    assert!(start.elapsed() < Duration::from_secs(300), "waited {:?}", start.elapsed());
     let (executed, cached) = (done["executed"].as_u64().unwrap(), done["cached"].as_u64().unwrap());
     assert_eq!(executed + cached, 144, "{done}");
     assert!(cached >= 8, "what the killed run stored stays stored: {done}");

@@ -38,6 +38,8 @@ pub struct DenseFuzzy {
     actions: u32,
     /// A row of rules' length in the table: n₁ · actions.
     stride: u32,
+    /// Each slot row's offset from the first: i0 · stride (added as one vector).
+    row_steps: [u32; GRID],
     /// Where the last row of rules starts: (n₀ − 1) · stride.
     last_row: u32,
     windowed: Fuzzy,
@@ -78,7 +80,8 @@ impl DenseFuzzy {
         assert!(rows * actions <= u32::MAX as usize, "a table of {rows} rules × {actions} actions");
         let stride = (fuzzy.vars[1].n * actions) as u32;
         let last_row = (fuzzy.vars[0].n as u32 - 1) * stride;
-        Self { vars: [pad(0), pad(1)], actions: actions as u32, stride, last_row, windowed: fuzzy }
+        let row_steps = std::array::from_fn(|i0| i0 as u32 * stride);
+        Self { vars: [pad(0), pad(1)], actions: actions as u32, stride, row_steps, last_row, windowed: fuzzy }
     }
 
     /// Variable `j`'s normalised memberships at `value` into the window's lanes of its [`Lanes`]
@@ -151,11 +154,12 @@ impl Encode for DenseFuzzy {
     #[inline(always)]
     fn encode(&self, state: &[f64], out: &mut DenseActive) {
         let g = &mut *out.0;
-        for (j, &value) in state[..2].iter().enumerate() {
-            let (first, len) = self.memberships(j, value, &mut g.mu[j]);
-            g.first[j] = first as u32;
-            g.view.len[j] = len as u32;
-        }
+        // Both variables written out, not a loop of two, so that their chains interleave.
+        let [x0, x1] = *state.first_chunk::<2>().expect("two state variables");
+        let (first0, len0) = self.memberships(0, x0, &mut g.mu[0]);
+        let (first1, len1) = self.memberships(1, x1, &mut g.mu[1]);
+        g.first = [first0 as u32, first1 as u32];
+        g.view.len = [len0 as u32, len1 as u32];
         // Each slot's weight μ₀·μ₁, as the windowed activation multiplies it (outside a window
         // one factor is +0, and so is the product).
         let (mu0, mu1) = (&g.mu[0][GRID..2 * GRID], &g.mu[1][GRID..2 * GRID]);
@@ -167,7 +171,7 @@ impl Encode for DenseFuzzy {
         // Slot row i0 starts at rule (first₀ + i0)·n₁ + first₁, clamped to the last row of sets.
         let base = g.first[0] * self.stride + g.first[1] * self.actions;
         let last = self.last_row + g.first[1] * self.actions;
-        g.view.row = std::array::from_fn(|i0| (base + i0 as u32 * self.stride).min(last));
+        g.view.row = std::array::from_fn(|i0| (base + self.row_steps[i0]).min(last));
         g.view.rule_len = self.actions;
         g.view.swap = 0u64.wrapping_sub(u64::from(g.view.len[1] & 1));
     }
