@@ -383,3 +383,14 @@ mod tests;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod x86;
+
+/// `y` truncated toward zero, for `y` within ±2⁶³; outside that, and for NaN, either i64::MIN
+/// (x86-64's `cvttsd2si`, one instruction) or the saturated value (`as`, elsewhere), so a caller
+/// must give both the same meaning.
+#[inline(always)]
+pub(crate) fn trunc_i64(y: f64) -> i64 {
+    #[cfg(target_arch = "x86_64")]
+    return x86::trunc_i64(y);
+    #[cfg(not(target_arch = "x86_64"))]
+    return y as i64;
+}

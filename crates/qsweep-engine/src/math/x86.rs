@@ -6,7 +6,8 @@ use super::{EXP2_J32, EXP_LANE_BOUND, INV_LN2_32, LN2_32_HI, LN2_32_LO, TO_INT};
 use std::arch::x86_64::{
     __m256d, _mm256_add_epi64, _mm256_add_pd, _mm256_and_si256, _mm256_castpd_si256, _mm256_castsi256_pd,
     _mm256_cmp_pd, _mm256_i64gather_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_epi64x,
-    _mm256_set1_pd, _mm256_slli_epi64, _mm256_srli_epi64, _mm256_sub_epi64, _mm256_sub_pd, _CMP_GE_OQ,
+    _mm256_set1_pd, _mm256_slli_epi64, _mm256_srli_epi64, _mm256_sub_epi64, _mm256_sub_pd, _mm_cvttsd_si64,
+    _mm_set_sd, _CMP_GE_OQ,
 };
 
 /// Whether every lane of `x` lies at or above −[`EXP_LANE_BOUND`] (NaN does not): where [`exp4`]
@@ -22,7 +23,16 @@ pub(crate) unsafe fn exp4_applies_at_most_zero(x: __m256d) -> bool {
     _mm256_movemask_pd(lo) == 0b1111
 }
 
-/// e^x in every lane, for lanes within ±[`EXP_LANE_BOUND`] ([`exp4_applies`]): the bits of
+/// `y` truncated toward zero by `cvttsd2si` (SSE2, which every x86-64 has): i64::MIN for NaN and
+/// outside ±2⁶³, where `as` would saturate with a few more instructions.
+#[inline(always)]
+pub(crate) fn trunc_i64(y: f64) -> i64 {
+    // SAFETY: SSE2 is part of x86-64.
+    unsafe { _mm_cvttsd_si64(_mm_set_sd(y)) }
+}
+
+/// e^x in every lane, for lanes within ±[`EXP_LANE_BOUND`] ([`exp4_applies_at_most_zero`] for
+/// lanes never above 0): the bits of
 /// [`exp`](super::exp) lane by lane.
 ///
 /// # Safety

@@ -97,8 +97,8 @@ impl DenseFuzzy {
         }
         #[cfg(target_arch = "x86_64")]
         if self.windowed.simd != Simd::Baseline {
-            // SAFETY: the level is capped by what the CPU has (AVX-512 includes AVX2), the reach
-            // fits (`fits`) and the centres are padded.
+            // SAFETY: the level is capped by what the CPU has (AVX-512 includes AVX2), and the
+            // centres are padded.
             return unsafe { super::dense_x86::memberships(v, centres, value, mid) };
         }
         let (x, pos, first, last) = v.window(value);

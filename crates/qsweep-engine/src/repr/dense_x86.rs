@@ -9,22 +9,17 @@ use crate::math;
 use std::arch::x86_64::{
     _mm256_and_pd, _mm256_castsi256_pd, _mm256_cmpgt_epi64, _mm256_loadu_pd, _mm256_mul_pd,
     _mm256_set1_epi64x, _mm256_set1_pd, _mm256_set_epi64x, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd,
-    _mm_cvttsd_si64, _mm_set_sd,
 };
 
 /// Variable `v`'s normalised memberships at `value` into `mid` (the [`GRID`] lanes of its window,
 /// 0 past its length), and its window (first set, length): the portable `DenseFuzzy::memberships`
 /// for a variable of several sets.
 ///
-/// The window is [`Variable::window`]'s for every value the grid form meets (its reach is at most
-/// 1.75, so the window's edges lie within −2 … n + 1): the truncations by `cvttsd2si`, which gives
-/// i64::MIN for NaN, where the portable casts saturate. For NaN both give the first set alone.
-///
 /// Not compiled for AVX2 itself (a function that is cannot be inlined without fail): inlined into
 /// a caller that is, its intrinsics are too.
 ///
 /// # Safety
-/// AVX2, `2·reach ≤ 3.5`, and `centres` holds `v`'s centres and [`GRID`] − 1 more.
+/// AVX2, and `centres` holds `v`'s centres and [`GRID`] − 1 more.
 #[inline(always)]
 pub(super) unsafe fn memberships(
     v: &Variable,
@@ -33,15 +28,8 @@ pub(super) unsafe fn memberships(
     mid: &mut [f64; GRID],
 ) -> (usize, usize) {
     const { assert!(GRID == 4) };
-    debug_assert!(2.0 * v.reach <= 3.5);
-    let x = value.clamp(v.lo, v.hi);
-    let pos = (x - v.lo) * v.inv_spacing;
-    let y = pos - v.reach;
-    let t = _mm_cvttsd_si64(_mm_set_sd(y));
-    let first = (t + i64::from((t as f64) < y)).max(0);
-    let last = _mm_cvttsd_si64(_mm_set_sd(pos + v.reach)).min(v.n as i64 - 1);
-    let (first, len) =
-        if first > last { (v.nearest(pos), 1) } else { (first as usize, (last + 1 - first) as usize) };
+    let (x, pos, first, last) = v.window(value);
+    let len = last + 1 - first;
     debug_assert!(len <= GRID && first + GRID <= centres.len());
     // Lane k is inside the window when k < len: all ones or zeros.
     let mask = _mm256_castsi256_pd(_mm256_cmpgt_epi64(

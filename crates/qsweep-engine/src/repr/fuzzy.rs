@@ -38,7 +38,7 @@ pub(super) struct Variable {
     /// 1 / spacing (the window position is a product, not a division).
     pub(super) inv_spacing: f64,
     pub(super) inv_two_sigma_sq: f64,
-    /// Half-width of the window of sets that can exceed `prune`, in units of `spacing`.
+    /// Half-width of the window of sets that can exceed `prune`, in units of `spacing`: at most n.
     pub(super) reach: f64,
     /// Every set's centre, `lo + k·spacing` (the midpoint for a single set).
     pub(super) centres: Vec<f64>,
@@ -48,11 +48,7 @@ impl Variable {
     /// Most sets a window can hold: ⌊2·reach⌋ + 1 centres lie within ±reach spacings of a point,
     /// plus one for rounding in the window edges.
     fn max_window(&self) -> usize {
-        if self.reach.is_finite() {
-            ((2.0 * self.reach) as usize).saturating_add(2).min(self.n)
-        } else {
-            self.n
-        }
+        ((2.0 * self.reach) as usize).saturating_add(2).min(self.n)
     }
 
     /// The set nearest to window position `pos` (≥ 0 or NaN): ⌊pos + ½⌋ with halves rounded up,
@@ -71,10 +67,11 @@ impl Variable {
     pub(super) fn window(&self, value: f64) -> (f64, f64, usize, usize) {
         let x = value.clamp(self.lo, self.hi);
         let pos = (x - self.lo) * self.inv_spacing;
+        // The reach is at most n (`Fuzzy::new`), so both edges lie within ±2n, and truncation is
+        // floor for the non-negative upper one; only a NaN position truncates out of range, and
+        // either meaning of that (`math::trunc_i64`) gives the first set alone.
         let first = ceil_to_index(pos - self.reach);
-        // A saturating cast is floor for every input here (negatives and NaN give 0 either way;
-        // through i64, which x86 converts in one instruction, not usize).
-        let last = (((pos + self.reach) as i64).max(0) as usize).min(self.n - 1);
+        let last = (math::trunc_i64(pos + self.reach).max(0) as usize).min(self.n - 1);
         if first > last {
             let nearest = self.nearest(pos);
             (x, pos, nearest, nearest)
@@ -110,12 +107,12 @@ impl Fuzzy {
                 assert!((1..=MAX_SETS).contains(&n));
                 let spacing = if n > 1 { (r[1] - r[0]) / (n - 1) as f64 } else { r[1] - r[0] };
                 let sigma = width * spacing;
-                let reach = if prune > 0.0 {
-                    // exp(−d²/2σ²) ≥ prune  ⇔  d ≤ σ·sqrt(2 ln(1/prune)).
-                    width * (2.0 * math::ln(1.0 / prune)).sqrt()
-                } else {
-                    f64::INFINITY
-                };
+                // exp(−d²/2σ²) ≥ prune  ⇔  d ≤ σ·sqrt(2 ln(1/prune)); no prune reaches every set.
+                // Capped at n spacings, which reach every set from anywhere in the range (the same
+                // windows, and finite window edges for `window`).
+                let reach =
+                    if prune > 0.0 { width * (2.0 * math::ln(1.0 / prune)).sqrt() } else { f64::INFINITY };
+                let reach = reach.min(n as f64);
                 let centres = if n == 1 {
                     vec![(r[0] + r[1]) / 2.0]
                 } else {
@@ -329,10 +326,10 @@ fn activate_with_large(f: &Fuzzy, state: &[f64], out: &mut Activations) {
 /// smallest integer ≥ y (exact for the small y of a window edge, which is below `MAX_SETS`).
 #[inline]
 fn ceil_to_index(y: f64) -> usize {
-    // The saturating cast to i64 truncates toward zero (NaN to 0): one instruction and two fixups
-    // where a cast to usize takes a dozen. Truncation is the ceiling for y ≤ 0, raised to 0 below.
-    let t = y as i64;
-    t.saturating_add(i64::from((t as f64) < y)).max(0) as usize
+    // Truncation is the ceiling for y ≤ 0, raised to 0 below; NaN and −∞ truncate to i64::MIN or
+    // saturate (`math::trunc_i64`), and either is raised to 0.
+    let t = math::trunc_i64(y);
+    (t + i64::from((t as f64) < y)).max(0) as usize
 }
 
 #[cfg(test)]
